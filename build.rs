@@ -1,0 +1,49 @@
+//! Compiles the GLSL in `shaders/` to SPIR-V (shaderc, Vulkan 1.2 / SPIR-V 1.5) into
+//! OUT_DIR; `src/gpu/shaders.rs` embeds the results. The compiler's log is the build error.
+
+use std::path::{Path, PathBuf};
+
+/// (source, output name, macro defined). One source can yield several variants.
+const SHADERS: &[(&str, &str, Option<&str>)] = &[
+    ("raster.vert", "raster.vert.spv", None),
+    ("raster.frag", "raster_range.frag.spv", None),
+    ("raster.frag", "raster_shadow.frag.spv", Some("SHADOW_VIEW")),
+    ("shadow_mask.comp", "shadow_mask.comp.spv", None),
+];
+
+fn main() {
+    let dir = Path::new("shaders");
+    println!("cargo:rerun-if-changed=shaders");
+    for entry in std::fs::read_dir(dir).expect("shaders/ exists") {
+        println!("cargo:rerun-if-changed={}", entry.expect("readable shaders/").path().display());
+    }
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let compiler = shaderc::Compiler::new().expect("shaderc initialises");
+    for &(source, output, define) in SHADERS {
+        let path = dir.join(source);
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let kind = match path.extension().and_then(|e| e.to_str()) {
+            Some("vert") => shaderc::ShaderKind::Vertex,
+            Some("frag") => shaderc::ShaderKind::Fragment,
+            Some("comp") => shaderc::ShaderKind::Compute,
+            other => panic!("{source}: unknown shader stage {other:?}"),
+        };
+        let mut options = shaderc::CompileOptions::new().expect("shaderc options");
+        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        options.set_warnings_as_errors();
+        if let Some(name) = define {
+            options.add_macro_definition(name, None);
+        }
+        options.set_include_callback(|name, _, _, _| {
+            let include = dir.join(name);
+            std::fs::read_to_string(&include)
+                .map(|content| shaderc::ResolvedInclude { resolved_name: include.display().to_string(), content })
+                .map_err(|e| format!("{}: {e}", include.display()))
+        });
+        let spirv = compiler
+            .compile_into_spirv(&text, kind, &path.display().to_string(), "main", Some(&options))
+            .unwrap_or_else(|e| panic!("compiling {source} ({output}):\n{e}"));
+        std::fs::write(out.join(output), spirv.as_binary_u8()).expect("OUT_DIR is writable");
+    }
+}

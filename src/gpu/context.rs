@@ -1,0 +1,367 @@
+//! The headless Vulkan instance and device that every GPU resource belongs to.
+//!
+//! Device choice: the device named by [`ContextOptions::device`] (a case-insensitive
+//! substring of its name), else the first discrete GPU, else the first device. Validation
+//! (the Khronos layer with synchronization validation) is on when asked; its messages are
+//! collected, not printed, so tests can fail on any of them and the CLI can show them.
+//!
+//! Resources hold an `Arc<GpuContext>`, so the context (allocator, then device, then
+//! instance) is torn down only after the last of them.
+
+use crate::error::{Error, Result, VkResultExt};
+use ash::{ext, vk};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+/// Environment variable naming the device to use (substring of its name).
+pub const DEVICE_ENV: &str = "RANGESYNTH_DEVICE";
+/// Environment variable turning validation on (`1`).
+pub const VALIDATION_ENV: &str = "RANGESYNTH_VALIDATION";
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+#[derive(Debug, Clone, Default)]
+pub struct ContextOptions {
+    /// Khronos validation with synchronization validation.
+    pub validation: bool,
+    /// Pick the device whose name contains this (case-insensitive).
+    pub device: Option<String>,
+}
+
+impl ContextOptions {
+    /// Options from `RANGESYNTH_VALIDATION` and `RANGESYNTH_DEVICE`.
+    pub fn from_env() -> Self {
+        Self {
+            validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"),
+            device: std::env::var(DEVICE_ENV).ok().filter(|d| !d.is_empty()),
+        }
+    }
+}
+
+pub struct GpuContext {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    debug: Option<DebugMessenger>,
+    pub(crate) physical_device: vk::PhysicalDevice,
+    pub(crate) device: ash::Device,
+    debug_names: Option<ext::debug_utils::Device>,
+    queue: Mutex<vk::Queue>,
+    pub(crate) queue_family: u32,
+    pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub(crate) limits: vk::PhysicalDeviceLimits,
+    /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
+    pub(crate) timestamp_period: Option<f64>,
+    device_name: String,
+}
+
+struct DebugMessenger {
+    loader: ext::debug_utils::Instance,
+    messenger: vk::DebugUtilsMessengerEXT,
+    messages: *mut Mutex<Vec<String>>,
+}
+
+// SAFETY: the raw pointer is a Box owned by the messenger, only read through its Mutex.
+unsafe impl Send for DebugMessenger {}
+unsafe impl Sync for DebugMessenger {}
+
+impl GpuContext {
+    pub fn new(options: &ContextOptions) -> Result<Arc<Self>> {
+        // SAFETY: loading the system Vulkan loader; no other Vulkan state exists yet.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::VulkanUnavailable(e.to_string()))?;
+        let validation = options.validation && validation_available(&entry)?;
+        if options.validation && !validation {
+            return Err(Error::Unsupported(
+                "validation was requested but VK_LAYER_KHRONOS_validation is not installed \
+                 (Debian: vulkan-validationlayers)"
+                    .into(),
+            ));
+        }
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"rangesynth")
+            .api_version(vk::API_VERSION_1_3);
+        let layers = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
+        let extensions =
+            if validation { vec![ext::debug_utils::NAME.as_ptr(), ext::validation_features::NAME.as_ptr()] } else { vec![] };
+        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
+        let mut info =
+            vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers).enabled_extension_names(&extensions);
+        if validation {
+            info = info.push_next(&mut features);
+        }
+        // SAFETY: every pointer in `info` outlives the call.
+        let instance = unsafe { entry.create_instance(&info, None) }.vk("creating the Vulkan instance")?;
+        let debug = if validation { Some(DebugMessenger::new(&entry, &instance)?) } else { None };
+
+        let chosen = choose_device(&instance, options.device.as_deref());
+        let (physical_device, queue_family) = match chosen {
+            Ok(found) => found,
+            Err(e) => {
+                drop(debug);
+                // SAFETY: nothing else was created from the instance.
+                unsafe { instance.destroy_instance(None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: physical_device came from this instance.
+        let properties = unsafe { instance.get_physical_device_properties(physical_device) };
+        let device_name = properties.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
+
+        let priorities = [1.0];
+        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        // gl_PrimitiveID in a fragment shader needs geometryShader.
+        let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&base)
+            .push_next(&mut v12)
+            .push_next(&mut v13);
+        // SAFETY: the features were checked by choose_device; pointers outlive the call.
+        let device = unsafe { instance.create_device(physical_device, &device_info, None) }.vk("creating the device")?;
+        // SAFETY: family and index 0 were requested above.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        // SAFETY: valid physical device.
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+        let timestamp_period = (families[queue_family as usize].timestamp_valid_bits > 0)
+            .then_some(f64::from(properties.limits.timestamp_period));
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        })?;
+        let debug_names = debug.as_ref().map(|_| ext::debug_utils::Device::new(&instance, &device));
+        Ok(Arc::new(Self {
+            entry,
+            instance,
+            debug,
+            physical_device,
+            device,
+            debug_names,
+            queue: Mutex::new(queue),
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            limits: properties.limits,
+            timestamp_period,
+            device_name,
+        }))
+    }
+
+    pub(crate) fn instance(&self) -> &ash::Instance {
+        &self.instance
+    }
+
+    pub fn device_name(&self) -> &str {
+        &self.device_name
+    }
+
+    pub fn validation_enabled(&self) -> bool {
+        self.debug.is_some()
+    }
+
+    /// Validation messages (warnings and errors) collected so far, oldest first; taking
+    /// them empties the log.
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        match &self.debug {
+            // SAFETY: the Box lives as long as the messenger, i.e. as long as self.
+            Some(d) => std::mem::take(&mut *unsafe { &*d.messages }.lock().unwrap_or_else(|p| p.into_inner())),
+            None => Vec::new(),
+        }
+    }
+
+    /// Gives a Vulkan object a name that validation messages will show.
+    pub(crate) fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(names) = &self.debug_names {
+            let name = CString::new(name.replace('\0', " ")).unwrap_or_default();
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+            // SAFETY: the handle belongs to this device; naming is best-effort.
+            let _ = unsafe { names.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Records commands into a fresh command buffer, submits it and waits for it to finish.
+    /// Each call has its own pool, so several threads may submit at once.
+    pub(crate) fn submit_and_wait(&self, name: &str, record: impl FnOnce(vk::CommandBuffer) -> Result<()>) -> Result<()> {
+        let d = &self.device;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(self.queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: valid device and family.
+        let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("creating a command pool")?;
+        let result = (|| {
+            let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1);
+            // SAFETY: the pool is valid.
+            let cmd = unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
+            self.name_object(cmd, name);
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            // SAFETY: a fresh command buffer.
+            unsafe { d.begin_command_buffer(cmd, &begin) }.vk("beginning a command buffer")?;
+            record(cmd)?;
+            // SAFETY: recording started above.
+            unsafe { d.end_command_buffer(cmd) }.vk("ending a command buffer")?;
+            // SAFETY: valid device.
+            let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("creating a fence")?;
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+            let waited = {
+                let queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
+                // SAFETY: the command buffer is complete; the queue is externally synchronized by the Mutex.
+                unsafe { d.queue_submit2(*queue, &submit, fence) }.vk(name)
+            }
+            // SAFETY: the fence was just submitted.
+            .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, SUBMIT_TIMEOUT_NS) }.vk(name));
+            // SAFETY: the fence is signalled (or the device is lost); nothing waits on it now.
+            unsafe { d.destroy_fence(fence, None) };
+            match waited {
+                Err(Error::Vulkan { result: vk::Result::TIMEOUT, .. }) => Err(Error::DeviceLost(format!(
+                    "{name}: the GPU did not finish within {} s",
+                    SUBMIT_TIMEOUT_NS / 1_000_000_000
+                ))),
+                other => other,
+            }
+        })();
+        // SAFETY: the submission finished (or failed to start); the pool is idle.
+        unsafe { d.destroy_command_pool(pool, None) };
+        result
+    }
+}
+
+/// How long one submission may run before it is treated as a lost device.
+const SUBMIT_TIMEOUT_NS: u64 = 600_000_000_000;
+
+impl Drop for GpuContext {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds an Arc to this context, so none is left; the
+        // allocator goes before the device, the device before the instance.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some(d) = self.debug.take() {
+                d.loader.destroy_debug_utils_messenger(d.messenger, None);
+                drop(Box::from_raw(d.messages));
+            }
+            self.instance.destroy_instance(None);
+        }
+        let _ = &self.entry;
+    }
+}
+
+fn validation_available(entry: &ash::Entry) -> Result<bool> {
+    // SAFETY: plain enumeration.
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("listing Vulkan layers")?;
+    Ok(layers.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)))
+}
+
+impl DebugMessenger {
+    fn new(entry: &ash::Entry, instance: &ash::Instance) -> Result<Self> {
+        let loader = ext::debug_utils::Instance::new(entry, instance);
+        let messages = Box::into_raw(Box::new(Mutex::new(Vec::new())));
+        let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(collect_message))
+            .user_data(messages.cast());
+        // SAFETY: `messages` stays alive until the messenger is destroyed in Drop.
+        match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+            Ok(messenger) => Ok(Self { loader, messenger, messages }),
+            Err(e) => {
+                // SAFETY: the messenger was not created, so nothing refers to the Box.
+                drop(unsafe { Box::from_raw(messages) });
+                Err(Error::vulkan("creating the validation messenger", e))
+            }
+        }
+    }
+}
+
+unsafe extern "system" fn collect_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes valid callback data; `user` is our Box<Mutex<Vec<String>>>.
+    unsafe {
+        let message = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
+        let log = &*(user as *const Mutex<Vec<String>>);
+        log.lock().unwrap_or_else(|p| p.into_inner()).push(format!("{severity:?}: {message}"));
+    }
+    vk::FALSE
+}
+
+/// The requested, else first discrete, else first device that has what rangesynth needs,
+/// with a queue family doing graphics and compute.
+fn choose_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: plain enumeration.
+    let devices = unsafe { instance.enumerate_physical_devices() }.vk("listing Vulkan devices")?;
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for pd in devices {
+        // SAFETY: pd came from the instance.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
+        if let Some(w) = wanted {
+            if !name.to_lowercase().contains(&w.to_lowercase()) {
+                rejected.push(format!("{name} (not named {w:?})"));
+                continue;
+            }
+        }
+        match suitability(instance, pd, &props) {
+            Ok(family) => candidates.push((pd, family, props.device_type == vk::PhysicalDeviceType::DISCRETE_GPU)),
+            Err(why) => rejected.push(format!("{name} ({why})")),
+        }
+    }
+    candidates
+        .iter()
+        .find(|c| c.2)
+        .or(candidates.first())
+        .map(|&(pd, family, _)| (pd, family))
+        .ok_or_else(|| {
+            Error::NoDevice(if rejected.is_empty() {
+                "the Vulkan loader found no device (Debian: install mesa-vulkan-drivers for lavapipe)".into()
+            } else {
+                format!("none fits: {}", rejected.join("; "))
+            })
+        })
+}
+
+fn suitability(instance: &ash::Instance, pd: vk::PhysicalDevice, props: &vk::PhysicalDeviceProperties) -> Result<u32, String> {
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err("needs Vulkan 1.3".into());
+    }
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
+    // SAFETY: valid physical device; the chain outlives the call.
+    unsafe { instance.get_physical_device_features2(pd, &mut features) };
+    let missing: Vec<&str> = [
+        (features.features.geometry_shader, "geometryShader"),
+        (v12.buffer_device_address, "bufferDeviceAddress"),
+        (v13.dynamic_rendering, "dynamicRendering"),
+        (v13.synchronization2, "synchronization2"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on == vk::FALSE)
+    .map(|(_, n)| *n)
+    .collect();
+    if !missing.is_empty() {
+        return Err(format!("lacks {}", missing.join(", ")));
+    }
+    // SAFETY: valid physical device.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+        .map(|i| i as u32)
+        .ok_or_else(|| "no queue family with graphics and compute".into())
+}

@@ -1,0 +1,13 @@
+//! The explicit-Vulkan layer: one file per concept (context, memory, barriers, shaders,
+//! timestamps). Nothing here knows about range images.
+
+mod barrier;
+mod context;
+mod memory;
+pub(crate) mod shaders;
+mod timing;
+
+pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
+pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
+pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
+pub use timing::Timestamps;

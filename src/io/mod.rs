@@ -1,0 +1,1 @@
+//! Reading and writing range images, previews and label maps.

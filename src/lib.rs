@@ -1,0 +1,16 @@
+//! rangesynth: realistic range images (triangulation shadows included) for verifying 3D
+//! object hypotheses, rendered with explicit Vulkan. See README.md and DESIGN.md.
+
+pub mod error;
+pub mod gpu;
+pub mod io;
+pub mod mesh;
+pub mod pose;
+pub mod render;
+pub mod scene;
+pub mod sensor;
+pub mod shadow;
+
+pub use error::{Error, Result};
+pub use render::{RenderOutput, Renderer};
+pub use scene::Scene;

@@ -1,0 +1,121 @@
+//! Triangle meshes whose triangles are grouped into labelled *surfaces*.
+//!
+//! The verifier binds scene segments to model surfaces (a planar face or a whole curved
+//! patch), never to triangles, so a mesh carries a surface id per triangle
+//! (DESIGN.md "Surfaces and labels"). Surface ids run from 1; 0 is "no data" everywhere.
+//!
+//! Every constructor goes through [`Mesh::new`], which is the one place that rejects what
+//! cannot be rendered (non-finite coordinates, indices out of range, no triangles) and drops
+//! degenerate triangles, counting them so callers can warn.
+
+mod builtin;
+mod obj;
+mod surfaces;
+
+pub use builtin::{builtin_mesh, BUILTIN_NAMES};
+pub use obj::load_obj;
+pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
+
+use crate::error::{Error, Result};
+use glam::DVec3;
+
+/// A validated triangle mesh with one surface id (1-based) per triangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// Where the mesh came from (a path or a `builtin:` name), for messages.
+    pub name: String,
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Surface id of each triangle, in `1..=surface_names.len()`.
+    pub triangle_surfaces: Vec<u32>,
+    /// Name of surface `i + 1`.
+    pub surface_names: Vec<String>,
+    /// Zero-area triangles removed by [`Mesh::new`].
+    pub dropped_degenerate: usize,
+}
+
+impl Mesh {
+    /// Validates and builds a mesh. Degenerate (zero-area) triangles are dropped and
+    /// counted in [`Mesh::dropped_degenerate`]; surfaces left without triangles keep their
+    /// label so that numbering stays as the file gave it.
+    pub fn new(
+        name: impl Into<String>,
+        positions: Vec<[f32; 3]>,
+        triangles: Vec<[u32; 3]>,
+        triangle_surfaces: Vec<u32>,
+        surface_names: Vec<String>,
+    ) -> Result<Self> {
+        let name = name.into();
+        let invalid = |reason: String| Error::Mesh { name: name.clone(), reason };
+        if let Some(i) = positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+            return Err(invalid(format!("vertex {i} has a non-finite coordinate {:?}", positions[i])));
+        }
+        if triangles.len() != triangle_surfaces.len() {
+            return Err(invalid("each triangle needs exactly one surface id".into()));
+        }
+        for (t, tri) in triangles.iter().enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&v| v as usize >= positions.len()) {
+                return Err(invalid(format!(
+                    "triangle {t} refers to vertex {bad}, but there are only {} vertices",
+                    positions.len()
+                )));
+            }
+        }
+        if let Some(t) = triangle_surfaces
+            .iter()
+            .position(|&s| s == 0 || s as usize > surface_names.len())
+        {
+            return Err(invalid(format!(
+                "triangle {t} has surface id {}, outside 1..={}",
+                triangle_surfaces[t],
+                surface_names.len()
+            )));
+        }
+        let given = triangles.len();
+        let (triangles, triangle_surfaces): (Vec<_>, Vec<_>) = triangles
+            .into_iter()
+            .zip(triangle_surfaces)
+            .filter(|(tri, _)| !is_degenerate(&positions, tri))
+            .unzip();
+        let dropped_degenerate = given - triangles.len();
+        if triangles.is_empty() {
+            return Err(invalid("it has no (non-degenerate) triangles".into()));
+        }
+        Ok(Self { name, positions, triangles, triangle_surfaces, surface_names, dropped_degenerate })
+    }
+
+    pub fn surface_count(&self) -> u32 {
+        self.surface_names.len() as u32
+    }
+
+    pub fn vertex(&self, index: u32) -> DVec3 {
+        let [x, y, z] = self.positions[index as usize];
+        DVec3::new(x.into(), y.into(), z.into())
+    }
+
+    /// Centre and radius of a sphere holding every vertex. A rigid pose moves the sphere
+    /// with the mesh, which is how depth ranges and the shadow view's extent are bounded
+    /// without transforming every vertex on the host.
+    pub fn bounding_sphere(&self) -> (DVec3, f64) {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for i in 0..self.positions.len() as u32 {
+            lo = lo.min(self.vertex(i));
+            hi = hi.max(self.vertex(i));
+        }
+        let centre = (lo + hi) * 0.5;
+        let radius = (0..self.positions.len() as u32)
+            .map(|i| self.vertex(i).distance(centre))
+            .fold(0.0, f64::max);
+        (centre, radius)
+    }
+}
+
+/// A triangle whose area is zero in f64 (repeated vertex or collinear corners) covers no
+/// pixel and has no normal; it is dropped.
+fn is_degenerate(positions: &[[f32; 3]], tri: &[u32; 3]) -> bool {
+    let p = tri.map(|i| {
+        let [x, y, z] = positions[i as usize];
+        DVec3::new(x.into(), y.into(), z.into())
+    });
+    (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0
+}

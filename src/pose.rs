@@ -1,0 +1,32 @@
+//! Rigid poses (model → range frame), given as row-major 4×4 matrices in files and kept in
+//! f64 on the host (DESIGN.md "Coordinates"). A pose that is not rigid would silently scale
+//! or shear the model, so it is refused.
+
+use crate::error::{Error, Result};
+use glam::{DMat3, DMat4};
+
+/// How far the rotation part may stray from orthonormal (per entry of RᵀR − I).
+pub const RIGIDITY_TOLERANCE: f64 = 1e-6;
+
+/// Builds a pose from row-major rows, checking that it is a finite rigid transform.
+pub fn pose_from_rows(rows: [[f64; 4]; 4]) -> Result<DMat4> {
+    let bad = |why: &str| Err(Error::Scene(format!("pose {rows:?} {why}")));
+    if rows.iter().flatten().any(|v| !v.is_finite()) {
+        return bad("has a non-finite entry");
+    }
+    if rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        return bad("must have [0, 0, 0, 1] as its last row");
+    }
+    let pose = DMat4::from_cols_array_2d(&rows).transpose();
+    let rotation = DMat3::from_mat4(pose);
+    let error = (rotation.transpose() * rotation - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if error > RIGIDITY_TOLERANCE || rotation.determinant() < 0.0 {
+        return bad("is not a rigid transform (its 3×3 part must be a rotation)");
+    }
+    Ok(pose)
+}
+
+/// Row-major rows of a pose, as files write them.
+pub fn pose_rows(pose: &DMat4) -> [[f64; 4]; 4] {
+    pose.transpose().to_cols_array_2d()
+}

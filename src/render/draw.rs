@@ -1,0 +1,117 @@
+//! One rasterization pass of posed meshes into a view's label, z (and slope) attachments.
+//! The range view and the shadow view differ only in their grid, their view rotation and
+//! their pipeline.
+
+use super::gpu_mesh::GpuMesh;
+use super::targets::ViewTargets;
+use crate::gpu::GpuContext;
+use crate::sensor::ViewGrid;
+use ash::vk;
+use glam::DMat4;
+
+/// Push constants of one draw; matches `shaders/draw.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DrawConstants {
+    clip_from_model: [f32; 16],
+    view_z_row: [f32; 4],
+    surface_ids: [u32; 2],
+    label_base: u32,
+    _pad: u32,
+}
+
+/// One posed mesh in a view.
+pub struct Draw<'a> {
+    pub mesh: &'a GpuMesh,
+    /// Model → range frame.
+    pub pose: DMat4,
+    pub label_base: u32,
+}
+
+impl DrawConstants {
+    /// Composes grid ∘ view rotation ∘ pose in f64 and rounds once to f32.
+    pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw) -> Self {
+        let view_from_model = view_from_range * draw.pose;
+        let clip = grid.clip_from_view() * view_from_model;
+        let address = draw.mesh.surface_ids.device_address();
+        let r = view_from_model.row(2);
+        Self {
+            clip_from_model: clip.as_mat4().to_cols_array(),
+            view_z_row: [r.x as f32, r.y as f32, r.z as f32, r.w as f32],
+            surface_ids: [address as u32, (address >> 32) as u32],
+            label_base: draw.label_base,
+            _pad: 0,
+        }
+    }
+}
+
+/// Records a view pass: clears (label 0, z 0, depth 1) then draws every mesh. The caller has
+/// moved the attachments to their attachment layouts.
+pub fn record_view(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    targets: &ViewTargets,
+    grid: &ViewGrid,
+    view_from_range: DMat4,
+    draws: &[Draw],
+) {
+    let d = &ctx.device;
+    let extent = targets.label.extent();
+    let colour = |view, clear| {
+        vk::RenderingAttachmentInfo::default()
+            .image_view(view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(clear)
+    };
+    let zero_u = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
+    let zero_f = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
+    let mut attachments = vec![colour(targets.label.view, zero_u), colour(targets.z.view, zero_f)];
+    if let Some(slope) = &targets.slope {
+        attachments.push(colour(slope.view, zero_f));
+    }
+    let depth = vk::RenderingAttachmentInfo::default()
+        .image_view(targets.depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+    let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+    let info = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&attachments)
+        .depth_attachment(&depth);
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
+    unsafe {
+        d.cmd_begin_rendering(cmd, &info);
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+        d.cmd_set_viewport(cmd, 0, &[viewport]);
+        d.cmd_set_scissor(cmd, 0, &[area]);
+        for draw in draws {
+            let constants = DrawConstants::new(grid, view_from_range, draw);
+            d.cmd_push_constants(
+                cmd,
+                layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                bytemuck::bytes_of(&constants),
+            );
+            d.cmd_bind_vertex_buffers(cmd, 0, &[draw.mesh.vertices.raw], &[0]);
+            d.cmd_bind_index_buffer(cmd, draw.mesh.indices.raw, 0, vk::IndexType::UINT32);
+            d.cmd_draw_indexed(cmd, draw.mesh.index_count, 1, 0, 0, 0);
+        }
+        d.cmd_end_rendering(cmd);
+    }
+}

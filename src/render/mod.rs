@@ -1,0 +1,198 @@
+//! Rendering a scene: the range pass, the shadow pass and the shadow-mask compute pass,
+//! recorded into one command buffer with barriers between them, then read back.
+//!
+//! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
+//! and reused: it is `Send + Sync`, and each call records its own command buffer.
+
+mod draw;
+mod gpu_mesh;
+mod output;
+mod pipelines;
+mod shadow_pass;
+mod targets;
+
+pub use draw::Draw;
+pub use gpu_mesh::GpuMesh;
+pub use output::{PassTimings, RenderOutput};
+
+use crate::error::{Error, Result};
+use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps};
+use crate::scene::Scene;
+use crate::sensor::{depth_bounds, ViewGrid};
+use crate::shadow::ShadowMode;
+use ash::vk;
+use glam::DMat4;
+use pipelines::Pipelines;
+use shadow_pass::{MaskBindings, MaskConstants};
+use std::sync::Arc;
+use targets::ViewTargets;
+
+pub struct Renderer {
+    pipelines: Pipelines,
+    ctx: Arc<GpuContext>,
+}
+
+/// The two views of one render, with the grids they were rendered on.
+struct Views {
+    range: ViewGrid,
+    /// `None` when no shadow pass is recorded (mode `none` or θ = 0).
+    shadow: Option<ViewGrid>,
+}
+
+impl Renderer {
+    pub fn new(options: &ContextOptions) -> Result<Self> {
+        Self::with_context(GpuContext::new(options)?)
+    }
+
+    pub fn with_context(ctx: Arc<GpuContext>) -> Result<Self> {
+        Ok(Self { pipelines: Pipelines::new(&ctx)?, ctx })
+    }
+
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
+    /// Renders the scene's range image, labels before and after shadowing, and pass times.
+    pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
+        let sensor = &scene.sensor;
+        sensor.validate()?;
+        let label_bases = scene.label_bases()?;
+        let mut uploaded: Vec<(*const crate::mesh::Mesh, GpuMesh)> = Vec::new();
+        for object in &scene.objects {
+            let key = Arc::as_ptr(&object.mesh);
+            if !uploaded.iter().any(|(k, _)| *k == key) {
+                uploaded.push((key, GpuMesh::upload(&self.ctx, &object.mesh)?));
+            }
+        }
+        let draws: Vec<Draw> = scene
+            .objects
+            .iter()
+            .zip(&label_bases)
+            .map(|(object, &label_base)| Draw {
+                mesh: &uploaded.iter().find(|(k, _)| *k == Arc::as_ptr(&object.mesh)).expect("uploaded above").1,
+                pose: object.pose,
+                label_base,
+            })
+            .collect();
+        let spheres: Vec<_> = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let (centre, radius) = o.mesh.bounding_sphere();
+                (o.pose.transform_point3(centre), radius)
+            })
+            .collect();
+        let views = self.plan_views(scene, &spheres)?;
+        self.render_views(scene, &views, &draws)
+    }
+
+    fn plan_views(&self, scene: &Scene, spheres: &[(glam::DVec3, f64)]) -> Result<Views> {
+        let sensor = &scene.sensor;
+        let z_range = depth_bounds(spheres.iter().copied());
+        let range = sensor.range_grid(z_range);
+        let shadow = match scene.shadow.mode {
+            ShadowMode::None => None,
+            _ if sensor.theta_deg == 0.0 => None,
+            _ => {
+                let to_shadow = sensor.to_shadow_frame();
+                let shadow_z = depth_bounds(spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r)));
+                Some(sensor.shadow_grid(z_range, shadow_z)?)
+            }
+        };
+        let max_side = self.ctx.limits.max_image_dimension2_d;
+        for grid in std::iter::once(&range).chain(shadow.as_ref()) {
+            if grid.width > max_side || grid.height > max_side {
+                return Err(Error::Scene(format!(
+                    "a {}×{} view exceeds this device's image limit of {max_side} pixels per side",
+                    grid.width, grid.height
+                )));
+            }
+        }
+        Ok(Views { range, shadow })
+    }
+
+    fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw]) -> Result<RenderOutput> {
+        let ctx = &self.ctx;
+        let d = &ctx.device;
+        let p = &self.pipelines;
+        let (w, h) = (views.range.width, views.range.height);
+        let pixels = u64::from(w) * u64::from(h);
+        let range = ViewTargets::new(ctx, w, h, false, "range view")?;
+        let shadow = match &views.shadow {
+            Some(g) => Some(ViewTargets::new(ctx, g.width, g.height, true, "shadow view")?),
+            None => None,
+        };
+        let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
+        let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
+        let masked = match &shadow {
+            Some(_) => Some(Buffer::new(ctx, BufferDesc::readback(pixels * 4), "shadowed labels")?),
+            None => None,
+        };
+        let bindings = match (&shadow, &masked) {
+            (Some(s), Some(m)) => Some(MaskBindings::new(ctx, p, &range, s, m)?),
+            _ => None,
+        };
+        let timestamps = Timestamps::new(ctx, 4, "pass timestamps")?;
+        let to_shadow = scene.sensor.to_shadow_frame();
+
+        ctx.submit_and_wait("render", |cmd| {
+            timestamps.reset(cmd);
+            let mut prepare = range.prepare_for_rendering();
+            if let Some(s) = &shadow {
+                prepare.extend(s.prepare_for_rendering());
+            }
+            barrier(d, cmd, &prepare, &[]);
+            timestamps.write(cmd, 0);
+            draw::record_view(ctx, cmd, p.range, p.raster_layout, &range, &views.range, DMat4::IDENTITY, draws);
+            timestamps.write(cmd, 1);
+            let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
+            if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
+                draw::record_view(ctx, cmd, p.shadow, p.raster_layout, s, grid, to_shadow, draws);
+                timestamps.write(cmd, 2);
+                let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
+                reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
+                barrier(d, cmd, &reads, &[]);
+                b.record(cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid));
+                timestamps.write(cmd, 3);
+                to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
+                barrier(d, cmd, &to_copy, &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }]);
+            } else {
+                barrier(d, cmd, &to_copy, &[]);
+            }
+            let region = [vk::BufferImageCopy::default()
+                .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1))
+                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+            // SAFETY: images are in TRANSFER_SRC layout; buffers are large enough (w·h·4 bytes).
+            unsafe {
+                d.cmd_copy_image_to_buffer(cmd, range.label.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, label_readback.raw, &region);
+                d.cmd_copy_image_to_buffer(cmd, range.z.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, z_readback.raw, &region);
+            }
+            let host: Vec<_> = [&label_readback, &z_readback]
+                .into_iter()
+                .map(|buffer| BufferTransition { buffer, from: Access::TransferWrite, to: Access::HostRead })
+                .collect();
+            barrier(d, cmd, &[] as &[ImageTransition], &host);
+            Ok(())
+        })?;
+
+        let label_unshadowed: Vec<u32> = label_readback.read()?;
+        let label = match &masked {
+            Some(m) => m.read()?,
+            None => label_unshadowed.clone(),
+        };
+        let timings = PassTimings {
+            range_ms: timestamps.millis_between(0, 1)?,
+            shadow_ms: if shadow.is_some() { timestamps.millis_between(1, 2)? } else { None },
+            mask_ms: if shadow.is_some() { timestamps.millis_between(2, 3)? } else { None },
+        };
+        Ok(RenderOutput {
+            sensor: scene.sensor,
+            shadow: scene.shadow,
+            shadow_pass: views.shadow.is_some(),
+            label,
+            label_unshadowed,
+            z: z_readback.read()?,
+            timings,
+        })
+    }
+}

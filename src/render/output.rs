@@ -1,0 +1,55 @@
+//! What a render returns: the range image (a 3D point per valid pixel), the labels before
+//! and after shadowing, and the time each pass took on the GPU.
+
+use crate::sensor::Sensor;
+use crate::shadow::ShadowSettings;
+
+#[derive(Debug, Clone)]
+pub struct RenderOutput {
+    pub sensor: Sensor,
+    pub shadow: ShadowSettings,
+    /// Whether a shadow pass ran (not with mode `none` or θ = 0).
+    pub shadow_pass: bool,
+    /// Row-major labels after shadowing; 0 = no data.
+    pub label: Vec<u32>,
+    /// Row-major labels of the range view alone.
+    pub label_unshadowed: Vec<u32>,
+    /// Row-major view z of the nearest surface (meaningful where `label_unshadowed` ≠ 0).
+    pub z: Vec<f32>,
+    pub timings: PassTimings,
+}
+
+/// GPU time per pass, in milliseconds; `None` for a pass not recorded or a device without
+/// timestamps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PassTimings {
+    pub range_ms: Option<f64>,
+    pub shadow_ms: Option<f64>,
+    pub mask_ms: Option<f64>,
+}
+
+impl RenderOutput {
+    pub fn width(&self) -> u32 {
+        self.sensor.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.sensor.height
+    }
+
+    /// The measured 3D point of pixel `index` (row-major), or `None` where there is no data
+    /// (background or shadow). x, y are the pixel centre (orthographic sensor).
+    pub fn point(&self, index: usize) -> Option<[f32; 3]> {
+        if self.label[index] == 0 {
+            return None;
+        }
+        let w = self.sensor.width as usize;
+        let (x, y) = self.sensor.pixel_centre((index % w) as u32, (index / w) as u32);
+        Some([x as f32, y as f32, self.z[index]])
+    }
+
+    /// Pixels with data before shadowing but not after.
+    pub fn shadowed_pixels(&self) -> usize {
+        self.label.iter().zip(&self.label_unshadowed).filter(|(l, u)| **l == 0 && **u != 0).count()
+    }
+}

@@ -1,0 +1,188 @@
+//! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
+//! rasterization pipelines (dynamic rendering into label, z and depth attachments) and the
+//! shadow-mask compute pipeline.
+
+use super::draw::DrawConstants;
+use super::shadow_pass::MaskConstants;
+use crate::error::{Error, Result, VkResultExt};
+use crate::gpu::shaders::{self, ShaderModule};
+use crate::gpu::{GpuContext, DEPTH_FORMAT};
+use ash::vk;
+use std::sync::Arc;
+
+pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
+pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+
+pub struct Pipelines {
+    ctx: Arc<GpuContext>,
+    pub raster_layout: vk::PipelineLayout,
+    pub range: vk::Pipeline,
+    pub shadow: vk::Pipeline,
+    pub mask_set_layout: vk::DescriptorSetLayout,
+    pub mask_layout: vk::PipelineLayout,
+    pub mask: vk::Pipeline,
+}
+
+impl Pipelines {
+    pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        check_formats(ctx)?;
+        let d = &ctx.device;
+        let mut p = Self {
+            ctx: ctx.clone(),
+            raster_layout: vk::PipelineLayout::null(),
+            range: vk::Pipeline::null(),
+            shadow: vk::Pipeline::null(),
+            mask_set_layout: vk::DescriptorSetLayout::null(),
+            mask_layout: vk::PipelineLayout::null(),
+            mask: vk::Pipeline::null(),
+        };
+        let raster_push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+            .size(size_of::<DrawConstants>() as u32)];
+        // SAFETY: valid device; p's Drop destroys whatever was created if a later step fails.
+        p.raster_layout = unsafe {
+            d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&raster_push), None)
+        }
+        .vk("creating the raster pipeline layout")?;
+        let vert = ShaderModule::new(ctx, shaders::RASTER_VERT, "raster.vert")?;
+        let range_frag = ShaderModule::new(ctx, shaders::RASTER_RANGE_FRAG, "raster.frag (range view)")?;
+        let shadow_frag = ShaderModule::new(ctx, shaders::RASTER_SHADOW_FRAG, "raster.frag (shadow view)")?;
+        p.range = raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &[LABEL_FORMAT, VALUE_FORMAT], "range view")?;
+        p.shadow = raster_pipeline(
+            ctx,
+            p.raster_layout,
+            &vert,
+            &shadow_frag,
+            &[LABEL_FORMAT, VALUE_FORMAT, VALUE_FORMAT],
+            "shadow view",
+        )?;
+
+        let bindings: Vec<_> = (0..6)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(if b < 5 { vk::DescriptorType::STORAGE_IMAGE } else { vk::DescriptorType::STORAGE_BUFFER })
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        // SAFETY: valid device.
+        p.mask_set_layout =
+            unsafe { d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None) }
+                .vk("creating the shadow-mask descriptor layout")?;
+        let mask_push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(size_of::<MaskConstants>() as u32)];
+        let set_layouts = [p.mask_set_layout];
+        // SAFETY: valid device.
+        p.mask_layout = unsafe {
+            d.create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&mask_push),
+                None,
+            )
+        }
+        .vk("creating the shadow-mask pipeline layout")?;
+        let comp = ShaderModule::new(ctx, shaders::SHADOW_MASK_COMP, "shadow_mask.comp")?;
+        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(comp.raw).name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(p.mask_layout)];
+        // SAFETY: valid layout and module.
+        p.mask = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map_err(|(_, e)| Error::vulkan("creating the shadow-mask pipeline", e))?[0];
+        for (handle, name) in [(p.range, "range view"), (p.shadow, "shadow view"), (p.mask, "shadow mask")] {
+            ctx.name_object(handle, name);
+        }
+        Ok(p)
+    }
+}
+
+impl Drop for Pipelines {
+    fn drop(&mut self) {
+        let d = &self.ctx.device;
+        // SAFETY: owned handles (null ones are ignored by Vulkan); no submission uses them
+        // once the renderer is dropped.
+        unsafe {
+            d.destroy_pipeline(self.mask, None);
+            d.destroy_pipeline_layout(self.mask_layout, None);
+            d.destroy_descriptor_set_layout(self.mask_set_layout, None);
+            d.destroy_pipeline(self.shadow, None);
+            d.destroy_pipeline(self.range, None);
+            d.destroy_pipeline_layout(self.raster_layout, None);
+        }
+    }
+}
+
+fn raster_pipeline(
+    ctx: &GpuContext,
+    layout: vk::PipelineLayout,
+    vert: &ShaderModule,
+    frag: &ShaderModule,
+    color_formats: &[vk::Format],
+    name: &str,
+) -> Result<vk::Pipeline> {
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vert.raw).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(frag.raw).name(c"main"),
+    ];
+    let bindings = [vk::VertexInputBindingDescription::default().stride(12).input_rate(vk::VertexInputRate::VERTEX)];
+    let attributes = [vk::VertexInputAttributeDescription::default().format(vk::Format::R32G32B32_SFLOAT)];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_binding_descriptions(&bindings)
+        .vertex_attribute_descriptions(&attributes);
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+    // No culling: models may be open or wound either way, and either side can face the sensor.
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .line_width(1.0);
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    // Larger z is closer and maps to smaller depth (sensor.rs), so the nearest surface wins with LESS.
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let blend_attachments: Vec<_> = color_formats
+        .iter()
+        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::R))
+        .collect();
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let mut rendering =
+        vk::PipelineRenderingCreateInfo::default().color_attachment_formats(color_formats).depth_attachment_format(DEPTH_FORMAT);
+    let info = [vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .push_next(&mut rendering)];
+    // SAFETY: all referenced state outlives the call.
+    unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+        .map(|p| p[0])
+        .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
+}
+
+/// The attachment formats are near-universal, but a device that lacks one gets a clear error
+/// instead of a validation failure later.
+fn check_formats(ctx: &GpuContext) -> Result<()> {
+    use vk::FormatFeatureFlags as F;
+    let needs = [
+        (LABEL_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_UINT colour attachment and storage image"),
+        (VALUE_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_SFLOAT colour attachment and storage image"),
+        (DEPTH_FORMAT, F::DEPTH_STENCIL_ATTACHMENT, "D32_SFLOAT depth attachment"),
+    ];
+    for (format, features, what) in needs {
+        // SAFETY: valid physical device of a live instance.
+        let props = unsafe { ctx.instance().get_physical_device_format_properties(ctx.physical_device, format) };
+        if !props.optimal_tiling_features.contains(features) {
+            return Err(Error::Unsupported(what.into()));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! Scenes: a sensor, a shadow setting and posed models, read from the TOML of DESIGN.md
+//! "Interfaces". Labels are numbered across objects in file order: object k's surface s has
+//! label `label_base(k) + s`.
+
+use crate::error::{Error, Result};
+use crate::mesh::{builtin_mesh, load_obj, Mesh};
+use crate::pose::pose_from_rows;
+use crate::sensor::Sensor;
+use crate::shadow::ShadowSettings;
+use glam::DMat4;
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub sensor: Sensor,
+    pub shadow: ShadowSettings,
+    pub objects: Vec<SceneObject>,
+}
+
+#[derive(Debug, Clone)]
+pub struct SceneObject {
+    /// The model reference as the scene gave it (a path or a `builtin:` name).
+    pub model_ref: String,
+    pub mesh: Arc<Mesh>,
+    /// Model → range frame, rigid.
+    pub pose: DMat4,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    sensor: Sensor,
+    #[serde(default)]
+    shadow: ShadowSettings,
+    #[serde(default)]
+    object: Vec<ObjectEntry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectEntry {
+    model: String,
+    #[serde(default = "identity_rows")]
+    pose: [[f64; 4]; 4],
+}
+
+fn identity_rows() -> [[f64; 4]; 4] {
+    DMat4::IDENTITY.to_cols_array_2d()
+}
+
+impl Scene {
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")))
+            .map_err(|e| match e {
+                Error::Scene(reason) => Error::file(path, reason),
+                other => other,
+            })
+    }
+
+    /// Parses a scene; model paths are relative to `base_dir`.
+    pub fn from_toml(text: &str, base_dir: &Path) -> Result<Self> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+        file.sensor.validate()?;
+        let mut loaded: HashMap<String, Arc<Mesh>> = HashMap::new();
+        let mut objects = Vec::with_capacity(file.object.len());
+        for entry in file.object {
+            let mesh = match loaded.get(&entry.model) {
+                Some(mesh) => mesh.clone(),
+                None => {
+                    let mesh = Arc::new(load_model(&entry.model, base_dir)?);
+                    loaded.insert(entry.model.clone(), mesh.clone());
+                    mesh
+                }
+            };
+            objects.push(SceneObject { model_ref: entry.model, mesh, pose: pose_from_rows(entry.pose)? });
+        }
+        let scene = Scene { sensor: file.sensor, shadow: file.shadow, objects };
+        scene.label_bases()?;
+        Ok(scene)
+    }
+
+    /// The label of object k's surface s is `label_bases()[k] + s`. Fails when the labels
+    /// would not fit in u32.
+    pub fn label_bases(&self) -> Result<Vec<u32>> {
+        let mut next: u64 = 0;
+        self.objects
+            .iter()
+            .map(|o| {
+                let base = next;
+                next += u64::from(o.mesh.surface_count());
+                u32::try_from(next)
+                    .map(|_| base as u32)
+                    .map_err(|_| Error::Scene("the scene has more than 2^32 - 1 surfaces".into()))
+            })
+            .collect()
+    }
+}
+
+/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`.
+pub fn load_model(reference: &str, base_dir: &Path) -> Result<Mesh> {
+    if reference.starts_with("builtin:") {
+        builtin_mesh(reference)
+    } else {
+        let path: PathBuf = base_dir.join(reference);
+        load_obj(&path)
+    }
+}

@@ -1,0 +1,169 @@
+//! Sensor geometry: the orthographic range image of DESIGN.md and the shadow view derived
+//! from it. Pure f64 functions, so the conventions are testable without a GPU.
+//!
+//! Range frame: the sensor looks down −z (larger z is closer); pixel (col c, row r) has its
+//! centre at `x = x0 + c·dx`, `y = y0 − r·dy`. The camera direction is
+//! `d_cam = R_y(θ)·(0,0,1)`; the shadow view renders the scene under `R_y(−θ)`, which maps
+//! `d_cam` to +z, on a grid with the same pitch and the same rows (a rotation about y leaves
+//! y alone), so a range pixel's point lands exactly on a shadow row and only its column is
+//! rounded.
+
+use crate::error::{Error, Result};
+use glam::{DMat4, DVec3, DVec4};
+use serde::{Deserialize, Serialize};
+
+/// The sensor settings of a scene file's `[sensor]` table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sensor {
+    /// Only `"orthographic"` (the paper's laser-stripe scanner) is implemented.
+    pub kind: SensorKind,
+    pub width: u32,
+    pub height: u32,
+    /// dx, dy: model units per pixel.
+    pub pitch: [f64; 2],
+    /// x, y of the centre of pixel (col 0, row 0).
+    pub origin: [f64; 2],
+    /// Triangulation angle between projector and camera, degrees, in (−90, 90).
+    pub theta_deg: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SensorKind {
+    Orthographic,
+}
+
+/// Largest image side accepted before asking the device (lavapipe allows 16384).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+impl Sensor {
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Scene(m));
+        if self.width == 0 || self.height == 0 {
+            return bad(format!("the image is {}×{} pixels; both sides must be at least 1", self.width, self.height));
+        }
+        if self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
+            return bad(format!("the image is {}×{} pixels; sides are limited to {MAX_IMAGE_SIDE}", self.width, self.height));
+        }
+        if !self.pitch.iter().all(|p| p.is_finite() && *p > 0.0) {
+            return bad(format!("pitch {:?} must be two positive finite numbers", self.pitch));
+        }
+        if !self.origin.iter().all(|o| o.is_finite()) {
+            return bad(format!("origin {:?} must be finite", self.origin));
+        }
+        if !(self.theta_deg.is_finite() && self.theta_deg.abs() < 90.0) {
+            return bad(format!("theta_deg = {} must lie strictly between -90 and 90", self.theta_deg));
+        }
+        Ok(())
+    }
+
+    pub fn theta(&self) -> f64 {
+        self.theta_deg.to_radians()
+    }
+
+    /// The camera direction `R_y(θ)·(0,0,1)`.
+    pub fn camera_direction(&self) -> DVec3 {
+        let t = self.theta();
+        DVec3::new(t.sin(), 0.0, t.cos())
+    }
+
+    /// `R_y(−θ)`: range frame → shadow-view frame.
+    pub fn to_shadow_frame(&self) -> DMat4 {
+        DMat4::from_rotation_y(-self.theta())
+    }
+
+    /// Centre of pixel (col, row) in the range frame's x, y.
+    pub fn pixel_centre(&self, col: u32, row: u32) -> (f64, f64) {
+        (self.origin[0] + f64::from(col) * self.pitch[0], self.origin[1] - f64::from(row) * self.pitch[1])
+    }
+
+    /// The range view's grid, with its depth range set to `z_range`.
+    pub fn range_grid(&self, z_range: (f64, f64)) -> ViewGrid {
+        ViewGrid {
+            origin: self.origin,
+            pitch: self.pitch,
+            width: self.width,
+            height: self.height,
+            z_range,
+        }
+    }
+
+    /// The shadow view's grid: same pitch and rows as the range view; columns cover the
+    /// shadow-frame x of every point the range view can see, i.e. the range image's
+    /// footprint at any depth in `z_range` (the range frame's scene depth bounds), rotated
+    /// by `R_y(−θ)`. `shadow_z_range` bounds the scene's depth in the shadow frame.
+    pub fn shadow_grid(&self, z_range: (f64, f64), shadow_z_range: (f64, f64)) -> Result<ViewGrid> {
+        let (c, s) = (self.theta().cos(), self.theta().sin());
+        let half = self.pitch[0] / 2.0;
+        let x_lo = self.origin[0] - half;
+        let x_hi = self.origin[0] + (f64::from(self.width) - 0.5) * self.pitch[0];
+        let xs: Vec<f64> = [(x_lo, z_range.0), (x_lo, z_range.1), (x_hi, z_range.0), (x_hi, z_range.1)]
+            .iter()
+            .map(|&(x, z)| c * x - s * z)
+            .collect();
+        let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let columns = ((hi - lo) / self.pitch[0]).ceil() + 1.0;
+        if columns > f64::from(MAX_IMAGE_SIDE) {
+            return Err(Error::Scene(format!(
+                "the shadow view would need {columns} columns (more than {MAX_IMAGE_SIDE}): the scene's depth \
+                 range ({:.4} to {:.4}) is too deep for θ = {}° at pitch {}",
+                z_range.0, z_range.1, self.theta_deg, self.pitch[0]
+            )));
+        }
+        Ok(ViewGrid {
+            origin: [lo + half, self.origin[1]],
+            pitch: self.pitch,
+            width: columns as u32,
+            height: self.height,
+            z_range: shadow_z_range,
+        })
+    }
+}
+
+/// One rendered view: an orthographic grid looking down −z, and the depth range mapped onto
+/// the depth buffer (larger z is closer, so it maps to smaller depth).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewGrid {
+    pub origin: [f64; 2],
+    pub pitch: [f64; 2],
+    pub width: u32,
+    pub height: u32,
+    pub z_range: (f64, f64),
+}
+
+impl ViewGrid {
+    /// Maps a view-frame point to Vulkan clip space: pixel centres land on framebuffer
+    /// pixel centres (c + ½, r + ½), rows go down in y, and z ∈ z_range maps to depth
+    /// (z_max − z)/(z_max − z_min) ∈ [0, 1].
+    pub fn clip_from_view(&self) -> DMat4 {
+        let [x0, y0] = self.origin;
+        let [dx, dy] = self.pitch;
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let (z_min, z_max) = self.z_range;
+        // ndc_x = 2(c + ½)/W − 1 with c = (x − x0)/dx; ndc_y = 2(r + ½)/H − 1 with r = (y0 − y)/dy.
+        let sx = 2.0 / (w * dx);
+        let sy = -2.0 / (h * dy);
+        let sz = -1.0 / (z_max - z_min);
+        DMat4::from_cols(
+            DVec4::new(sx, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, sy, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, sz, 0.0),
+            DVec4::new(-x0 * sx + 1.0 / w - 1.0, -y0 * sy + 1.0 / h - 1.0, -z_max * sz, 1.0),
+        )
+    }
+}
+
+/// Depth bounds along z of spheres (centre, radius), widened by 1% and a small absolute
+/// margin so nothing sits on the near or far plane. An empty set gives (−1, 1).
+pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f64) {
+    let (lo, hi) = spheres.into_iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (c, r)| {
+        (lo.min(c.z - r), hi.max(c.z + r))
+    });
+    if lo > hi {
+        return (-1.0, 1.0);
+    }
+    let margin = 0.01 * (hi - lo) + 1e-6 * (1.0 + lo.abs().max(hi.abs()));
+    (lo - margin, hi + margin)
+}
