@@ -1,12 +1,13 @@
 #version 460
-// Both views: orthographic, so w = 1 and the view-frame z varies linearly across a triangle.
+// Both views are orthographic: pixel (c, r) has its centre at x = x0 + c·dx, y = y0 − r·dy
+// (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½).
 #include "draw.glsl"
 
 layout(location = 0) in vec3 position;
-layout(location = 0) out float view_z;
 
 void main() {
-    vec4 p = vec4(position, 1.0);
-    gl_Position = draw.clip_from_model * p;
-    view_z = dot(draw.view_z_row, p);
+    vec3 v = to_view(position);
+    vec2 pixel = vec2((v.x - draw.grid.x) / draw.grid.z, (draw.grid.y - v.y) / draw.grid.w) + 0.5;
+    float depth = (draw.z_range.y - v.z) / (draw.z_range.y - draw.z_range.x);
+    gl_Position = vec4(2.0 * pixel / draw.size - 1.0, depth, 1.0);
 }

@@ -46,16 +46,19 @@ bool shadowed(ivec2 pixel, uint label) {
     if (occluder == 0u) {
         return false;
     }
+    // The surface seen at shadow pixel s, its plane carried along the row to the point's
+    // exact column; exact when that facet reaches the point. A crease between s and its
+    // neighbour toward the point can move the surface by at most the change of slope times
+    // the offset, so that much is allowed (src/shadow.rs).
     float offset = column - float(s.x);
     float slope = imageLoad(shadow_slope, s).r;
+    float front_z = imageLoad(shadow_z, s).r + slope * offset;
+    float bias = m.bias_pitch + m.bias_relative * max(max(abs(zs), abs(front_z)), max(abs(xs), abs(y)));
     ivec2 toward = ivec2(s.x + (offset >= 0.0 ? 1 : -1), s.y);
     if (toward.x >= 0 && toward.x < m.sizes.z && imageLoad(shadow_label, toward).r != 0u) {
-        slope = max(slope, imageLoad(shadow_slope, toward).r);
+        bias += abs(slope - imageLoad(shadow_slope, toward).r) * abs(offset);
     }
-    float occluder_z = imageLoad(shadow_z, s).r;
-    float bias = slope * abs(offset) + m.bias_pitch
-        + m.bias_relative * max(max(abs(zs), abs(occluder_z)), max(abs(xs), abs(y)));
-    return occluder_z - zs > bias;
+    return front_z - zs > bias;
 }
 
 void main() {

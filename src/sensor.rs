@@ -9,7 +9,7 @@
 //! rounded.
 
 use crate::error::{Error, Result};
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// The sensor settings of a scene file's `[sensor]` table.
@@ -123,7 +123,7 @@ impl Sensor {
 }
 
 /// One rendered view: an orthographic grid looking down −z, and the depth range mapped onto
-/// the depth buffer (larger z is closer, so it maps to smaller depth).
+/// the depth buffer (larger z is closer, so it maps to smaller depth; shaders/raster.vert).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewGrid {
     pub origin: [f64; 2],
@@ -131,28 +131,6 @@ pub struct ViewGrid {
     pub width: u32,
     pub height: u32,
     pub z_range: (f64, f64),
-}
-
-impl ViewGrid {
-    /// Maps a view-frame point to Vulkan clip space: pixel centres land on framebuffer
-    /// pixel centres (c + ½, r + ½), rows go down in y, and z ∈ z_range maps to depth
-    /// (z_max − z)/(z_max − z_min) ∈ [0, 1].
-    pub fn clip_from_view(&self) -> DMat4 {
-        let [x0, y0] = self.origin;
-        let [dx, dy] = self.pitch;
-        let (w, h) = (f64::from(self.width), f64::from(self.height));
-        let (z_min, z_max) = self.z_range;
-        // ndc_x = 2(c + ½)/W − 1 with c = (x − x0)/dx; ndc_y = 2(r + ½)/H − 1 with r = (y0 − y)/dy.
-        let sx = 2.0 / (w * dx);
-        let sy = -2.0 / (h * dy);
-        let sz = -1.0 / (z_max - z_min);
-        DMat4::from_cols(
-            DVec4::new(sx, 0.0, 0.0, 0.0),
-            DVec4::new(0.0, sy, 0.0, 0.0),
-            DVec4::new(0.0, 0.0, sz, 0.0),
-            DVec4::new(-x0 * sx + 1.0 / w - 1.0, -y0 * sy + 1.0 / h - 1.0, -z_max * sz, 1.0),
-        )
-    }
 }
 
 /// Depth bounds along z of spheres (centre, radius), widened by 1% and a small absolute

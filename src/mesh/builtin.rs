@@ -130,6 +130,9 @@ impl Builder {
     }
 
     fn cylinder(&mut self, sides: u32) {
+        for name in ["top", "bottom", "side"] {
+            self.surface(name);
+        }
         let r = 0.5;
         let rim = |i: u32, z: f64| {
             let a = TAU * f64::from(i % sides) / f64::from(sides);

@@ -13,8 +13,12 @@ use glam::DMat4;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DrawConstants {
-    clip_from_model: [f32; 16],
-    view_z_row: [f32; 4],
+    view_from_model: [[f32; 4]; 3],
+    grid: [f32; 4],
+    size: [f32; 2],
+    z_range: [f32; 2],
+    positions: [u32; 2],
+    indices: [u32; 2],
     surface_ids: [u32; 2],
     label_base: u32,
     _pad: u32,
@@ -29,16 +33,22 @@ pub struct Draw<'a> {
 }
 
 impl DrawConstants {
-    /// Composes grid ∘ view rotation ∘ pose in f64 and rounds once to f32.
+    /// Composes view rotation ∘ pose in f64 and rounds once to f32.
     pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw) -> Self {
         let view_from_model = view_from_range * draw.pose;
-        let clip = grid.clip_from_view() * view_from_model;
-        let address = draw.mesh.surface_ids.device_address();
-        let r = view_from_model.row(2);
+        let row = |i| view_from_model.row(i).as_vec4().to_array();
+        let address = |b: &crate::gpu::Buffer| {
+            let a = b.device_address();
+            [a as u32, (a >> 32) as u32]
+        };
         Self {
-            clip_from_model: clip.as_mat4().to_cols_array(),
-            view_z_row: [r.x as f32, r.y as f32, r.z as f32, r.w as f32],
-            surface_ids: [address as u32, (address >> 32) as u32],
+            view_from_model: [row(0), row(1), row(2)],
+            grid: [grid.origin[0], grid.origin[1], grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
+            size: [grid.width as f32, grid.height as f32],
+            z_range: [grid.z_range.0 as f32, grid.z_range.1 as f32],
+            positions: address(&draw.mesh.vertices),
+            indices: address(&draw.mesh.indices),
+            surface_ids: address(&draw.mesh.surface_ids),
             label_base: draw.label_base,
             _pad: 0,
         }

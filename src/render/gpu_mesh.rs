@@ -1,5 +1,6 @@
-//! A mesh uploaded once: vertex positions, triangle indices and per-triangle surface ids
-//! (read by the fragment shader through a buffer device address, indexed by gl_PrimitiveID).
+//! A mesh uploaded once: vertex positions, triangle indices and per-triangle surface ids.
+//! The fragment shader reads all three through buffer device addresses, indexed by
+//! gl_PrimitiveID, to label the pixel and evaluate its triangle's plane exactly.
 
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext};
@@ -19,8 +20,8 @@ impl GpuMesh {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         Ok(Self {
-            vertices: Buffer::with_data(ctx, vk::BufferUsageFlags::VERTEX_BUFFER, &mesh.positions, &format!("{name} vertices"))?,
-            indices: Buffer::with_data(ctx, vk::BufferUsageFlags::INDEX_BUFFER, &indices, &format!("{name} indices"))?,
+            vertices: Buffer::with_data(ctx, vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &mesh.positions, &format!("{name} vertices"))?,
+            indices: Buffer::with_data(ctx, vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &indices, &format!("{name} indices"))?,
             surface_ids: Buffer::with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,

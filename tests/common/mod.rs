@@ -1,0 +1,68 @@
+//! Shared test harness: one renderer per test binary with validation (synchronization
+//! validation included) always on; any validation message fails the test that sees it.
+//! There is no skipping: without a Vulkan device, `renderer()` panics and the test fails.
+//! When `RANGESYNTH_EXPECT_DEVICE` is set (CI sets "llvmpipe"), the device must match it.
+#![allow(dead_code)]
+
+pub mod compare;
+pub mod reference;
+
+use glam::DMat4;
+use rangesynth::gpu::ContextOptions;
+use rangesynth::mesh::builtin_mesh;
+use rangesynth::scene::SceneObject;
+use rangesynth::sensor::{Sensor, SensorKind};
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::{RenderOutput, Renderer, Scene};
+use std::sync::{Arc, LazyLock};
+
+pub static RENDERER: LazyLock<Renderer> = LazyLock::new(|| {
+    let renderer = Renderer::new(&ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok() })
+        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan device with validation layers: {e}"));
+    let name = renderer.context().device_name().to_string();
+    if let Ok(expected) = std::env::var("RANGESYNTH_EXPECT_DEVICE") {
+        assert!(name.contains(&expected), "tests ran on {name:?}, expected a device named {expected:?}");
+    }
+    assert!(renderer.context().validation_enabled());
+    renderer
+});
+
+/// Fails the calling test if validation reported anything.
+pub fn assert_no_validation_messages() {
+    let messages = RENDERER.context().take_validation_messages();
+    assert!(messages.is_empty(), "validation reported {} message(s):\n{}", messages.len(), messages.join("\n"));
+}
+
+pub fn render(scene: &Scene) -> RenderOutput {
+    let out = RENDERER.render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
+    assert_no_validation_messages();
+    out
+}
+
+pub fn sensor(width: u32, height: u32, pitch: f64, origin: [f64; 2], theta_deg: f64) -> Sensor {
+    Sensor { kind: SensorKind::Orthographic, width, height, pitch: [pitch, pitch], origin, theta_deg }
+}
+
+/// A sensor of `width`×`height` pixels centred on (cx, cy).
+pub fn centred_sensor(width: u32, height: u32, pitch: f64, centre: [f64; 2], theta_deg: f64) -> Sensor {
+    let origin = [
+        centre[0] - (f64::from(width) - 1.0) / 2.0 * pitch,
+        centre[1] + (f64::from(height) - 1.0) / 2.0 * pitch,
+    ];
+    sensor(width, height, pitch, origin, theta_deg)
+}
+
+pub fn scene(sensor: Sensor, mode: ShadowMode, objects: &[(&str, DMat4)]) -> Scene {
+    Scene {
+        sensor,
+        shadow: ShadowSettings { mode },
+        objects: objects
+            .iter()
+            .map(|&(model, pose)| SceneObject {
+                model_ref: model.to_string(),
+                mesh: Arc::new(builtin_mesh(model).expect("built-in model")),
+                pose,
+            })
+            .collect(),
+    }
+}

@@ -1,0 +1,213 @@
+//! Independent CPU reference: exact f64 ray casting at pixel centres (DESIGN.md "Testing
+//! stance"). Shares nothing with the GPU path but the scene description.
+//!
+//! The primary ray at a pixel centre travels down −z; the first hit is the triangle with
+//! the largest z over (x, y). The shadow ray from that point p travels along d_cam; rotated
+//! by R_y(−θ) it becomes a vertical ray too, so both are answered by the same caster: "which
+//! triangles cover this (x, y), at what z".
+
+use glam::{DMat4, DVec2, DVec3};
+use rangesynth::Scene;
+
+pub struct Reference {
+    pub width: usize,
+    pub height: usize,
+    /// Label of the first hit, 0 for none.
+    pub label: Vec<u32>,
+    /// z of the first hit (range frame).
+    pub z: Vec<f64>,
+    /// |n_z| of the hit triangle's unit normal: 1 face-on, 0 edge-on.
+    pub normal_z: Vec<f64>,
+    /// Range of z over the planes a rasterizer may rightly pick at the pixel centre: the hit
+    /// triangle's and those of triangles sharing a vertex with it that come within
+    /// [`SNAP_PIXELS`] of the centre (Vulkan's minimum sub-pixel precision is 4 bits).
+    pub z_bracket: Vec<(f64, f64)>,
+    /// Whether a surface lies along d_cam from the point: exact triangulation shadow.
+    pub occluded: Vec<bool>,
+    /// Label of the surface the camera sees at the point's position (the front-most along
+    /// the camera ray through it): what an exact shadow buffer holds there, and what the
+    /// paper's label test compares with.
+    pub camera_label: Vec<u32>,
+    /// Whether the camera's view within one shadow-view pixel (±dx across its rows) of the
+    /// point shows more than one surface: the point is within one pixel of a silhouette or
+    /// surface edge as the camera sees it, which is where shadow boundaries are cast and
+    /// where a shadow buffer of that pitch cannot decide.
+    pub near_camera_edge: Vec<bool>,
+}
+
+impl Reference {
+    /// Labels after exact shadowing.
+    pub fn label_shadowed(&self) -> Vec<u32> {
+        (0..self.label.len()).map(|i| if self.occluded[i] { 0 } else { self.label[i] }).collect()
+    }
+
+    /// Labels after the paper's test (Fig. 4) evaluated exactly: shadowed where the camera
+    /// sees another surface at the point. A surface hiding part of itself goes unnoticed.
+    pub fn label_paper_shadowed(&self) -> Vec<u32> {
+        (0..self.label.len()).map(|i| if self.camera_label[i] != self.label[i] { 0 } else { self.label[i] }).collect()
+    }
+}
+
+/// How close to a triangle edge a pixel centre may go either way, in pixels.
+pub const SNAP_PIXELS: f64 = 1.0 / 16.0;
+
+struct Triangle {
+    corners: [DVec3; 3],
+    /// (object, model-space corner bits), to find neighbours however the mesh shares vertices.
+    vertices: [(usize, [u32; 3]); 3],
+    label: u32,
+    lo: DVec2,
+    hi: DVec2,
+}
+
+/// Triangles binned on a uniform grid over their xy bounding box.
+struct VerticalCaster {
+    triangles: Vec<Triangle>,
+    lo: DVec2,
+    cell: DVec2,
+    cells: (usize, usize),
+    bins: Vec<Vec<u32>>,
+}
+
+impl VerticalCaster {
+    fn new(triangles: Vec<Triangle>) -> Self {
+        let lo = triangles.iter().fold(DVec2::splat(f64::INFINITY), |m, t| m.min(t.lo));
+        let hi = triangles.iter().fold(DVec2::splat(f64::NEG_INFINITY), |m, t| m.max(t.hi));
+        let n = ((triangles.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
+        let cell = ((hi - lo) / n as f64).max(DVec2::splat(1e-12));
+        let mut bins = vec![Vec::new(); n * n];
+        for (i, t) in triangles.iter().enumerate() {
+            let (c0, r0) = Self::cell_of(lo, cell, n, t.lo);
+            let (c1, r1) = Self::cell_of(lo, cell, n, t.hi);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    bins[r * n + c].push(i as u32);
+                }
+            }
+        }
+        Self { triangles, lo, cell, cells: (n, n), bins }
+    }
+
+    fn cell_of(lo: DVec2, cell: DVec2, n: usize, p: DVec2) -> (usize, usize) {
+        let q = ((p - lo) / cell).floor();
+        ((q.x.max(0.0) as usize).min(n - 1), (q.y.max(0.0) as usize).min(n - 1))
+    }
+
+    /// (z, label, triangle) of every triangle covering (x, y), boundary included.
+    fn hits(&self, p: DVec2) -> impl Iterator<Item = (f64, u32, &Triangle)> + '_ {
+        let inside_grid = p.cmpge(self.lo).all() && p.cmple(self.lo + self.cell * DVec2::new(self.cells.0 as f64, self.cells.1 as f64)).all();
+        let bin: &[u32] = if inside_grid {
+            let (c, r) = Self::cell_of(self.lo, self.cell, self.cells.0, p);
+            &self.bins[r * self.cells.0 + c]
+        } else {
+            &[]
+        };
+        bin.iter().filter_map(move |&i| {
+            let t = &self.triangles[i as usize];
+            if p.cmplt(t.lo).any() || p.cmpgt(t.hi).any() {
+                return None;
+            }
+            height_at(&t.corners, p).map(|z| (z, t.label, t))
+        })
+    }
+}
+
+impl VerticalCaster {
+    /// (z, triangle) of triangles whose xy projection comes within `margin` of p.
+    fn near(&self, p: DVec2, margin: f64) -> impl Iterator<Item = (f64, &Triangle)> + '_ {
+        self.triangles.iter().filter_map(move |t| {
+            if (p + margin).cmplt(t.lo).any() || (p - margin).cmpgt(t.hi).any() {
+                return None;
+            }
+            height_within(&t.corners, p, margin).map(|z| (z, t))
+        })
+    }
+}
+
+/// z of the triangle's plane over p when p lies inside its xy projection (edges included);
+/// None outside or for a triangle seen edge-on.
+fn height_at(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
+    height_within(c, p, 0.0)
+}
+
+/// As [`height_at`], with the triangle grown by `margin` (a distance) on every side.
+fn height_within(c: &[DVec3; 3], p: DVec2, margin: f64) -> Option<f64> {
+    let [a, b, d] = c.map(|v| v.truncate());
+    let area = (b - a).perp_dot(d - a);
+    if area == 0.0 {
+        return None;
+    }
+    let w = [(d, b), (a, d), (b, a)].map(|(from, to)| (from - to).perp_dot(p - to) / area);
+    let inside = [(d, b), (a, d), (b, a)]
+        .iter()
+        .zip(w)
+        .all(|((from, to), wi)| wi * area.abs() / (*from - *to).length() >= -margin);
+    inside.then(|| w[0] * c[0].z + w[1] * c[1].z + w[2] * c[2].z)
+}
+
+fn posed_triangles(scene: &Scene, frame: DMat4) -> Vec<Triangle> {
+    let bases = scene.label_bases().expect("labels fit");
+    let mut out = Vec::new();
+    for (k, (object, base)) in scene.objects.iter().zip(bases).enumerate() {
+        let m = frame * object.pose;
+        for (tri, &surface) in object.mesh.triangles.iter().zip(&object.mesh.triangle_surfaces) {
+            let corners = tri.map(|v| {
+                let [x, y, z] = object.mesh.positions[v as usize];
+                m.transform_point3(DVec3::new(x.into(), y.into(), z.into()))
+            });
+            let lo = corners.iter().fold(DVec2::splat(f64::INFINITY), |m, c| m.min(c.truncate()));
+            let hi = corners.iter().fold(DVec2::splat(f64::NEG_INFINITY), |m, c| m.max(c.truncate()));
+            let vertices = tri.map(|v| (k, object.mesh.positions[v as usize].map(f32::to_bits)));
+            out.push(Triangle { corners, vertices, label: base + surface, lo, hi });
+        }
+    }
+    out
+}
+
+pub fn reference_render(scene: &Scene) -> Reference {
+    let s = &scene.sensor;
+    let (width, height) = (s.width as usize, s.height as usize);
+    let theta = s.theta_deg.to_radians();
+    let range = VerticalCaster::new(posed_triangles(scene, DMat4::IDENTITY));
+    let to_camera = DMat4::from_rotation_y(-theta);
+    let camera = VerticalCaster::new(posed_triangles(scene, to_camera));
+    let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    let self_hit = 1e-9 * scale;
+
+    let mut reference =
+        Reference {
+            width,
+            height,
+            label: vec![0; width * height],
+            z: vec![0.0; width * height],
+            normal_z: vec![0.0; width * height],
+            z_bracket: vec![(0.0, 0.0); width * height],
+            occluded: vec![false; width * height],
+            camera_label: vec![0; width * height],
+            near_camera_edge: vec![false; width * height],
+        };
+    let first_seen = |p: DVec2| camera.hits(p).max_by(|a, b| a.0.total_cmp(&b.0)).map_or(0, |(_, l, _)| l);
+    for row in 0..height {
+        for col in 0..width {
+            let i = row * width + col;
+            let x = s.origin[0] + col as f64 * s.pitch[0];
+            let y = s.origin[1] - row as f64 * s.pitch[1];
+            let Some((z, label, t)) = range.hits(DVec2::new(x, y)).max_by(|a, b| a.0.total_cmp(&b.0)) else { continue };
+            reference.label[i] = label;
+            reference.z[i] = z;
+            let [a, b, c] = t.corners;
+            reference.normal_z[i] = (b - a).cross(c - a).normalize().z.abs();
+            let snap = SNAP_PIXELS * s.pitch[0].min(s.pitch[1]);
+            reference.z_bracket[i] = range
+                .near(DVec2::new(x, y), snap)
+                .filter(|(_, n)| n.vertices.iter().any(|v| t.vertices.contains(v)))
+                .fold((z, z), |(lo, hi), (zn, _)| (lo.min(zn), hi.max(zn)));
+            let p = to_camera.transform_point3(DVec3::new(x, y, z));
+            reference.occluded[i] = camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
+            let seen = [-1.0, 0.0, 1.0].map(|k| first_seen(p.truncate() + DVec2::new(k * s.pitch[0], 0.0)));
+            reference.camera_label[i] = seen[1];
+            reference.near_camera_edge[i] = seen.iter().any(|&l| l != seen[0]);
+        }
+    }
+    reference
+}
