@@ -1,6 +1,7 @@
-//! PNG previews for people: the range image as shaded grey (Lambert shading from normals
-//! estimated by finite differences of z), labels in distinct colours, and shadowed pixels
-//! (data before shadowing, none after) in one marked colour.
+//! PNG previews for people: the range image as shaded grey (brighter is closer to the sensor,
+//! times Lambert shading from normals estimated by finite differences of z), labels in
+//! distinct colours, and shadowed pixels (data before shadowing, none after) in one marked
+//! colour. Pixels without data are black.
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -20,6 +21,9 @@ pub fn write_range_preview(path: &Path, width: u32, height: u32, z: &[f32], vali
         (None, Some(a)) => (a - here) / step,
         (None, None) => 0.0,
     };
+    let (z_lo, z_hi) = (0..w * h)
+        .filter(|&i| valid[i])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| (lo.min(f64::from(z[i])), hi.max(f64::from(z[i]))));
     let mut pixels = vec![0u8; w * h * 3];
     for r in 0..h {
         for c in 0..w {
@@ -28,7 +32,8 @@ pub fn write_range_preview(path: &Path, width: u32, height: u32, z: &[f32], vali
             // Rows go down in y.
             let dzdy = -slope(here, r.checked_sub(1).and_then(|r| at(c, r)), (r + 1 < h).then(|| at(c, r + 1)).flatten(), pitch[1]);
             let normal = glam::DVec3::new(-dzdx, -dzdy, 1.0).normalize();
-            let grey = (0.15 + 0.85 * normal.dot(light).max(0.0)) * 255.0;
+            let height = if z_hi > z_lo { (here - z_lo) / (z_hi - z_lo) } else { 1.0 };
+            let grey = (0.3 + 0.7 * height) * (0.35 + 0.65 * normal.dot(light).max(0.0)) * 255.0;
             pixels[(r * w + c) * 3..][..3].fill(grey.round() as u8);
         }
     }
