@@ -25,7 +25,7 @@ pub enum Error {
     Mesh { name: String, reason: String },
     #[error("invalid scene: {0}")]
     Scene(String),
-    #[error("{}: {source}", path.display())]
+    #[error("cannot access {}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: {reason}", path.display())]
     File { path: PathBuf, reason: String },

@@ -20,6 +20,9 @@
 //!   another surface at the point, so a surface hiding part of itself goes unnoticed), with
 //!   the same allowance; its rim of false shadow along surface edges lies within it.
 
+// Per-pixel arrays (GPU output, reference, allowances) are read side by side by pixel index.
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use common::compare::{compare_labels, near_label_change, LabelDiff};

@@ -55,19 +55,21 @@ impl DrawConstants {
     }
 }
 
+/// One view to render: its pipeline, attachments, grid, and the rotation from the range
+/// frame into it (identity for the range view, R_y(−θ) for the shadow view).
+pub struct ViewPass<'a> {
+    pub pipeline: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub targets: &'a ViewTargets,
+    pub grid: &'a ViewGrid,
+    pub view_from_range: DMat4,
+}
+
 /// Records a view pass: clears (label 0, z 0, depth 1) then draws every mesh. The caller has
 /// moved the attachments to their attachment layouts.
-pub fn record_view(
-    ctx: &GpuContext,
-    cmd: vk::CommandBuffer,
-    pipeline: vk::Pipeline,
-    layout: vk::PipelineLayout,
-    targets: &ViewTargets,
-    grid: &ViewGrid,
-    view_from_range: DMat4,
-    draws: &[Draw],
-) {
+pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw]) {
     let d = &ctx.device;
+    let targets = pass.targets;
     let extent = targets.label.extent();
     let colour = |view, clear| {
         vk::RenderingAttachmentInfo::default()
@@ -106,14 +108,14 @@ pub fn record_view(
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
         d.cmd_begin_rendering(cmd, &info);
-        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipeline);
         d.cmd_set_viewport(cmd, 0, &[viewport]);
         d.cmd_set_scissor(cmd, 0, &[area]);
         for draw in draws {
-            let constants = DrawConstants::new(grid, view_from_range, draw);
+            let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw);
             d.cmd_push_constants(
                 cmd,
-                layout,
+                pass.layout,
                 vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
                 0,
                 bytemuck::bytes_of(&constants),

@@ -12,6 +12,7 @@ mod shadow_pass;
 mod targets;
 
 pub use draw::Draw;
+use draw::ViewPass;
 pub use gpu_mesh::GpuMesh;
 pub use output::{PassTimings, RenderOutput};
 
@@ -143,11 +144,20 @@ impl Renderer {
             }
             barrier(d, cmd, &prepare, &[]);
             timestamps.write(cmd, 0);
-            draw::record_view(ctx, cmd, p.range, p.raster_layout, &range, &views.range, DMat4::IDENTITY, draws);
+            let range_pass = ViewPass {
+                pipeline: p.range,
+                layout: p.raster_layout,
+                targets: &range,
+                grid: &views.range,
+                view_from_range: DMat4::IDENTITY,
+            };
+            draw::record_view(ctx, cmd, &range_pass, draws);
             timestamps.write(cmd, 1);
             let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
             if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
-                draw::record_view(ctx, cmd, p.shadow, p.raster_layout, s, grid, to_shadow, draws);
+                let shadow_pass =
+                    ViewPass { pipeline: p.shadow, layout: p.raster_layout, targets: s, grid, view_from_range: to_shadow };
+                draw::record_view(ctx, cmd, &shadow_pass, draws);
                 timestamps.write(cmd, 2);
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));

@@ -1,0 +1,137 @@
+//! The binary end to end: the demo, `render` of a scene file, and bad input, which must give a
+//! clear message and a non-zero exit code, never a panic. Validation is on throughout (the
+//! CLI exits non-zero when validation reports anything).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rangesynth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rangesynth")).args(args).env("RANGESYNTH_VALIDATION", "1").output().expect("the binary runs")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn demo_writes_the_images_and_a_summary() {
+    let out_dir = dir("demo");
+    let out = rangesynth(&["demo", "--out", out_dir.to_str().unwrap()]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "demo failed:\n{stdout}\n{stderr}");
+    assert!(stdout.contains("device: "), "{stdout}");
+    assert!(stdout.contains("low_top") && stdout.contains("shadowed"), "{stdout}");
+    assert!(stdout.contains("GPU time per pass: range"), "{stdout}");
+    for f in ["range.exr", "label_unshadowed.exr", "labels.json", "range.png", "label.png", "label_unshadowed.png"] {
+        assert!(out_dir.join(f).is_file(), "{f} missing");
+    }
+    // The low top is partly shadowed by the tall part, the high top not at all.
+    let row = |name: &str| stdout.lines().find(|l| l.contains(name)).unwrap().split_whitespace().rev().take(2).map(|v| v.parse::<u64>().unwrap()).collect::<Vec<_>>();
+    let (low_shadowed, low_valid) = (row("low_top")[0], row("low_top")[1]);
+    assert!(low_shadowed > 1000 && low_valid > 1000, "{stdout}");
+    assert_eq!(row("high_top")[0], 0);
+}
+
+fn write_scene(d: &Path, body: &str) -> PathBuf {
+    let path = d.join("scene.toml");
+    std::fs::write(&path, body).unwrap();
+    path
+}
+
+const SENSOR: &str = "[sensor]\nkind = \"orthographic\"\nwidth = 32\nheight = 24\npitch = [0.1, 0.1]\norigin = [-1.5, 1.1]\ntheta_deg = 30.0\n";
+
+#[test]
+fn render_reads_a_scene_file_with_an_obj_model() {
+    let d = dir("render");
+    std::fs::write(d.join("tri.obj"), "v -1 -1 0\nv 1 -1 0\nv 0 1 0.5\ng only\nf 1 2 3\n").unwrap();
+    let scene = write_scene(&d, &format!("{SENSOR}[shadow]\nmode = \"label\"\n[[object]]\nmodel = \"tri.obj\"\n[[object]]\nmodel = \"builtin:box\"\npose = [[1,0,0,0.9],[0,1,0,0],[0,0,1,-2],[0,0,0,1]]\n"));
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]);
+    assert!(out.status.success(), "{}{}", text(&out.stdout), text(&out.stderr));
+    let labels = std::fs::read_to_string(d.join("out/labels.json")).unwrap();
+    assert!(labels.contains("\"tri.obj\"") && labels.contains("\"builtin:box\""), "{labels}");
+}
+
+/// Runs `render` on a scene body and returns stderr, asserting a clean failure.
+fn refused(name: &str, body: &str) -> String {
+    refused_in(&dir(name), name, body)
+}
+
+fn refused_in(d: &Path, name: &str, body: &str) -> String {
+    let scene = write_scene(d, body);
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{name}: expected exit code 1, stderr:\n{stderr}");
+    assert!(stderr.starts_with("error: "), "{name}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    stderr
+}
+
+#[test]
+fn bad_scenes_are_refused_with_a_clear_message() {
+    let object = "[[object]]\nmodel = \"builtin:box\"\n";
+    let cases: &[(&str, String, &str)] = &[
+        ("malformed", "[sensor\nwidth = 3".into(), "scene.toml"),
+        ("no_sensor", object.into(), "missing field `sensor`"),
+        ("incomplete_sensor", "[sensor]\nkind = \"orthographic\"\nwidth = 4\n".into(), "missing field"),
+        ("zero_width", SENSOR.replace("width = 32", "width = 0") + object, "at least 1"),
+        ("too_large", SENSOR.replace("height = 24", "height = 100000") + object, "limited to"),
+        ("theta_90", SENSOR.replace("theta_deg = 30.0", "theta_deg = 90.0") + object, "strictly between -90 and 90"),
+        ("theta_minus_120", SENSOR.replace("theta_deg = 30.0", "theta_deg = -120.0") + object, "strictly between -90 and 90"),
+        ("theta_nan", SENSOR.replace("theta_deg = 30.0", "theta_deg = nan") + object, "strictly between -90 and 90"),
+        ("pitch_zero", SENSOR.replace("pitch = [0.1, 0.1]", "pitch = [0.0, 0.1]") + object, "positive finite"),
+        ("unknown_key", SENSOR.to_string() + "colour = 3\n" + object, "unknown field `colour`"),
+        ("unknown_mode", SENSOR.to_string() + "[shadow]\nmode = \"soft\"\n" + object, "unknown variant `soft`"),
+        ("unknown_kind", SENSOR.replace("\"orthographic\"", "\"pinhole\"") + object, "unknown variant `pinhole`"),
+        ("missing_model", SENSOR.to_string() + "[[object]]\nmodel = \"nowhere.obj\"\n", "nowhere.obj: No such file"),
+        ("unknown_builtin", SENSOR.to_string() + "[[object]]\nmodel = \"builtin:teapot\"\n", "unknown built-in"),
+        ("non_rigid", SENSOR.to_string() + object + "pose = [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n", "not a rigid transform"),
+        ("projective", SENSOR.to_string() + object + "pose = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]]\n", "last row"),
+        ("nan_pose", SENSOR.to_string() + object + "pose = [[1,0,0,nan],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n", "non-finite"),
+    ];
+    for (name, body, expected) in cases {
+        let stderr = refused(name, body);
+        assert!(stderr.contains(expected), "{name}: expected {expected:?} in:\n{stderr}");
+    }
+}
+
+#[test]
+fn bad_models_in_a_scene_are_refused_with_a_clear_message() {
+    let cases = [
+        ("nan_vertex", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "non-finite coordinate"),
+        ("bad_index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "tri.obj"),
+        ("no_triangles", "v 0 0 0\nv 1 0 0\n", "no (non-degenerate) triangles"),
+        ("garbage", "this is not an obj file\n\u{0}\u{1}", "tri.obj"),
+    ];
+    for (name, obj, expected) in cases {
+        let d = dir(name);
+        std::fs::write(d.join("tri.obj"), obj).unwrap();
+        let stderr = refused_in(&d, name, &(SENSOR.to_string() + "[[object]]\nmodel = \"tri.obj\"\n"));
+        assert!(stderr.contains(expected), "{name}: expected {expected:?} in:\n{stderr}");
+    }
+}
+
+#[test]
+fn degenerate_triangles_give_a_warning() {
+    let d = dir("degenerate");
+    std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 2\n").unwrap();
+    let scene = write_scene(&d, &(SENSOR.to_string() + "[[object]]\nmodel = \"tri.obj\"\n"));
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]);
+    assert!(out.status.success());
+    assert!(text(&out.stderr).contains("dropped 1 degenerate triangle"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn an_unknown_device_name_is_refused() {
+    let d = dir("device");
+    let out = rangesynth(&["demo", "--device", "no-such-gpu", "--out", d.to_str().unwrap()]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no usable Vulkan device") && stderr.contains("not named \"no-such-gpu\""), "{stderr}");
+}

@@ -1,0 +1,91 @@
+//! What is written reads back bit-identical: EXR points (NaN included), u32 labels above 2^24,
+//! the sensor settings in the header, and labels.json.
+
+mod common;
+
+use common::*;
+use glam::DMat4;
+use rangesynth::io::{read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage};
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn range_image_round_trips_bit_identically_with_large_labels() {
+    let (w, h) = (7u32, 5u32);
+    let n = (w * h) as usize;
+    // Labels that a float channel would corrupt: 2^24 + 1 is not representable in f32.
+    let labels: Vec<u32> = (0..n as u32).map(|i| match i % 5 {
+        0 => 0,
+        1 => (1 << 24) + 1,
+        2 => u32::MAX,
+        3 => (1 << 31) + 12345,
+        _ => i,
+    }).collect();
+    let coordinate = |k: u32| -> Vec<f32> {
+        (0..n as u32).map(|i| if labels[i as usize] == 0 { f32::NAN } else { (i * 7 + k) as f32 * 0.123_456_7 - 1.0 }).collect()
+    };
+    let image = RangeImage {
+        width: w,
+        height: h,
+        x: coordinate(1),
+        y: coordinate(2),
+        z: coordinate(3),
+        label: labels.clone(),
+        sensor: Some(sensor(w, h, 0.25, [-1.0, 2.0], 37.5)),
+        shadow: Some(ShadowSettings { mode: ShadowMode::Depth }),
+    };
+    let dir = temp_dir("files_round_trip");
+    let path = dir.join("range.exr");
+    write_range_image(&path, &image).unwrap();
+    let back = read_range_image(&path).unwrap();
+    let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&back.x), bits(&image.x));
+    assert_eq!(bits(&back.y), bits(&image.y));
+    assert_eq!(bits(&back.z), bits(&image.z));
+    assert_eq!(back.label, labels);
+    assert_eq!(back.sensor, image.sensor);
+    assert_eq!(back.shadow, image.shadow);
+
+    let label_path = dir.join("label.exr");
+    write_label_image(&label_path, w, h, &labels).unwrap();
+    assert_eq!(read_label_image(&label_path).unwrap(), (w, h, labels));
+}
+
+#[test]
+fn a_rendered_directory_reads_back_what_was_rendered() {
+    let s = centred_sensor(48, 40, 0.05, [-0.5, 0.0], 45.0);
+    let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY), ("builtin:plane:4", DMat4::IDENTITY)]);
+    let out = render(&sc);
+    let dir = temp_dir("files_render_dir");
+    let written = write_render_directory(&dir, &sc, &out).unwrap();
+    assert_eq!(written.len(), 6);
+    let back = read_range_image(&dir.join("range.exr")).unwrap();
+    assert_eq!(back.label, out.label);
+    for i in 0..out.label.len() {
+        match out.point(i) {
+            Some([x, y, z]) => assert_eq!([back.x[i], back.y[i], back.z[i]].map(f32::to_bits), [x, y, z].map(f32::to_bits)),
+            None => assert!(back.x[i].is_nan() && back.y[i].is_nan() && back.z[i].is_nan(), "pixel {i} has no data"),
+        }
+    }
+    assert_eq!(back.sensor, Some(s));
+    let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr")).unwrap();
+    assert_eq!(unshadowed, out.label_unshadowed);
+    let map: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();
+    let labels = map["labels"].as_array().unwrap();
+    assert_eq!(labels.len(), 9, "8 step surfaces and the plane");
+    assert_eq!(labels[8]["label"], 9);
+    assert_eq!(labels[8]["object"], 1);
+    assert_eq!(labels[8]["surface_name"], "plane");
+    assert_eq!(labels[1]["surface_name"], "high_top");
+    for png in ["range.png", "label.png", "label_unshadowed.png"] {
+        let decoder = png::Decoder::new(std::fs::File::open(dir.join(png)).unwrap());
+        let reader = decoder.read_info().unwrap();
+        assert_eq!((reader.info().width, reader.info().height), (48, 40), "{png}");
+    }
+}

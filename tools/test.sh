@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The test command (README, .ci/run): installs what is missing, then runs the whole suite on
+# lavapipe with Vulkan validation (synchronization validation included) on in every GPU test.
+# Every GPU test asserts that it ran on lavapipe (RANGESYNTH_EXPECT_DEVICE).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tools/setup.sh
+icd=$(ls /usr/share/vulkan/icd.d/lvp_icd.*.json 2>/dev/null | head -n 1)
+if [ -z "$icd" ]; then
+  echo "lavapipe's ICD file was not found under /usr/share/vulkan/icd.d" >&2
+  exit 1
+fi
+export VK_DRIVER_FILES="$icd" VK_ICD_FILENAMES="$icd" # the second for older loaders
+export RANGESYNTH_EXPECT_DEVICE=llvmpipe
+cargo test --locked "$@"
