@@ -9,6 +9,7 @@ const SHADERS: &[(&str, &str, Option<&str>)] = &[
     ("raster.frag", "raster_range.frag.spv", None),
     ("raster.frag", "raster_shadow.frag.spv", Some("SHADOW_VIEW")),
     ("shadow_mask.comp", "shadow_mask.comp.spv", None),
+    ("score.comp", "score.comp.spv", None),
 ];
 
 fn main() {

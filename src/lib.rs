@@ -10,6 +10,7 @@ pub mod render;
 pub mod scene;
 pub mod sensor;
 pub mod shadow;
+pub mod verify;
 
 pub use error::{Error, Result};
 pub use render::{RenderOutput, Renderer};

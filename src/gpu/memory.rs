@@ -22,6 +22,19 @@ impl BufferDesc {
         Self { size, usage: usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS, location: MemoryLocation::CpuToGpu }
     }
 
+    /// Device-local scratch that shaders read and write through its device address, and that
+    /// transfers can fill or copy from.
+    pub fn gpu_storage(size: u64) -> Self {
+        Self {
+            size,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        }
+    }
+
     /// Written by the GPU (copies or storage writes), read by the host.
     pub fn readback(size: u64) -> Self {
         Self {
@@ -82,6 +95,12 @@ impl Buffer {
         let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
         // SAFETY: created with SHADER_DEVICE_ADDRESS (BufferDesc::upload) on a device with the feature.
         unsafe { self.ctx.device.get_buffer_device_address(&info) }
+    }
+
+    /// The device address as the (low, high) words shaders take (GL_EXT_buffer_reference_uvec2).
+    pub fn address_words(&self) -> [u32; 2] {
+        let a = self.device_address();
+        [a as u32, (a >> 32) as u32]
     }
 
     fn mapped_mut(&mut self) -> Result<&mut [u8]> {

@@ -9,6 +9,7 @@ pub const RASTER_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.
 pub const RASTER_RANGE_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_range.frag.spv"));
 pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow.frag.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
+pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
 
 /// A shader module that lives only as long as pipeline creation needs it.
 pub struct ShaderModule<'a> {

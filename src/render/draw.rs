@@ -37,18 +37,14 @@ impl DrawConstants {
     pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw) -> Self {
         let view_from_model = view_from_range * draw.pose;
         let row = |i| view_from_model.row(i).as_vec4().to_array();
-        let address = |b: &crate::gpu::Buffer| {
-            let a = b.device_address();
-            [a as u32, (a >> 32) as u32]
-        };
         Self {
             view_from_model: [row(0), row(1), row(2)],
             grid: [grid.origin[0], grid.origin[1], grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
             size: [grid.width as f32, grid.height as f32],
             z_range: [grid.z_range.0 as f32, grid.z_range.1 as f32],
-            positions: address(&draw.mesh.vertices),
-            indices: address(&draw.mesh.indices),
-            surface_ids: address(&draw.mesh.surface_ids),
+            positions: draw.mesh.vertices.address_words(),
+            indices: draw.mesh.indices.address_words(),
+            surface_ids: draw.mesh.surface_ids.address_words(),
             label_base: draw.label_base,
             _pad: 0,
         }
@@ -70,7 +66,8 @@ pub struct ViewPass<'a> {
 pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw]) {
     let d = &ctx.device;
     let targets = pass.targets;
-    let extent = targets.label.extent();
+    // The attachments may be larger than the grid (batch slots fit their largest view).
+    let extent = vk::Extent2D { width: pass.grid.width, height: pass.grid.height };
     let colour = |view, clear| {
         vk::RenderingAttachmentInfo::default()
             .image_view(view)

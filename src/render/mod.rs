@@ -4,13 +4,16 @@
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
+mod batch;
 mod draw;
 mod gpu_mesh;
 mod output;
 mod pipelines;
+mod score_pass;
 mod shadow_pass;
 mod targets;
 
+pub use batch::{BatchItem, BatchSettings, SensedBuffers, SLOTS};
 pub use draw::Draw;
 use draw::ViewPass;
 pub use gpu_mesh::GpuMesh;
@@ -19,10 +22,10 @@ pub use output::{PassTimings, RenderOutput};
 use crate::error::{Error, Result};
 use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps};
 use crate::scene::Scene;
-use crate::sensor::{depth_bounds, ViewGrid};
+use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
 use ash::vk;
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 use pipelines::Pipelines;
 use shadow_pass::{MaskBindings, MaskConstants};
 use std::sync::Arc;
@@ -33,11 +36,37 @@ pub struct Renderer {
     ctx: Arc<GpuContext>,
 }
 
+/// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
+/// `none` or θ = 0, the shadow grid (sensor.rs) for bounding spheres (centre, radius) given in
+/// the range frame.
+pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f64)], max_side: u32) -> Result<Views> {
+    let z_range = depth_bounds(spheres.iter().copied());
+    let range = sensor.range_grid(z_range);
+    let shadow = match mode {
+        ShadowMode::None => None,
+        _ if sensor.theta_deg == 0.0 => None,
+        _ => {
+            let to_shadow = sensor.to_shadow_frame();
+            let shadow_z = depth_bounds(spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r)));
+            Some(sensor.shadow_grid(z_range, shadow_z)?)
+        }
+    };
+    for grid in std::iter::once(&range).chain(shadow.as_ref()) {
+        if grid.width > max_side || grid.height > max_side {
+            return Err(Error::Scene(format!(
+                "a {}×{} view exceeds this device's image limit of {max_side} pixels per side",
+                grid.width, grid.height
+            )));
+        }
+    }
+    Ok(Views { range, shadow })
+}
+
 /// The two views of one render, with the grids they were rendered on.
-struct Views {
-    range: ViewGrid,
+pub(crate) struct Views {
+    pub range: ViewGrid,
     /// `None` when no shadow pass is recorded (mode `none` or θ = 0).
-    shadow: Option<ViewGrid>,
+    pub shadow: Option<ViewGrid>,
 }
 
 impl Renderer {
@@ -83,33 +112,8 @@ impl Renderer {
                 (o.pose.transform_point3(centre), radius)
             })
             .collect();
-        let views = self.plan_views(scene, &spheres)?;
+        let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
         self.render_views(scene, &views, &draws)
-    }
-
-    fn plan_views(&self, scene: &Scene, spheres: &[(glam::DVec3, f64)]) -> Result<Views> {
-        let sensor = &scene.sensor;
-        let z_range = depth_bounds(spheres.iter().copied());
-        let range = sensor.range_grid(z_range);
-        let shadow = match scene.shadow.mode {
-            ShadowMode::None => None,
-            _ if sensor.theta_deg == 0.0 => None,
-            _ => {
-                let to_shadow = sensor.to_shadow_frame();
-                let shadow_z = depth_bounds(spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r)));
-                Some(sensor.shadow_grid(z_range, shadow_z)?)
-            }
-        };
-        let max_side = self.ctx.limits.max_image_dimension2_d;
-        for grid in std::iter::once(&range).chain(shadow.as_ref()) {
-            if grid.width > max_side || grid.height > max_side {
-                return Err(Error::Scene(format!(
-                    "a {}×{} view exceeds this device's image limit of {max_side} pixels per side",
-                    grid.width, grid.height
-                )));
-            }
-        }
-        Ok(Views { range, shadow })
     }
 
     fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw]) -> Result<RenderOutput> {
@@ -162,7 +166,7 @@ impl Renderer {
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                 barrier(d, cmd, &reads, &[]);
-                b.record(cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid));
+                b.record(ctx, cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid));
                 timestamps.write(cmd, 3);
                 to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
                 barrier(d, cmd, &to_copy, &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }]);

@@ -1,8 +1,9 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
-//! rasterization pipelines (dynamic rendering into label, z and depth attachments) and the
-//! shadow-mask compute pipeline.
+//! rasterization pipelines (dynamic rendering into label, z and depth attachments), the
+//! shadow-mask compute pipeline and the verification-count compute pipeline.
 
 use super::draw::DrawConstants;
+use super::score_pass::ScoreConstants;
 use super::shadow_pass::MaskConstants;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
@@ -21,6 +22,9 @@ pub struct Pipelines {
     pub mask_set_layout: vk::DescriptorSetLayout,
     pub mask_layout: vk::PipelineLayout,
     pub mask: vk::Pipeline,
+    pub score_set_layout: vk::DescriptorSetLayout,
+    pub score_layout: vk::PipelineLayout,
+    pub score: vk::Pipeline,
 }
 
 impl Pipelines {
@@ -35,6 +39,9 @@ impl Pipelines {
             mask_set_layout: vk::DescriptorSetLayout::null(),
             mask_layout: vk::PipelineLayout::null(),
             mask: vk::Pipeline::null(),
+            score_set_layout: vk::DescriptorSetLayout::null(),
+            score_layout: vk::PipelineLayout::null(),
+            score: vk::Pipeline::null(),
         };
         let raster_push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
@@ -57,38 +64,19 @@ impl Pipelines {
             "shadow view",
         )?;
 
-        let bindings: Vec<_> = (0..6)
-            .map(|b| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(if b < 5 { vk::DescriptorType::STORAGE_IMAGE } else { vk::DescriptorType::STORAGE_BUFFER })
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
+        let mask_bindings: Vec<_> = (0..6)
+            .map(|b| if b < 5 { vk::DescriptorType::STORAGE_IMAGE } else { vk::DescriptorType::STORAGE_BUFFER })
             .collect();
-        // SAFETY: valid device.
-        p.mask_set_layout =
-            unsafe { d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None) }
-                .vk("creating the shadow-mask descriptor layout")?;
-        let mask_push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .size(size_of::<MaskConstants>() as u32)];
-        let set_layouts = [p.mask_set_layout];
-        // SAFETY: valid device.
-        p.mask_layout = unsafe {
-            d.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&mask_push),
-                None,
-            )
-        }
-        .vk("creating the shadow-mask pipeline layout")?;
-        let comp = ShaderModule::new(ctx, shaders::SHADOW_MASK_COMP, "shadow_mask.comp")?;
-        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(comp.raw).name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(p.mask_layout)];
-        // SAFETY: valid layout and module.
-        p.mask = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
-            .map_err(|(_, e)| Error::vulkan("creating the shadow-mask pipeline", e))?[0];
-        for (handle, name) in [(p.range, "range view"), (p.shadow, "shadow view"), (p.mask, "shadow mask")] {
+        (p.mask_set_layout, p.mask_layout, p.mask) =
+            compute_pipeline(ctx, &mask_bindings, size_of::<MaskConstants>(), shaders::SHADOW_MASK_COMP, "shadow mask")?;
+        (p.score_set_layout, p.score_layout, p.score) = compute_pipeline(
+            ctx,
+            &[vk::DescriptorType::STORAGE_IMAGE; 2],
+            size_of::<ScoreConstants>(),
+            shaders::SCORE_COMP,
+            "verification counts",
+        )?;
+        for (handle, name) in [(p.range, "range view"), (p.shadow, "shadow view")] {
             ctx.name_object(handle, name);
         }
         Ok(p)
@@ -101,12 +89,78 @@ impl Drop for Pipelines {
         // SAFETY: owned handles (null ones are ignored by Vulkan); no submission uses them
         // once the renderer is dropped.
         unsafe {
+            d.destroy_pipeline(self.score, None);
+            d.destroy_pipeline_layout(self.score_layout, None);
+            d.destroy_descriptor_set_layout(self.score_set_layout, None);
             d.destroy_pipeline(self.mask, None);
             d.destroy_pipeline_layout(self.mask_layout, None);
             d.destroy_descriptor_set_layout(self.mask_set_layout, None);
             d.destroy_pipeline(self.shadow, None);
             d.destroy_pipeline(self.range, None);
             d.destroy_pipeline_layout(self.raster_layout, None);
+        }
+    }
+}
+
+/// A compute pipeline whose set 0 has one binding of each given type (compute stage) and
+/// whose push constants are `push_size` bytes. Whatever was created before a failure is
+/// destroyed by the caller's `Pipelines::drop` once assigned, so each step is assigned as made.
+fn compute_pipeline(
+    ctx: &GpuContext,
+    binding_types: &[vk::DescriptorType],
+    push_size: usize,
+    spirv: &[u8],
+    name: &str,
+) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout, vk::Pipeline)> {
+    let d = &ctx.device;
+    let bindings: Vec<_> = binding_types
+        .iter()
+        .enumerate()
+        .map(|(b, &ty)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b as u32)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        })
+        .collect();
+    // SAFETY: valid device.
+    let set_layout = unsafe { d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None) }
+        .vk(&format!("creating the {name} descriptor layout"))?;
+    let push = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32)];
+    let set_layouts = [set_layout];
+    // SAFETY: valid device and set layout.
+    let layout = unsafe {
+        d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push), None)
+    };
+    let layout = match layout {
+        Ok(l) => l,
+        Err(e) => {
+            // SAFETY: unused layout.
+            unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
+            return Err(Error::vulkan(&format!("creating the {name} pipeline layout"), e));
+        }
+    };
+    let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
+        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module.raw).name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        // SAFETY: valid layout and module.
+        unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map(|p| p[0])
+            .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
+    });
+    match made {
+        Ok(pipeline) => {
+            ctx.name_object(pipeline, name);
+            Ok((set_layout, layout, pipeline))
+        }
+        Err(e) => {
+            // SAFETY: unused layouts.
+            unsafe {
+                d.destroy_pipeline_layout(layout, None);
+                d.destroy_descriptor_set_layout(set_layout, None);
+            }
+            Err(e)
         }
     }
 }

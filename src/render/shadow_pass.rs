@@ -3,8 +3,8 @@
 
 use super::pipelines::Pipelines;
 use super::targets::ViewTargets;
-use crate::error::{Result, VkResultExt};
-use crate::gpu::{Buffer, GpuContext};
+use crate::error::Result;
+use crate::gpu::{Buffer, GpuContext, StorageSet};
 use crate::sensor::{Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
@@ -44,77 +44,25 @@ impl MaskConstants {
 
 /// The descriptor set binding both views' attachments and the output labels.
 pub struct MaskBindings {
-    ctx: Arc<GpuContext>,
-    pool: vk::DescriptorPool,
-    pub set: vk::DescriptorSet,
+    set: StorageSet,
 }
 
 impl MaskBindings {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        pipelines: &Pipelines,
-        range: &ViewTargets,
-        shadow: &ViewTargets,
-        masked: &Buffer,
-    ) -> Result<Self> {
-        let d = &ctx.device;
-        let sizes = [
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: 5 },
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 1 },
-        ];
-        // SAFETY: valid device.
-        let pool = unsafe { d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None) }
-            .vk("creating the shadow-mask descriptor pool")?;
-        let mut bindings = Self { ctx: ctx.clone(), pool, set: vk::DescriptorSet::null() };
-        let layouts = [pipelines.mask_set_layout];
-        // SAFETY: the pool has room for one set of this layout.
-        bindings.set = unsafe { d.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts)) }
-            .vk("allocating the shadow-mask descriptor set")?[0];
+    pub fn new(ctx: &Arc<GpuContext>, pipelines: &Pipelines, range: &ViewTargets, shadow: &ViewTargets, masked: &Buffer) -> Result<Self> {
         let slope = shadow.slope.as_ref().unwrap_or(&shadow.z);
-        let images: Vec<[vk::DescriptorImageInfo; 1]> = [&range.label, &range.z, &shadow.label, &shadow.z, slope]
-            .iter()
-            .map(|i| [vk::DescriptorImageInfo::default().image_view(i.view).image_layout(vk::ImageLayout::GENERAL)])
-            .collect();
-        let buffer = [vk::DescriptorBufferInfo::default().buffer(masked.raw).range(vk::WHOLE_SIZE)];
-        let mut writes: Vec<_> = images
-            .iter()
-            .enumerate()
-            .map(|(b, info)| {
-                vk::WriteDescriptorSet::default()
-                    .dst_set(bindings.set)
-                    .dst_binding(b as u32)
-                    .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-                    .image_info(info)
-            })
-            .collect();
-        writes.push(
-            vk::WriteDescriptorSet::default()
-                .dst_set(bindings.set)
-                .dst_binding(5)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .buffer_info(&buffer),
-        );
-        // SAFETY: the set, views and buffer are alive.
-        unsafe { d.update_descriptor_sets(&writes, &[]) };
-        Ok(bindings)
+        let images = [&range.label, &range.z, &shadow.label, &shadow.z, slope];
+        Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &[masked], "shadow mask bindings")? })
     }
 
-    pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &MaskConstants) {
-        let d = &self.ctx.device;
+    pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &MaskConstants) {
+        let d = &ctx.device;
         let groups = |n: i32| (n as u32).div_ceil(8);
         // SAFETY: cmd is recording; the set's resources are in GENERAL layout by now.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask_layout, 0, &[self.set], &[]);
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask_layout, 0, &[self.set.set], &[]);
             d.cmd_push_constants(cmd, pipelines.mask_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(constants));
             d.cmd_dispatch(cmd, groups(constants.sizes[0]), groups(constants.sizes[1]), 1);
         }
-    }
-}
-
-impl Drop for MaskBindings {
-    fn drop(&mut self) {
-        // SAFETY: owned; the submission using the set has completed.
-        unsafe { self.ctx.device.destroy_descriptor_pool(self.pool, None) };
     }
 }

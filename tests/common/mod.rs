@@ -6,6 +6,7 @@
 
 pub mod compare;
 pub mod reference;
+pub mod scorer;
 
 use glam::DMat4;
 use rangesynth::gpu::ContextOptions;
@@ -13,10 +14,12 @@ use rangesynth::mesh::builtin_mesh;
 use rangesynth::scene::SceneObject;
 use rangesynth::sensor::{Sensor, SensorKind};
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::verify::Verifier;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::sync::{Arc, LazyLock};
 
-pub static RENDERER: LazyLock<Renderer> = LazyLock::new(|| {
+/// The test binary's one verifier; its renderer is the one every GPU test uses.
+pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
     let renderer = Renderer::new(&ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok() })
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan device with validation layers: {e}"));
     let name = renderer.context().device_name().to_string();
@@ -24,17 +27,21 @@ pub static RENDERER: LazyLock<Renderer> = LazyLock::new(|| {
         assert!(name.contains(&expected), "tests ran on {name:?}, expected a device named {expected:?}");
     }
     assert!(renderer.context().validation_enabled());
-    renderer
+    Verifier::new(renderer)
 });
+
+pub fn renderer() -> &'static Renderer {
+    VERIFIER.renderer()
+}
 
 /// Fails the calling test if validation reported anything.
 pub fn assert_no_validation_messages() {
-    let messages = RENDERER.context().take_validation_messages();
+    let messages = renderer().context().take_validation_messages();
     assert!(messages.is_empty(), "validation reported {} message(s):\n{}", messages.len(), messages.join("\n"));
 }
 
 pub fn render(scene: &Scene) -> RenderOutput {
-    let out = RENDERER.render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
+    let out = renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
     assert_no_validation_messages();
     out
 }

@@ -1,0 +1,103 @@
+#version 460
+// Verification counts (paper §4; src/verify/counts.rs has the layout): one invocation per
+// pixel compares the hypothesis' synthetic labels and depths with the sensed image and adds
+// to exact integer counters. Integer atomics are order-independent, so the counts are the
+// same whatever the batch; areas are summed in fixed point for the same reason.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
+layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words { uint word[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Floats { float value[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Counters { uint count[]; };
+
+layout(push_constant, std430) uniform Score {
+    uvec2 shadowed_labels;  // device address of the shadow-masked labels; 0: use range_label
+    uvec2 sensed_segments;  // per pixel: dense segment index + 1, 0 = no data
+    uvec2 sensed_z;
+    uvec2 counts;           // this hypothesis' counters
+    uint width;
+    uint height;
+    uint surfaces;          // M
+    uint segments;          // K
+    float tolerance;        // τ
+    float area_scale;       // area.rs unit_scale
+    float dx;
+    float dy;
+} s;
+
+const uint N1_PLUS = 0u, N1_MINUS = 1u, N0 = 2u, N1 = 3u, POPULATIONS = 4u;
+
+uint synthetic(ivec2 p) {
+    if (s.shadowed_labels == uvec2(0u)) {
+        return imageLoad(range_label, p).r;
+    }
+    return Words(s.shadowed_labels).word[uint(p.y) * s.width + uint(p.x)];
+}
+
+// An exact 64-bit sum in two words: the low word's wrap-around is the carry.
+void add_units(Counters c, uint index, uint units) {
+    uint before = atomicAdd(c.count[index], units);
+    if (before + units < before) {
+        atomicAdd(c.count[index + 1u], 1u);
+    }
+}
+
+// area.rs block_area_units, operation for operation, without fused multiply-adds.
+uint triangle_units(float p, float q, float level) {
+    precise float sum = p * p + q * q + level;
+    precise float units = sqrt(sum) * s.area_scale;
+    return uint(min(units, 4294967040.0));
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (uint(p.x) >= s.width || uint(p.y) >= s.height) {
+        return;
+    }
+    uint index = uint(p.y) * s.width + uint(p.x);
+    uint m = synthetic(p);
+    uint k = Words(s.sensed_segments).word[index];
+    Counters c = Counters(s.counts);
+    if (m == 0u) {
+        if (k != 0u) {
+            atomicAdd(c.count[N1], 1u);
+        }
+        return;
+    }
+    atomicAdd(c.count[POPULATIONS + m - 1u], 1u);
+    float z = imageLoad(range_z, p).r;
+    if (k == 0u) {
+        atomicAdd(c.count[N0], 1u);
+    } else {
+        uint overlaps = POPULATIONS + s.surfaces;
+        atomicAdd(c.count[overlaps + (k - 1u) * s.surfaces + (m - 1u)], 1u);
+        precise float d = z - Floats(s.sensed_z).value[index];
+        if (abs(d) <= s.tolerance) {
+            atomicAdd(c.count[N1_PLUS], 1u);
+        } else if (d > s.tolerance) {
+            atomicAdd(c.count[N1_MINUS], 1u);
+        }
+    }
+    // The 2×2 block whose top-left pixel this is, if all four carry surface m.
+    ivec2 right = p + ivec2(1, 0), down = p + ivec2(0, 1), across = p + ivec2(1, 1);
+    if (uint(across.x) < s.width && uint(across.y) < s.height
+        && synthetic(right) == m && synthetic(down) == m && synthetic(across) == m) {
+        float z10 = imageLoad(range_z, right).r;
+        float z01 = imageLoad(range_z, down).r;
+        float z11 = imageLoad(range_z, across).r;
+        precise float a = z10 - z;
+        precise float b = z11 - z;
+        precise float e = z01 - z;
+        precise float dxdy = s.dx * s.dy;
+        precise float level = dxdy * dxdy;
+        precise float q1 = s.dx * (a - b);
+        precise float p2 = s.dy * (b - e);
+        uint areas = POPULATIONS + s.surfaces + s.segments * s.surfaces + 2u * (m - 1u);
+        add_units(c, areas, triangle_units(s.dy * a, q1, level));
+        add_units(c, areas, triangle_units(p2, s.dx * e, level));
+    }
+}

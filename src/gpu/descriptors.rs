@@ -1,0 +1,63 @@
+//! An owned descriptor set of storage images (GENERAL layout) followed by storage buffers,
+//! bound in that order from binding 0, with its own pool so dropping it frees everything.
+
+use super::{Buffer, GpuContext, Image};
+use crate::error::{Result, VkResultExt};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct StorageSet {
+    ctx: Arc<GpuContext>,
+    pool: vk::DescriptorPool,
+    pub(crate) set: vk::DescriptorSet,
+}
+
+impl StorageSet {
+    pub fn new(ctx: &Arc<GpuContext>, layout: vk::DescriptorSetLayout, images: &[&Image], buffers: &[&Buffer], name: &str) -> Result<Self> {
+        let d = &ctx.device;
+        let mut sizes = Vec::new();
+        if !images.is_empty() {
+            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: images.len() as u32 });
+        }
+        if !buffers.is_empty() {
+            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: buffers.len() as u32 });
+        }
+        // SAFETY: valid device.
+        let pool = unsafe { d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None) }
+            .vk(name)?;
+        let mut owned = Self { ctx: ctx.clone(), pool, set: vk::DescriptorSet::null() };
+        let layouts = [layout];
+        // SAFETY: the pool has room for one set of this layout.
+        owned.set = unsafe { d.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts)) }
+            .vk(name)?[0];
+        ctx.name_object(owned.set, name);
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+            .iter()
+            .map(|i| [vk::DescriptorImageInfo::default().image_view(i.view).image_layout(vk::ImageLayout::GENERAL)])
+            .collect();
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
+        let write = |binding: usize| vk::WriteDescriptorSet::default().dst_set(owned.set).dst_binding(binding as u32);
+        let writes: Vec<_> = image_infos
+            .iter()
+            .enumerate()
+            .map(|(b, info)| write(b).descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(info))
+            .chain(
+                buffer_infos
+                    .iter()
+                    .enumerate()
+                    .map(|(b, info)| write(images.len() + b).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info)),
+            )
+            .collect();
+        // SAFETY: the set, views and buffers are alive.
+        unsafe { d.update_descriptor_sets(&writes, &[]) };
+        Ok(owned)
+    }
+}
+
+impl Drop for StorageSet {
+    fn drop(&mut self) {
+        // SAFETY: owned; submissions using the set have completed.
+        unsafe { self.ctx.device.destroy_descriptor_pool(self.pool, None) };
+    }
+}

@@ -1,0 +1,182 @@
+//! Many hypotheses per submission: for each, the range pass, the shadow pass, the shadow mask
+//! and the verification counts, all recorded into one command buffer with barriers between
+//! passes and no waits between hypotheses.
+//!
+//! Render targets live in a few slots reused round-robin; a slot's next hypothesis waits (by
+//! barrier) only for that slot's previous score pass. Slot images are sized for the largest
+//! view of the batch, and each hypothesis renders its own grid into them, so a hypothesis
+//! renders the same alone or in any batch. Counts go to one device-local buffer, zeroed
+//! first, copied to host memory at the end.
+
+use super::draw::{record_view, Draw, ViewPass};
+use super::gpu_mesh::GpuMesh;
+use super::score_pass::{ScoreBindings, ScoreConstants};
+use super::shadow_pass::{MaskBindings, MaskConstants};
+use super::targets::ViewTargets;
+use super::{plan_views, Renderer, Views};
+use crate::error::Result;
+use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
+use crate::sensor::Sensor;
+use crate::shadow::ShadowMode;
+use ash::vk;
+use glam::DMat4;
+
+/// Render-target slots in flight within one submission.
+pub const SLOTS: usize = 4;
+
+/// The sensed image as the score pass reads it, uploaded once per batch.
+pub struct SensedBuffers<'a> {
+    /// Per pixel: dense segment index + 1, or 0.
+    pub segments: &'a Buffer,
+    pub z: &'a Buffer,
+    pub segment_count: u32,
+}
+
+/// What is constant over a batch.
+pub struct BatchSettings<'a> {
+    pub sensor: &'a Sensor,
+    pub mode: ShadowMode,
+    pub tolerance: f32,
+    pub area_scale: f32,
+    pub sensed: SensedBuffers<'a>,
+}
+
+/// One hypothesis: a posed mesh and where its counts go (word offsets into the batch's counts).
+pub struct BatchItem<'a> {
+    pub mesh: &'a GpuMesh,
+    /// Bounding sphere of the mesh in model coordinates.
+    pub sphere: (glam::DVec3, f64),
+    pub pose: DMat4,
+    pub surfaces: u32,
+    /// Counts of the shadowed image (or the only image when there is no shadow pass).
+    pub counts_offset: usize,
+    /// Also count the unshadowed image here, when asked and a shadow pass runs.
+    pub unshadowed_offset: Option<usize>,
+}
+
+struct Slot {
+    range: ViewTargets,
+    shadow: Option<ViewTargets>,
+    masked: Option<Buffer>,
+    mask_bindings: Option<MaskBindings>,
+    score_bindings: ScoreBindings,
+}
+
+impl Renderer {
+    /// Records and runs one batch; returns the counts buffer (`counts_words` u32 words).
+    pub(crate) fn count_batch(&self, settings: &BatchSettings, items: &[BatchItem], counts_words: usize) -> Result<Vec<u32>> {
+        let ctx = &self.ctx;
+        let d = &ctx.device;
+        let p = &self.pipelines;
+        let sensor = settings.sensor;
+        let max_side = ctx.limits.max_image_dimension2_d;
+        let views: Vec<Views> = items
+            .iter()
+            .map(|item| {
+                let (centre, radius) = item.sphere;
+                plan_views(sensor, settings.mode, &[(item.pose.transform_point3(centre), radius)], max_side)
+            })
+            .collect::<Result<_>>()?;
+        let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
+        let (w, h) = (sensor.width, sensor.height);
+        let slots: Vec<Slot> = (0..SLOTS.min(items.len()))
+            .map(|i| {
+                let range = ViewTargets::new(ctx, w, h, false, &format!("slot {i} range view"))?;
+                let shadow = match shadow_width {
+                    Some(sw) => Some(ViewTargets::new(ctx, sw, h, true, &format!("slot {i} shadow view"))?),
+                    None => None,
+                };
+                let masked = match &shadow {
+                    Some(_) => Some(Buffer::new(ctx, BufferDesc::gpu_storage(u64::from(w) * u64::from(h) * 4), &format!("slot {i} shadowed labels"))?),
+                    None => None,
+                };
+                let mask_bindings = match (&shadow, &masked) {
+                    (Some(s), Some(m)) => Some(MaskBindings::new(ctx, p, &range, s, m)?),
+                    _ => None,
+                };
+                let score_bindings = ScoreBindings::new(ctx, p, &range)?;
+                Ok(Slot { range, shadow, masked, mask_bindings, score_bindings })
+            })
+            .collect::<Result<_>>()?;
+        let bytes = (counts_words as u64 * 4).max(4);
+        let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
+        let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
+        let counts_address = counts.device_address();
+        let to_shadow = sensor.to_shadow_frame();
+
+        ctx.submit_and_wait("verification batch", |cmd| {
+            // SAFETY: cmd is recording; the buffer is not in use.
+            unsafe { d.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
+            barrier(d, cmd, &[], &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }]);
+            for (k, (item, views)) in items.iter().zip(&views).enumerate() {
+                let slot = &slots[k % slots.len()];
+                let first_use = k < slots.len();
+                let (colour_before, depth_before) =
+                    if first_use { (Access::Nothing, Access::Nothing) } else { (Access::ComputeRead, Access::DepthAttachmentWrite) };
+                let mut prepare = Vec::new();
+                for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
+                    prepare.extend(targets.colour_transitions(colour_before, Access::ColorAttachmentWrite));
+                    prepare.push(ImageTransition { image: &targets.depth, from: depth_before, to: Access::DepthAttachmentWrite });
+                }
+                barrier(d, cmd, &prepare, &[]);
+                let draw = [Draw { mesh: item.mesh, pose: item.pose, label_base: 0 }];
+                let range_pass = ViewPass {
+                    pipeline: p.range,
+                    layout: p.raster_layout,
+                    targets: &slot.range,
+                    grid: &views.range,
+                    view_from_range: DMat4::IDENTITY,
+                };
+                record_view(ctx, cmd, &range_pass, &draw);
+                let mut reads = slot.range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
+                let shadowed_labels = match (&slot.shadow, &views.shadow, &slot.masked, &slot.mask_bindings) {
+                    (Some(targets), Some(grid), Some(masked), Some(bindings)) => {
+                        let shadow_pass =
+                            ViewPass { pipeline: p.shadow, layout: p.raster_layout, targets, grid, view_from_range: to_shadow };
+                        record_view(ctx, cmd, &shadow_pass, &draw);
+                        reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
+                        let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
+                        barrier(d, cmd, &reads, &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }]);
+                        bindings.record(ctx, cmd, p, &MaskConstants::new(sensor, settings.mode, &views.range, grid));
+                        barrier(d, cmd, &[], &[BufferTransition { buffer: masked, from: Access::ComputeWrite, to: Access::ComputeRead }]);
+                        masked.address_words()
+                    }
+                    _ => {
+                        barrier(d, cmd, &reads, &[]);
+                        [0, 0]
+                    }
+                };
+                let score = |labels: [u32; 2], offset: usize| ScoreConstants {
+                    shadowed_labels: labels,
+                    sensed_segments: settings.sensed.segments.address_words(),
+                    sensed_z: settings.sensed.z.address_words(),
+                    counts: {
+                        let a = counts_address + offset as u64 * 4;
+                        [a as u32, (a >> 32) as u32]
+                    },
+                    width: w,
+                    height: h,
+                    surfaces: item.surfaces,
+                    segments: settings.sensed.segment_count,
+                    tolerance: settings.tolerance,
+                    area_scale: settings.area_scale,
+                    dx: sensor.pitch[0] as f32,
+                    dy: sensor.pitch[1] as f32,
+                };
+                slot.score_bindings.record(ctx, cmd, p, &score(shadowed_labels, item.counts_offset));
+                if let (Some(offset), true) = (item.unshadowed_offset, shadowed_labels != [0, 0]) {
+                    slot.score_bindings.record(ctx, cmd, p, &score([0, 0], offset));
+                }
+            }
+            barrier(d, cmd, &[], &[BufferTransition { buffer: &counts, from: Access::ComputeWrite, to: Access::TransferRead }]);
+            let region = [vk::BufferCopy::default().size(bytes)];
+            // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
+            unsafe { d.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
+            barrier(d, cmd, &[], &[BufferTransition { buffer: &readback, from: Access::TransferWrite, to: Access::HostRead }]);
+            Ok(())
+        })?;
+        let mut words: Vec<u32> = readback.read()?;
+        words.truncate(counts_words);
+        Ok(words)
+    }
+}

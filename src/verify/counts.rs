@@ -1,0 +1,85 @@
+//! The integer counts the GPU accumulates for one hypothesis, and where each lives in its
+//! slice of the counts buffer (shared with `shaders/score.comp`):
+//!
+//! | words | content |
+//! |---|---|
+//! | 0..4 | N1+, N1−, N0, N1 |
+//! | 4..4+M | N_M: synthetic population of model surface m (index m − 1) |
+//! | then K·M | t: pixels with sensed segment k and synthetic surface m, at (k − 1)·M + (m − 1) |
+//! | then 2·M | A_M in area units (area.rs), as (low, high) u32 pairs |
+//!
+//! M is the model's surface count and K the sensed image's segment count.
+
+/// Offsets and size of one hypothesis' counts, in u32 words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CountsLayout {
+    pub surfaces: u32,
+    pub segments: u32,
+}
+
+pub const SCALARS: u32 = 4;
+
+impl CountsLayout {
+    pub fn populations(&self) -> usize {
+        SCALARS as usize
+    }
+
+    pub fn overlaps(&self) -> usize {
+        self.populations() + self.surfaces as usize
+    }
+
+    pub fn areas(&self) -> usize {
+        self.overlaps() + self.segments as usize * self.surfaces as usize
+    }
+
+    pub fn words(&self) -> usize {
+        self.areas() + 2 * self.surfaces as usize
+    }
+
+    pub fn decode(&self, words: &[u32]) -> Counts {
+        let m = self.surfaces as usize;
+        let overlaps = &words[self.overlaps()..self.areas()];
+        Counts {
+            n1_plus: u64::from(words[0]),
+            n1_minus: u64::from(words[1]),
+            n0: u64::from(words[2]),
+            n1: u64::from(words[3]),
+            surface_population: words[self.populations()..self.overlaps()].iter().map(|&w| u64::from(w)).collect(),
+            overlap: (0..self.segments as usize)
+                .flat_map(|k| (0..m).map(move |j| (k, j)))
+                .filter(|&(k, j)| overlaps[k * m + j] != 0)
+                .map(|(k, j)| ((k as u32, j as u32 + 1), u64::from(overlaps[k * m + j])))
+                .collect(),
+            surface_area_units: words[self.areas()..self.words()]
+                .chunks_exact(2)
+                .map(|pair| u64::from(pair[0]) | (u64::from(pair[1]) << 32))
+                .collect(),
+        }
+    }
+}
+
+/// What one hypothesis' synthetic image counts against the sensed image.
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize)]
+pub struct Counts {
+    /// Pixels valid in both within the tolerance.
+    pub n1_plus: u64,
+    /// Pixels valid in both where the prediction is closer than sensed by more than τ.
+    pub n1_minus: u64,
+    /// Synthetic valid, sensed invalid.
+    pub n0: u64,
+    /// Sensed valid, synthetic invalid.
+    pub n1: u64,
+    /// N_M per model surface (index m − 1).
+    pub surface_population: Vec<u64>,
+    /// t per (dense segment index, model surface), only where non-zero, in index order.
+    pub overlap: Vec<((u32, u32), u64)>,
+    /// A_M per model surface in area units (index m − 1).
+    pub surface_area_units: Vec<u64>,
+}
+
+impl Counts {
+    /// N_s: synthetic valid pixels.
+    pub fn synthetic_valid(&self) -> u64 {
+        self.surface_population.iter().sum()
+    }
+}

@@ -1,0 +1,90 @@
+//! The hypothesis file (DESIGN.md "Interfaces"): a depth tolerance, optional sensor and shadow
+//! settings, and hypotheses, each a model, a pose and bindings (scene label, model surface).
+
+use crate::error::{Error, Result};
+use crate::pose::pose_from_rows;
+use crate::sensor::Sensor;
+use crate::shadow::ShadowSettings;
+use glam::DMat4;
+use serde::Deserialize;
+use std::path::Path;
+
+/// Default depth tolerance τ, model units (the paper's 0.1 inch).
+pub const DEFAULT_TOLERANCE: f64 = 0.1;
+
+#[derive(Debug, Clone)]
+pub struct HypothesisFile {
+    pub tolerance: f64,
+    pub sensor: Option<Sensor>,
+    pub shadow: Option<ShadowSettings>,
+    pub hypotheses: Vec<HypothesisEntry>,
+}
+
+/// One hypothesis as the file gives it; its model is still a reference.
+#[derive(Debug, Clone)]
+pub struct HypothesisEntry {
+    pub id: String,
+    pub model: String,
+    pub pose: DMat4,
+    /// (scene label, model surface) pairs.
+    pub bindings: Vec<(u32, u32)>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    #[serde(default = "default_tolerance")]
+    tolerance: f64,
+    sensor: Option<Sensor>,
+    shadow: Option<ShadowSettings>,
+    hypotheses: Vec<RawHypothesis>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHypothesis {
+    id: String,
+    model: String,
+    pose: [[f64; 4]; 4],
+    #[serde(default)]
+    bindings: Vec<(u32, u32)>,
+}
+
+fn default_tolerance() -> f64 {
+    DEFAULT_TOLERANCE
+}
+
+impl HypothesisFile {
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_json(&text).map_err(|e| match e {
+            Error::Scene(reason) => Error::file(path, reason),
+            other => other,
+        })
+    }
+
+    pub fn from_json(text: &str) -> Result<Self> {
+        let raw: RawFile = serde_json::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+        if !(raw.tolerance.is_finite() && raw.tolerance >= 0.0) {
+            return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", raw.tolerance)));
+        }
+        if let Some(sensor) = &raw.sensor {
+            sensor.validate()?;
+        }
+        let hypotheses = raw
+            .hypotheses
+            .into_iter()
+            .map(|h| {
+                let pose = pose_from_rows(h.pose).map_err(|e| Error::Scene(format!("hypothesis {:?}: {e}", h.id)))?;
+                if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0) {
+                    return Err(Error::Scene(format!(
+                        "hypothesis {:?}: binding ({scene}, {surface}) uses label 0, which means \"no data\"",
+                        h.id
+                    )));
+                }
+                Ok(HypothesisEntry { id: h.id, model: h.model, pose, bindings: h.bindings })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, hypotheses })
+    }
+}

@@ -1,0 +1,94 @@
+//! The sensed image as verification needs it, computed once per batch: its segments (the
+//! labels it holds) numbered densely, each pixel's segment index, the depths, and what the
+//! scores take from the sensed image alone: N_i, N_S and A_S.
+
+use super::area::{block_area_units, unit_scale};
+use crate::error::{Error, Result};
+use crate::io::RangeImage;
+use crate::sensor::Sensor;
+
+#[derive(Debug, Clone)]
+pub struct SensedImage {
+    pub width: u32,
+    pub height: u32,
+    pub pitch: [f64; 2],
+    /// The segment labels present, ascending; dense index k stands for `segments[k]`.
+    pub segments: Vec<u32>,
+    /// Per pixel, the dense segment index + 1, or 0 where there is no data.
+    pub(crate) segment_index: Vec<u32>,
+    pub(crate) z: Vec<f32>,
+    /// N_i: valid pixels.
+    pub valid: u64,
+    /// N_S per dense segment index.
+    pub segment_population: Vec<u64>,
+    /// A_S per dense segment index, in area units.
+    pub segment_area_units: Vec<u64>,
+}
+
+impl SensedImage {
+    /// Checks the image against the sensor it is verified with and computes its statistics.
+    pub fn new(image: &RangeImage, sensor: &Sensor) -> Result<Self> {
+        sensor.validate()?;
+        if (image.width, image.height) != (sensor.width, sensor.height) {
+            return Err(Error::Scene(format!(
+                "the sensed image is {}×{} but the sensor is {}×{}",
+                image.width, image.height, sensor.width, sensor.height
+            )));
+        }
+        let n = image.label.len();
+        if image.z.len() != n || n != (image.width as usize) * (image.height as usize) {
+            return Err(Error::Scene("the sensed image's channels do not match its size".into()));
+        }
+        if let Some(i) = (0..n).find(|&i| image.label[i] != 0 && !image.z[i].is_finite()) {
+            return Err(Error::Scene(format!(
+                "the sensed image has label {} but Z = {} at pixel ({}, {})",
+                image.label[i],
+                image.z[i],
+                i % image.width as usize,
+                i / image.width as usize
+            )));
+        }
+        let mut segments: Vec<u32> = image.label.iter().copied().filter(|&l| l != 0).collect();
+        segments.sort_unstable();
+        segments.dedup();
+        let segment_index: Vec<u32> = image
+            .label
+            .iter()
+            .map(|&l| if l == 0 { 0 } else { segments.binary_search(&l).expect("collected above") as u32 + 1 })
+            .collect();
+        let mut segment_population = vec![0u64; segments.len()];
+        for &k in segment_index.iter().filter(|&&k| k != 0) {
+            segment_population[k as usize - 1] += 1;
+        }
+        let (dx, dy) = (sensor.pitch[0] as f32, sensor.pitch[1] as f32);
+        let scale = unit_scale(dx, dy);
+        let mut segment_area_units = vec![0u64; segments.len()];
+        let (w, h) = (image.width as usize, image.height as usize);
+        for r in 0..h.saturating_sub(1) {
+            for c in 0..w.saturating_sub(1) {
+                let i = r * w + c;
+                let k = segment_index[i];
+                if k != 0 && segment_index[i + 1] == k && segment_index[i + w] == k && segment_index[i + w + 1] == k {
+                    let units = block_area_units(image.z[i], image.z[i + 1], image.z[i + w], image.z[i + w + 1], dx, dy, scale);
+                    segment_area_units[k as usize - 1] += units.iter().map(|&u| u64::from(u)).sum::<u64>();
+                }
+            }
+        }
+        Ok(Self {
+            width: image.width,
+            height: image.height,
+            pitch: sensor.pitch,
+            valid: segment_population.iter().sum(),
+            segments,
+            segment_index,
+            z: image.z.clone(),
+            segment_population,
+            segment_area_units,
+        })
+    }
+
+    /// Dense index of a segment label, if the image holds it.
+    pub fn segment_index(&self, label: u32) -> Option<u32> {
+        self.segments.binary_search(&label).ok().map(|k| k as u32)
+    }
+}

@@ -1,0 +1,197 @@
+//! The verification entry point for an embedding daemon: a [`Verifier`] is created once,
+//! loads each model once (cached by reference), and scores slices of hypotheses against a
+//! sensed image. It is `Send + Sync`; every failure is an error value.
+//!
+//! A call splits its hypotheses into chunks, each recorded into one command buffer; a chunk's
+//! size comes from the device (its memory heaps) and from the size of one hypothesis' counts,
+//! so a batch of any length runs in bounded memory.
+
+use super::counts::{Counts, CountsLayout};
+use super::scores::{score, Scores};
+use super::sensed::SensedImage;
+use super::area::unit_scale;
+use crate::error::{Error, Result};
+use crate::gpu::Buffer;
+use crate::mesh::Mesh;
+use crate::render::{BatchItem, BatchSettings, GpuMesh, Renderer, SensedBuffers};
+use crate::scene::load_model;
+use crate::sensor::Sensor;
+use crate::shadow::ShadowMode;
+use ash::vk;
+use glam::{DMat4, DVec3};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+/// Most hypotheses recorded into one command buffer.
+pub const MAX_CHUNK: usize = 1024;
+/// Most bytes of counts one chunk may hold.
+pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
+
+/// A model uploaded once and shared by every hypothesis that names it.
+pub struct Model {
+    pub mesh: Arc<Mesh>,
+    gpu: GpuMesh,
+    sphere: (DVec3, f64),
+}
+
+/// One hypothesis: a model in a pose, with bindings (scene label, model surface).
+#[derive(Clone)]
+pub struct Hypothesis {
+    pub id: String,
+    pub model: Arc<Model>,
+    pub pose: DMat4,
+    pub bindings: Vec<(u32, u32)>,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct VerifySettings {
+    pub sensor: Sensor,
+    pub shadow: ShadowMode,
+    /// τ, model units.
+    pub tolerance: f64,
+    /// Also score the unshadowed image.
+    pub compare_shadow: bool,
+    /// Cap on hypotheses per submission (the device may impose a smaller one).
+    pub chunk_size: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct Verification {
+    pub id: String,
+    pub counts: Counts,
+    pub scores: Scores,
+    /// With `compare_shadow` and a shadow pass: the counts and scores without shadowing.
+    pub unshadowed: Option<(Counts, Scores)>,
+}
+
+pub struct Verifier {
+    renderer: Renderer,
+    models: Mutex<HashMap<String, Arc<Model>>>,
+}
+
+impl Verifier {
+    pub fn new(renderer: Renderer) -> Self {
+        Self { renderer, models: Mutex::new(HashMap::new()) }
+    }
+
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
+
+    /// The model named `reference` (a `builtin:` name, or an OBJ path relative to
+    /// `base_dir`), loaded and uploaded on first use.
+    pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
+        let key = if reference.starts_with("builtin:") { reference.to_string() } else { base_dir.join(reference).display().to_string() };
+        if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+            return Ok(model.clone());
+        }
+        let mesh = Arc::new(load_model(reference, base_dir)?);
+        let model = Arc::new(Model { gpu: GpuMesh::upload(self.renderer.context(), &mesh)?, sphere: mesh.bounding_sphere(), mesh });
+        Ok(self.models.lock().unwrap_or_else(|p| p.into_inner()).entry(key).or_insert(model).clone())
+    }
+
+    /// Scores every hypothesis against the sensed image, in order. `progress` is told how many
+    /// hypotheses are done after each chunk.
+    pub fn verify(
+        &self,
+        sensed: &SensedImage,
+        settings: &VerifySettings,
+        hypotheses: &[Hypothesis],
+        progress: &mut dyn FnMut(usize),
+    ) -> Result<Vec<Verification>> {
+        let sensor = &settings.sensor;
+        sensor.validate()?;
+        if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
+            return Err(Error::Scene(format!(
+                "the sensed image is {}×{} but the sensor is {}×{}",
+                sensed.width, sensed.height, sensor.width, sensor.height
+            )));
+        }
+        if !(settings.tolerance.is_finite() && settings.tolerance >= 0.0) {
+            return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", settings.tolerance)));
+        }
+        for h in hypotheses {
+            let surfaces = h.model.mesh.surface_count();
+            if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0 || m > surfaces) {
+                return Err(Error::Scene(format!(
+                    "hypothesis {:?}: binding ({scene}, {surface}) names no surface of {} (surfaces 1..={surfaces})",
+                    h.id, h.model.mesh.name
+                )));
+            }
+        }
+        let ctx = self.renderer.context();
+        let segments = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.segment_index, "sensed segments")?;
+        let z = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.z, "sensed z")?;
+        let batch = BatchSettings {
+            sensor,
+            mode: settings.shadow,
+            tolerance: settings.tolerance as f32,
+            area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
+            sensed: SensedBuffers { segments: &segments, z: &z, segment_count: sensed.segments.len() as u32 },
+        };
+        let layout = |h: &Hypothesis| CountsLayout { surfaces: h.model.mesh.surface_count(), segments: sensed.segments.len() as u32 };
+        let copies = if settings.compare_shadow { 2 } else { 1 };
+        let per_hypothesis = |h: &Hypothesis| (layout(h).words() * copies * 4) as u64;
+        if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > CHUNK_COUNTS_BUDGET) {
+            return Err(Error::Scene(format!(
+                "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
+                h.id,
+                sensed.segments.len(),
+                h.model.mesh.surface_count(),
+                per_hypothesis(h) >> 20,
+                CHUNK_COUNTS_BUDGET >> 20
+            )));
+        }
+
+        let mut results = Vec::with_capacity(hypotheses.len());
+        let mut start = 0;
+        while start < hypotheses.len() {
+            // Grow the chunk while its counts fit the budget.
+            let mut end = start;
+            let mut bytes = 0;
+            while end < hypotheses.len() && end - start < settings.chunk_size.clamp(1, MAX_CHUNK) && bytes + per_hypothesis(&hypotheses[end]) <= CHUNK_COUNTS_BUDGET {
+                bytes += per_hypothesis(&hypotheses[end]);
+                end += 1;
+            }
+            let chunk = &hypotheses[start..end];
+            let mut offset = 0;
+            let items: Vec<BatchItem> = chunk
+                .iter()
+                .map(|h| {
+                    let words = layout(h).words();
+                    let item = BatchItem {
+                        mesh: &h.model.gpu,
+                        sphere: h.model.sphere,
+                        pose: h.pose,
+                        surfaces: h.model.mesh.surface_count(),
+                        counts_offset: offset,
+                        unshadowed_offset: settings.compare_shadow.then_some(offset + words),
+                    };
+                    offset += words * copies;
+                    item
+                })
+                .collect();
+            let words = self.renderer.count_batch(&batch, &items, offset)?;
+            let shadow_pass = settings.shadow != ShadowMode::None && sensor.theta_deg != 0.0;
+            for (h, item) in chunk.iter().zip(&items) {
+                let l = layout(h);
+                let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()]);
+                let scores = score(&counts, sensed, &h.bindings);
+                let unshadowed = match item.unshadowed_offset {
+                    Some(o) if shadow_pass => {
+                        let c = l.decode(&words[o..o + l.words()]);
+                        let s = score(&c, sensed, &h.bindings);
+                        Some((c, s))
+                    }
+                    Some(_) => Some((counts.clone(), scores.clone())),
+                    None => None,
+                };
+                results.push(Verification { id: h.id.clone(), counts, scores, unshadowed });
+            }
+            start = end;
+            progress(start);
+        }
+        Ok(results)
+    }
+}

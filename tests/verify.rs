@@ -1,0 +1,206 @@
+//! Verification on the GPU against the independent CPU scorer (tests/common/scorer.rs), batch
+//! invariance, and the paper's claims on a synthetic scene: the correct hypothesis outscores a
+//! wrong model and a wrong pose, and shadowing raises its score.
+
+mod common;
+
+use common::scorer::{cpu_counts, cpu_scores, CpuCounts, Images};
+use common::*;
+use glam::{DMat4, DVec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rangesynth::io::RangeImage;
+use rangesynth::sensor::Sensor;
+use rangesynth::shadow::ShadowMode;
+use rangesynth::verify::{Counts, Hypothesis, SensedImage, Verification, VerifySettings};
+use std::path::Path;
+
+const TOLERANCE: f64 = 0.05;
+
+fn step_pose() -> DMat4 {
+    DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(25f64.to_radians())
+}
+
+fn test_sensor(theta: f64) -> Sensor {
+    centred_sensor(128, 128, 0.035, [0.0, 0.0], theta)
+}
+
+/// The sensed image: the stepped block, rendered with exact-enough (depth-mode) shadows.
+fn sensed(sensor: Sensor) -> (RangeImage, SensedImage) {
+    let out = render(&scene(sensor, ShadowMode::Depth, &[("builtin:step", step_pose())]));
+    let image = RangeImage::from(&out);
+    let sensed = SensedImage::new(&image, &sensor).expect("valid sensed image");
+    (image, sensed)
+}
+
+fn hypothesis(id: &str, model: &str, pose: DMat4, bindings: &[(u32, u32)]) -> Hypothesis {
+    Hypothesis { id: id.into(), model: VERIFIER.model(model, Path::new(".")).unwrap(), pose, bindings: bindings.to_vec() }
+}
+
+/// The step's surfaces are labels 1..=8 in the sensed image: the correct binding is identity.
+fn correct() -> Hypothesis {
+    hypothesis("correct", "builtin:step", step_pose(), &(1..=8).map(|l| (l, l)).collect::<Vec<_>>())
+}
+
+fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
+    VerifySettings { sensor, shadow, tolerance: TOLERANCE, compare_shadow: false, chunk_size: 1024 }
+}
+
+fn verify(sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Vec<Verification> {
+    let out = VERIFIER.verify(sensed, settings, hypotheses, &mut |_| {}).expect("verification runs");
+    assert_no_validation_messages();
+    out
+}
+
+/// The GPU's counts in the CPU scorer's terms (scene labels instead of dense indices).
+fn as_cpu(c: &Counts, sensed: &SensedImage, n_i: u64) -> CpuCounts {
+    let nonzero = |v: &[u64]| v.iter().enumerate().filter(|(_, &n)| n != 0).map(|(m, &n)| (m as u32 + 1, n)).collect();
+    CpuCounts {
+        n1_plus: c.n1_plus,
+        n1_minus: c.n1_minus,
+        n0: c.n0,
+        n1: c.n1,
+        n_i,
+        n_s: c.synthetic_valid(),
+        overlap: c.overlap.iter().map(|&((k, m), t)| ((sensed.segments[k as usize], m), t)).collect(),
+        scene_population: sensed.segments.iter().zip(&sensed.segment_population).map(|(&s, &n)| (s, n)).collect(),
+        model_population: nonzero(&c.surface_population),
+        scene_area_units: sensed.segments.iter().zip(&sensed.segment_area_units).filter(|(_, &a)| a != 0).map(|(&s, &a)| (s, a)).collect(),
+        model_area_units: nonzero(&c.surface_area_units),
+    }
+}
+
+fn assert_close(name: &str, gpu: f64, cpu: f64) {
+    assert!(gpu.is_finite(), "{name}: {gpu}");
+    let scale = gpu.abs().max(cpu.abs()).max(f64::MIN_POSITIVE);
+    assert!((gpu - cpu).abs() <= 1e-12 * scale, "{name}: GPU {gpu} vs CPU {cpu}");
+}
+
+#[test]
+fn gpu_counts_and_scores_match_the_cpu_scorer() {
+    for (theta, mode) in [(45.0, ShadowMode::Depth), (45.0, ShadowMode::Label), (30.0, ShadowMode::None), (-30.0, ShadowMode::Depth)] {
+        let sensor = test_sensor(theta);
+        let (image, sensed) = sensed(sensor);
+        let wrong_pose = step_pose() * DMat4::from_rotation_z(0.3) * DMat4::from_translation(DVec3::new(0.2, 0.1, 0.05));
+        let hypotheses = [
+            correct(),
+            hypothesis("wrong pose", "builtin:step", wrong_pose, &[(1, 1), (2, 2), (3, 3)]),
+            hypothesis("wrong model", "builtin:box", step_pose(), &[(1, 1), (2, 2)]),
+            hypothesis("sphere", "builtin:sphere:24", DMat4::from_translation(DVec3::new(-0.5, 0.2, 0.3)), &[(1, 1), (9, 1)]),
+        ];
+        let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
+        for (h, v) in hypotheses.iter().zip(&results) {
+            let synthetic = render(&scene(sensor, mode, &[(h.model.mesh.name.as_str(), h.pose)]));
+            let images = Images {
+                width: 128,
+                height: 128,
+                pitch: sensor.pitch,
+                sensed_label: &image.label,
+                sensed_z: &image.z,
+                synthetic_label: &synthetic.label,
+                synthetic_z: &synthetic.z,
+            };
+            let cpu = cpu_counts(&images, TOLERANCE as f32);
+            let name = format!("{} ({mode:?}, θ = {theta})", h.id);
+            assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{name}: counts");
+            assert!(cpu.n_s > 0 || h.id == "sphere", "{name}: the model is in view");
+            let expected = cpu_scores(&cpu, &h.bindings);
+            let s = &v.scores;
+            for (k, (gpu, cpu)) in [s.s1, s.s2, s.s3, s.s4, s.s5, s.s6, s.s].iter().zip(expected).enumerate() {
+                assert_close(&format!("{name} score {k}"), *gpu, cpu);
+            }
+        }
+    }
+}
+
+#[test]
+fn correct_hypothesis_outscores_a_wrong_model_and_a_wrong_pose_and_shadowing_raises_it() {
+    let sensor = test_sensor(45.0);
+    let (_, sensed) = sensed(sensor);
+    let wrong_pose = step_pose() * DMat4::from_rotation_z(0.15) * DMat4::from_translation(DVec3::new(0.1, 0.0, 0.0));
+    let hypotheses = [
+        correct(),
+        hypothesis("wrong pose", "builtin:step", wrong_pose, &(1..=8).map(|l| (l, l)).collect::<Vec<_>>()),
+        hypothesis("wrong model", "builtin:box", step_pose(), &[(1, 1), (2, 2)]),
+    ];
+    let settings = VerifySettings { compare_shadow: true, ..settings(sensor, ShadowMode::Depth) };
+    let results = verify(&sensed, &settings, &hypotheses);
+    let s: Vec<f64> = results.iter().map(|v| v.scores.s).collect();
+    assert!(s[0] > 0.5, "the correct hypothesis scores high: {:?}", results[0].scores);
+    assert!(s[0] > s[1] && s[0] > s[2], "correct {} vs wrong pose {} and wrong model {}", s[0], s[1], s[2]);
+    let (_, unshadowed) = results[0].unshadowed.as_ref().expect("compare_shadow");
+    assert!(
+        s[0] > unshadowed.s && results[0].scores.s5 > unshadowed.s5 && results[0].scores.s6 > unshadowed.s6,
+        "shadowing raises the correct score: {} (shadowed) vs {} (unshadowed)",
+        s[0],
+        unshadowed.s
+    );
+}
+
+#[test]
+fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
+    let sensor = test_sensor(45.0);
+    let (_, sensed) = sensed(sensor);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let models = ["builtin:step", "builtin:box", "builtin:cylinder:12", "builtin:sphere:16"];
+    let mut hypotheses: Vec<Hypothesis> = (0..40)
+        .map(|i| {
+            let pose = DMat4::from_translation(DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-0.5..0.5)))
+                * DMat4::from_rotation_z(rng.gen_range(0.0..6.3))
+                * DMat4::from_rotation_x(rng.gen_range(-0.5..0.5));
+            hypothesis(&format!("h{i}"), models[i % 4], pose, &[(1, 1), (2, 1)])
+        })
+        .collect();
+    hypotheses.push(correct());
+    let base = settings(sensor, ShadowMode::Depth);
+    let alone: Vec<Verification> = hypotheses.iter().map(|h| verify(&sensed, &base, std::slice::from_ref(h)).remove(0)).collect();
+    let same = |a: &Verification, b: &Verification| {
+        assert_eq!(a.id, b.id);
+        assert_eq!(a.counts, b.counts, "{}", a.id);
+        assert_eq!(a.scores.s.to_bits(), b.scores.s.to_bits(), "{}", a.id);
+    };
+    for chunk_size in [1, 7, 1024] {
+        let batch = verify(&sensed, &VerifySettings { chunk_size, ..base }, &hypotheses);
+        alone.iter().zip(&batch).for_each(|(a, b)| same(a, b));
+    }
+    let reversed: Vec<Hypothesis> = hypotheses.iter().rev().cloned().collect();
+    let batch = verify(&sensed, &base, &reversed);
+    alone.iter().rev().zip(&batch).for_each(|(a, b)| same(a, b));
+}
+
+#[test]
+fn a_batch_of_1024_runs_in_chunks() {
+    let sensor = centred_sensor(64, 64, 0.07, [0.0, 0.0], 45.0);
+    let (_, sensed) = sensed(sensor);
+    let hypotheses: Vec<Hypothesis> = (0..1024)
+        .map(|i| {
+            let pose = step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.001);
+            hypothesis(&format!("h{i}"), "builtin:step", pose, &[(1, 1), (2, 2)])
+        })
+        .collect();
+    let mut reports = Vec::new();
+    let settings = VerifySettings { chunk_size: 256, ..settings(sensor, ShadowMode::Depth) };
+    let results = VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |done| reports.push(done)).unwrap();
+    assert_no_validation_messages();
+    assert_eq!(reports, [256, 512, 768, 1024]);
+    assert_eq!(results.len(), 1024);
+    assert!(results.iter().all(|v| v.scores.s.is_finite() && v.counts.synthetic_valid() > 0));
+    // Poses differ by a thousandth of a radian each: the first is the correct one.
+    assert!(results[0].scores.s >= results[1023].scores.s);
+}
+
+#[test]
+fn bad_verification_input_is_refused() {
+    let sensor = test_sensor(45.0);
+    let (image, sensed) = sensed(sensor);
+    let err = VERIFIER.verify(&sensed, &settings(sensor, ShadowMode::Depth), &[hypothesis("h", "builtin:box", DMat4::IDENTITY, &[(1, 7)])], &mut |_| {});
+    assert!(err.unwrap_err().to_string().contains("binding (1, 7) names no surface"));
+    let other = centred_sensor(64, 128, 0.035, [0.0, 0.0], 45.0);
+    assert!(SensedImage::new(&image, &other).unwrap_err().to_string().contains("128×128 but the sensor is 64×128"));
+    let mut broken = image.clone();
+    let i = broken.label.iter().position(|&l| l != 0).unwrap();
+    broken.z[i] = f32::NAN;
+    assert!(SensedImage::new(&broken, &sensor).unwrap_err().to_string().contains("Z = NaN"));
+    let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
+    assert!(VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).is_err());
+}
