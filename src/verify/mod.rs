@@ -5,12 +5,14 @@
 pub mod area;
 mod counts;
 mod hypothesis;
+mod report;
 mod scores;
 mod sensed;
 mod verifier;
 
 pub use counts::{Counts, CountsLayout};
 pub use hypothesis::{HypothesisEntry, HypothesisFile, DEFAULT_TOLERANCE};
+pub use report::{CountsRecord, Record, ScoresRecord};
 pub use scores::{score, BindingDetail, Scores};
 pub use sensed::SensedImage;
 pub use verifier::{Hypothesis, Model, Verification, Verifier, VerifySettings, CHUNK_COUNTS_BUDGET, MAX_CHUNK};

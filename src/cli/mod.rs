@@ -1,5 +1,8 @@
-//! The `rangesynth` command line: `render` a scene file, or run the `demo` on the embedded
-//! default scene. Errors come back as values; `main` prints them and exits non-zero.
+//! The `rangesynth` command line: `render` a scene file, run the `demo` on the embedded
+//! default scene, or `verify` hypotheses against a sensed image. Errors come back as values;
+//! `main` prints them and exits non-zero.
+
+mod verify;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -37,6 +40,8 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Score the hypotheses of HYPS.json against a sensed range image; one JSON line each.
+    Verify(verify::VerifyArgs),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -48,6 +53,7 @@ pub fn run(cli: Cli) -> Result<()> {
     let (scene, out_dir) = match cli.command {
         Command::Render { scene, out } => (Scene::from_file(&scene)?, out),
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."))?, out),
+        Command::Verify(args) => return verify::run(&options, &args),
     };
     for object in &scene.objects {
         if object.mesh.dropped_degenerate > 0 {
@@ -59,6 +65,11 @@ pub fn run(cli: Cli) -> Result<()> {
     let written = write_render_directory(&out_dir, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    check_validation(&renderer)
+}
+
+/// Fails when validation (if on) reported anything.
+fn check_validation(renderer: &Renderer) -> Result<()> {
     let messages = renderer.context().take_validation_messages();
     if !messages.is_empty() {
         anyhow::bail!("Vulkan validation reported {} message(s):\n{}", messages.len(), messages.join("\n"));
