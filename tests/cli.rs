@@ -135,3 +135,91 @@ fn an_unknown_device_name_is_refused() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("no usable Vulkan device") && stderr.contains("not named \"no-such-gpu\""), "{stderr}");
 }
+
+/// Renders the example's sensed scene and returns (directory, path of range.exr).
+fn sensed_example(name: &str) -> (PathBuf, PathBuf) {
+    let d = dir(name);
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example");
+    let out = rangesynth(&["render", example.join("sensed.toml").to_str().unwrap(), "--out", d.join("sensed").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let exr = d.join("sensed/range.exr");
+    (d, exr)
+}
+
+#[test]
+fn verify_scores_the_example_and_ranks_the_correct_hypothesis_first() {
+    let (d, exr) = sensed_example("verify_example");
+    let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
+    let scores = d.join("scores.jsonl");
+    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", scores.to_str().unwrap(), "--compare-shadow"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    let first_ranked = stdout.lines().find(|l| l.trim_start().starts_with("1 ")).expect("a ranked summary");
+    assert!(first_ranked.contains("step-correct"), "{stdout}");
+    let lines: Vec<serde_json::Value> =
+        std::fs::read_to_string(&scores).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 3);
+    assert_eq!(lines[0]["id"], "step-correct");
+    for key in ["s1", "s2", "s3", "s4", "s5", "s6", "s"] {
+        assert!(lines[0][key].as_f64().is_some(), "{key} in {}", lines[0]);
+    }
+    assert!(lines[0]["rejected"].is_null());
+    assert!(lines[0]["counts"]["n_i"].as_u64().unwrap() > 0);
+    // Shadowing raises the correct hypothesis' score (the paper's §4 finding).
+    assert!(lines[0]["s"].as_f64().unwrap() > lines[0]["unshadowed"]["s"].as_f64().unwrap());
+    assert!(lines[2]["rejected"].as_str().unwrap().contains("s5"), "{}", lines[2]);
+}
+
+#[test]
+fn verify_runs_a_batch_of_1024_from_the_cli() {
+    let (d, exr) = sensed_example("verify_1024");
+    let hypotheses: Vec<serde_json::Value> = (0..1024)
+        .map(|i| {
+            let a = 0.4363323129985824 + f64::from(i) * 0.0005; // 25° and on
+            serde_json::json!({
+                "id": format!("h{i}"),
+                "model": "builtin:step",
+                "pose": [[a.cos(), -a.sin(), 0.0, 0.3], [a.sin(), a.cos(), 0.0, -0.2], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+                "bindings": [[1, 1], [2, 2]]
+            })
+        })
+        .collect();
+    let hyps = d.join("hyps.json");
+    std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
+    let scores = d.join("scores.jsonl");
+    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", scores.to_str().unwrap(), "--chunk-size", "300"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let lines = std::fs::read_to_string(&scores).unwrap();
+    assert_eq!(lines.lines().count(), 1024);
+    assert!(text(&out.stdout).contains("1024 hypotheses"));
+}
+
+#[test]
+fn bad_hypothesis_files_are_refused_with_a_clear_message() {
+    let (d, exr) = sensed_example("verify_bad");
+    let pose = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+    let cases = [
+        ("not_json", "{".to_string(), "EOF"),
+        ("no_hypotheses", "{}".to_string(), "missing field `hypotheses`"),
+        ("negative_tolerance", format!(r#"{{"tolerance": -1, "hypotheses": []}}"#), "tolerance -1"),
+        ("bad_pose", r#"{"hypotheses": [{"id": "a", "model": "builtin:box", "pose": [[3,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#.to_string(), "not a rigid transform"),
+        ("bad_surface", format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}, "bindings": [[1, 9]]}}]}}"#), "binding (1, 9) names no surface"),
+        ("label_zero", format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}, "bindings": [[0, 1]]}}]}}"#), "label 0"),
+        ("bad_model", format!(r#"{{"hypotheses": [{{"id": "a", "model": "missing.obj", "pose": {pose}}}]}}"#), "missing.obj"),
+    ];
+    for (name, body, expected) in cases {
+        let hyps = d.join(format!("{name}.json"));
+        std::fs::write(&hyps, body).unwrap();
+        let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", d.join("s.jsonl").to_str().unwrap()]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(stderr.contains(expected) && !stderr.contains("panicked"), "{name}: expected {expected:?} in {stderr}");
+    }
+    let hyps = d.join("ok.json");
+    std::fs::write(&hyps, format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}}}]}}"#)).unwrap();
+    let garbage = d.join("garbage.exr");
+    std::fs::write(&garbage, "not an exr").unwrap();
+    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", garbage.to_str().unwrap(), "--out", d.join("s.jsonl").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("not a usable OpenEXR file"), "{}", text(&out.stderr));
+}

@@ -204,3 +204,24 @@ fn bad_verification_input_is_refused() {
     let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
     assert!(VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).is_err());
 }
+
+#[test]
+fn one_verifier_serves_several_threads_at_once() {
+    let sensor = test_sensor(45.0);
+    let (_, sensed) = sensed(sensor);
+    let base = settings(sensor, ShadowMode::Depth);
+    let hypotheses: Vec<Hypothesis> = (0..12)
+        .map(|i| hypothesis(&format!("h{i}"), "builtin:step", step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.05), &[(1, 1), (2, 2)]))
+        .collect();
+    let sequential = verify(&sensed, &base, &hypotheses);
+    std::thread::scope(|scope| {
+        let runs: Vec<_> = (0..4).map(|_| scope.spawn(|| VERIFIER.verify(&sensed, &base, &hypotheses, &mut |_| {}).unwrap())).collect();
+        for run in runs {
+            let results = run.join().expect("no panic");
+            for (a, b) in sequential.iter().zip(&results) {
+                assert_eq!((a.id.as_str(), &a.counts, a.scores.s.to_bits()), (b.id.as_str(), &b.counts, b.scores.s.to_bits()));
+            }
+        }
+    });
+    assert_no_validation_messages();
+}

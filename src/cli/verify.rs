@@ -101,7 +101,10 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Veri
     );
     let mut ranked: Vec<&Verification> = results.iter().collect();
     ranked.sort_by(|a, b| b.scores.s.total_cmp(&a.scores.s));
-    println!("{:>4}  {:<20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}  {}", "rank", "id", "s", "s1", "s2", "s3", "s4", "s5", "s6", "unshadowed s / rejected");
+    println!(
+        "{:>4}  {:<20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}  unshadowed s / rejected",
+        "rank", "id", "s", "s1", "s2", "s3", "s4", "s5", "s6"
+    );
     for (rank, v) in ranked.iter().take(top).enumerate() {
         let c = &v.scores;
         let extra = match (&c.rejected, &v.unshadowed) {

@@ -157,6 +157,18 @@ impl GpuContext {
         &self.instance
     }
 
+    /// Size of the smallest device-local memory heap, in bytes: what a batch may plan against.
+    pub fn device_local_heap_size(&self) -> u64 {
+        // SAFETY: valid physical device of a live instance.
+        let memory = unsafe { self.instance.get_physical_device_memory_properties(self.physical_device) };
+        memory.memory_heaps[..memory.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .min()
+            .unwrap_or(0)
+    }
+
     pub fn device_name(&self) -> &str {
         &self.device_name
     }

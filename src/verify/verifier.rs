@@ -3,8 +3,10 @@
 //! sensed image. It is `Send + Sync`; every failure is an error value.
 //!
 //! A call splits its hypotheses into chunks, each recorded into one command buffer; a chunk's
-//! size comes from the device (its memory heaps) and from the size of one hypothesis' counts,
-//! so a batch of any length runs in bounded memory.
+//! size comes from the device (a sixteenth of its device-local heap, at most
+//! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
+//! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
+//! image.
 
 use super::counts::{Counts, CountsLayout};
 use super::scores::{score, Scores};
@@ -25,7 +27,7 @@ use std::sync::{Arc, Mutex};
 
 /// Most hypotheses recorded into one command buffer.
 pub const MAX_CHUNK: usize = 1024;
-/// Most bytes of counts one chunk may hold.
+/// Most bytes of counts one chunk may hold (less on a device with a small heap).
 pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
 
 /// A model uploaded once and shared by every hypothesis that names it.
@@ -133,14 +135,15 @@ impl Verifier {
         let layout = |h: &Hypothesis| CountsLayout { surfaces: h.model.mesh.surface_count(), segments: sensed.segments.len() as u32 };
         let copies = if settings.compare_shadow { 2 } else { 1 };
         let per_hypothesis = |h: &Hypothesis| (layout(h).words() * copies * 4) as u64;
-        if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > CHUNK_COUNTS_BUDGET) {
+        let budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
+        if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > budget) {
             return Err(Error::Scene(format!(
                 "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
                 h.id,
                 sensed.segments.len(),
                 h.model.mesh.surface_count(),
                 per_hypothesis(h) >> 20,
-                CHUNK_COUNTS_BUDGET >> 20
+                budget >> 20
             )));
         }
 
@@ -150,7 +153,7 @@ impl Verifier {
             // Grow the chunk while its counts fit the budget.
             let mut end = start;
             let mut bytes = 0;
-            while end < hypotheses.len() && end - start < settings.chunk_size.clamp(1, MAX_CHUNK) && bytes + per_hypothesis(&hypotheses[end]) <= CHUNK_COUNTS_BUDGET {
+            while end < hypotheses.len() && end - start < settings.chunk_size.clamp(1, MAX_CHUNK) && bytes + per_hypothesis(&hypotheses[end]) <= budget {
                 bytes += per_hypothesis(&hypotheses[end]);
                 end += 1;
             }
