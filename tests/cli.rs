@@ -201,7 +201,7 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     let cases = [
         ("not_json", "{".to_string(), "EOF"),
         ("no_hypotheses", "{}".to_string(), "missing field `hypotheses`"),
-        ("negative_tolerance", format!(r#"{{"tolerance": -1, "hypotheses": []}}"#), "tolerance -1"),
+        ("negative_tolerance", r#"{"tolerance": -1, "hypotheses": []}"#.to_string(), "tolerance -1"),
         ("bad_pose", r#"{"hypotheses": [{"id": "a", "model": "builtin:box", "pose": [[3,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#.to_string(), "not a rigid transform"),
         ("bad_surface", format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}, "bindings": [[1, 9]]}}]}}"#), "binding (1, 9) names no surface"),
         ("label_zero", format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}, "bindings": [[0, 1]]}}]}}"#), "label 0"),
