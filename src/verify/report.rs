@@ -1,7 +1,7 @@
 //! One line of `verify`'s JSON-lines output: a hypothesis' scores with the counts they came
 //! from (DESIGN.md "Interfaces").
 
-use super::{BindingDetail, Counts, SensedImage, Verification};
+use super::{Counts, Scores, SensedImage, Verification};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -14,19 +14,12 @@ pub struct Record<'a> {
     pub unshadowed: Option<ScoresRecord<'a>>,
 }
 
+/// s1…s6, s, rejected, notes and bindings, then the counts.
 #[derive(Serialize)]
 pub struct ScoresRecord<'a> {
-    pub s1: f64,
-    pub s2: f64,
-    pub s3: f64,
-    pub s4: f64,
-    pub s5: f64,
-    pub s6: f64,
-    pub s: f64,
-    pub rejected: &'a Option<String>,
+    #[serde(flatten)]
+    pub scores: &'a Scores,
     pub counts: CountsRecord,
-    pub bindings: &'a [BindingDetail],
-    pub notes: &'a [String],
 }
 
 #[derive(Serialize)]
@@ -47,15 +40,8 @@ pub struct CountsRecord {
 
 impl<'a> Record<'a> {
     pub fn new(v: &'a Verification, sensed: &SensedImage) -> Self {
-        let scores = |counts: &'a Counts, s: &'a super::Scores| ScoresRecord {
-            s1: s.s1,
-            s2: s.s2,
-            s3: s.s3,
-            s4: s.s4,
-            s5: s.s5,
-            s6: s.s6,
-            s: s.s,
-            rejected: &s.rejected,
+        let scores = |counts: &'a Counts, scores: &'a Scores| ScoresRecord {
+            scores,
             counts: CountsRecord {
                 n1_plus: counts.n1_plus,
                 n1_minus: counts.n1_minus,
@@ -66,8 +52,6 @@ impl<'a> Record<'a> {
                 overlaps: counts.overlap.iter().map(|&((k, m), t)| [u64::from(sensed.segments[k as usize]), u64::from(m), t]).collect(),
                 surface_population: counts.surface_population.clone(),
             },
-            bindings: &s.bindings,
-            notes: &s.notes,
         };
         Record { id: &v.id, scores: scores(&v.counts, &v.scores), unshadowed: v.unshadowed.as_ref().map(|(c, s)| scores(c, s)) }
     }
