@@ -1,6 +1,6 @@
 #version 460
 // Verification counts (paper §4; src/verify/counts.rs has the layout): one invocation per
-// pixel compares the hypothesis' synthetic labels and depths with the sensed image and adds
+// pixel of the hypothesis' footprint compares the hypothesis' synthetic labels and depths with the sensed image and adds
 // to exact integer counters. Integer atomics are order-independent, so the counts are the
 // same whatever the batch; areas are summed in fixed point for the same reason.
 #extension GL_EXT_buffer_reference : require
@@ -21,6 +21,7 @@ layout(push_constant, std430) uniform Score {
     uvec2 counts;           // this hypothesis' counters
     uint width;
     uint height;
+    uvec4 region;           // the pixels that may hold the model: first column, first row, width, height
     uint surfaces;          // M
     uint segments;          // K
     float tolerance;        // τ
@@ -29,9 +30,13 @@ layout(push_constant, std430) uniform Score {
     float dy;
 } s;
 
-const uint N1_PLUS = 0u, N1_MINUS = 1u, N0 = 2u, N1 = 3u, POPULATIONS = 4u;
+const uint N1_PLUS = 0u, N1_MINUS = 1u, N0 = 2u, POPULATIONS = 3u;
 
+// The synthetic label; 0 outside the region, where the attachments were not drawn.
 uint synthetic(ivec2 p) {
+    if (any(greaterThanEqual(uvec2(p) - s.region.xy, s.region.zw))) {
+        return 0u;
+    }
     if (s.shadowed_labels == uvec2(0u)) {
         return imageLoad(range_label, p).r;
     }
@@ -54,18 +59,17 @@ uint triangle_units(float p, float q, float level) {
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (uint(p.x) >= s.width || uint(p.y) >= s.height) {
+    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, s.region.zw))) {
         return;
     }
+    ivec2 p = ivec2(s.region.xy + gl_GlobalInvocationID.xy);
     uint index = uint(p.y) * s.width + uint(p.x);
     uint m = synthetic(p);
     uint k = Words(s.sensed_segments).word[index];
     Counters c = Counters(s.counts);
+    // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
+    // need not cover the whole image.
     if (m == 0u) {
-        if (k != 0u) {
-            atomicAdd(c.count[N1], 1u);
-        }
         return;
     }
     atomicAdd(c.count[POPULATIONS + m - 1u], 1u);

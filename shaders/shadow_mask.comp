@@ -15,6 +15,7 @@ layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
     vec4 shadow_grid;   // x0, y0, dx, dy of the shadow view
     ivec4 sizes;        // range width, height; shadow width, height
+    ivec4 region;       // the range pixels to mask: first column, first row, width, height
     float cos_theta;
     float sin_theta;
     float bias_pitch;   // constant bias, model units
@@ -62,10 +63,10 @@ bool shadowed(ivec2 pixel, uint label) {
 }
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (pixel.x >= m.sizes.x || pixel.y >= m.sizes.y) {
+    if (any(greaterThanEqual(ivec2(gl_GlobalInvocationID.xy), m.region.zw))) {
         return;
     }
+    ivec2 pixel = m.region.xy + ivec2(gl_GlobalInvocationID.xy);
     uint label = imageLoad(range_label, pixel).r;
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
     masked_label[index] = (label != 0u && shadowed(pixel, label)) ? 0u : label;

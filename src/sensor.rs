@@ -133,6 +133,39 @@ pub struct ViewGrid {
     pub z_range: (f64, f64),
 }
 
+/// A rectangle of pixels: columns `col..col + width`, rows `row..row + height`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelRect {
+    pub col: u32,
+    pub row: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl ViewGrid {
+    /// Every pixel of the grid.
+    pub fn full(&self) -> PixelRect {
+        PixelRect { col: 0, row: 0, width: self.width, height: self.height }
+    }
+
+    /// The pixels whose centres may fall on a sphere's orthographic footprint (centre in this
+    /// view's frame), grown by `margin` pixels on every side and clipped to the grid; `None`
+    /// when it misses the grid.
+    pub fn footprint(&self, centre: DVec3, radius: f64, margin: u32) -> Option<PixelRect> {
+        let [x0, y0] = self.origin;
+        let [dx, dy] = self.pitch;
+        let m = f64::from(margin);
+        let cols = (((centre.x - radius - x0) / dx).floor() - m, ((centre.x + radius - x0) / dx).ceil() + m);
+        let rows = (((y0 - centre.y - radius) / dy).floor() - m, ((y0 - centre.y + radius) / dy).ceil() + m);
+        let clip = |(lo, hi): (f64, f64), n: u32| {
+            let (lo, hi) = (lo.max(0.0), hi.min(f64::from(n) - 1.0));
+            (lo <= hi).then(|| (lo as u32, (hi - lo) as u32 + 1))
+        };
+        let ((col, width), (row, height)) = (clip(cols, self.width)?, clip(rows, self.height)?);
+        Some(PixelRect { col, row, width, height })
+    }
+}
+
 /// Depth bounds along z of spheres (centre, radius), widened by 1% and a small absolute
 /// margin so nothing sits on the near or far plane. An empty set gives (−1, 1).
 pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f64) {
@@ -144,4 +177,28 @@ pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f6
     }
     let margin = 0.01 * (hi - lo) + 1e-6 * (1.0 + lo.abs().max(hi.abs()));
     (lo - margin, hi + margin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> ViewGrid {
+        ViewGrid { origin: [0.0, 0.0], pitch: [0.1, 0.1], width: 100, height: 50, z_range: (-1.0, 1.0) }
+    }
+
+    #[test]
+    fn a_footprint_covers_the_sphere_with_its_margin() {
+        // Centre (2, −1) is pixel (20, 10); radius 0.35 spans 3.5 pixels each way.
+        let r = grid().footprint(DVec3::new(2.0, -1.0, 0.0), 0.35, 1).unwrap();
+        assert_eq!(r, PixelRect { col: 15, row: 5, width: 11, height: 11 });
+    }
+
+    #[test]
+    fn a_footprint_is_clipped_to_the_grid_or_absent() {
+        let r = grid().footprint(DVec3::new(-0.05, 0.0, 0.0), 0.2, 1).unwrap();
+        assert_eq!((r.col, r.row), (0, 0));
+        assert_eq!(grid().footprint(DVec3::new(50.0, 0.0, 0.0), 1.0, 1), None);
+        assert_eq!(grid().footprint(DVec3::new(5.0, 3.0, 0.0), 1.0, 1), None);
+    }
 }

@@ -5,8 +5,10 @@
 //! Render targets live in a few slots reused round-robin; a slot's next hypothesis waits (by
 //! barrier) only for that slot's previous score pass. Slot images are sized for the largest
 //! view of the batch, and each hypothesis renders its own grid into them, so a hypothesis
-//! renders the same alone or in any batch. Counts go to one device-local buffer, zeroed
-//! first, copied to host memory at the end.
+//! renders the same alone or in any batch. Each pass touches only the hypothesis' footprint
+//! (its bounding sphere's pixels, with a margin), so a small model in a large image costs
+//! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
+//! device-local buffer, zeroed first, copied to host memory at the end.
 
 use super::draw::{record_view, Draw, ViewPass};
 use super::gpu_mesh::GpuMesh;
@@ -16,13 +18,16 @@ use super::targets::ViewTargets;
 use super::{plan_views, Renderer, Views};
 use crate::error::Result;
 use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
-use crate::sensor::Sensor;
+use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
 use ash::vk;
 use glam::DMat4;
 
 /// Render-target slots in flight within one submission.
 pub const SLOTS: usize = 4;
+/// Pixels added around a footprint: one for rounding, one more in the shadow view for the
+/// depth test's neighbour (shaders/shadow_mask.comp).
+const FOOTPRINT_MARGIN: u32 = 2;
 
 /// The sensed image as the score pass reads it, uploaded once per batch.
 pub struct SensedBuffers<'a> {
@@ -108,9 +113,20 @@ impl Renderer {
             // SAFETY: cmd is recording; the buffer is not in use.
             unsafe { d.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
             barrier(d, cmd, &[], &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }]);
-            for (k, (item, views)) in items.iter().zip(&views).enumerate() {
-                let slot = &slots[k % slots.len()];
-                let first_use = k < slots.len();
+            let mut recorded = 0;
+            for (item, views) in items.iter().zip(&views) {
+                let (centre, radius) = item.sphere;
+                let centre = item.pose.transform_point3(centre);
+                let Some(area) = views.range.footprint(centre, radius, FOOTPRINT_MARGIN) else { continue };
+                let shadow_area = views.shadow.map(|g| {
+                    let c = to_shadow.transform_point3(centre);
+                    let columns = g.footprint(c, radius, FOOTPRINT_MARGIN).unwrap_or(g.full());
+                    // Rows are the range view's (a rotation about y keeps y).
+                    PixelRect { row: area.row, height: area.height, ..columns }
+                });
+                let slot = &slots[recorded % slots.len()];
+                let first_use = recorded < slots.len();
+                recorded += 1;
                 let (colour_before, depth_before) =
                     if first_use { (Access::Nothing, Access::Nothing) } else { (Access::ComputeRead, Access::DepthAttachmentWrite) };
                 let mut prepare = Vec::new();
@@ -126,18 +142,25 @@ impl Renderer {
                     targets: &slot.range,
                     grid: &views.range,
                     view_from_range: DMat4::IDENTITY,
+                    area,
                 };
                 record_view(ctx, cmd, &range_pass, &draw);
                 let mut reads = slot.range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
-                let shadowed_labels = match (&slot.shadow, &views.shadow, &slot.masked, &slot.mask_bindings) {
-                    (Some(targets), Some(grid), Some(masked), Some(bindings)) => {
-                        let shadow_pass =
-                            ViewPass { pipeline: p.shadow, layout: p.raster_layout, targets, grid, view_from_range: to_shadow };
+                let shadowed_labels = match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
+                    (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) => {
+                        let shadow_pass = ViewPass {
+                            pipeline: p.shadow,
+                            layout: p.raster_layout,
+                            targets,
+                            grid,
+                            view_from_range: to_shadow,
+                            area: shadow_area,
+                        };
                         record_view(ctx, cmd, &shadow_pass, &draw);
                         reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                         let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
                         barrier(d, cmd, &reads, &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }]);
-                        bindings.record(ctx, cmd, p, &MaskConstants::new(sensor, settings.mode, &views.range, grid));
+                        bindings.record(ctx, cmd, p, &MaskConstants::new(sensor, settings.mode, &views.range, grid, area));
                         barrier(d, cmd, &[], &[BufferTransition { buffer: masked, from: Access::ComputeWrite, to: Access::ComputeRead }]);
                         masked.address_words()
                     }
@@ -156,6 +179,8 @@ impl Renderer {
                     },
                     width: w,
                     height: h,
+                    _pad: [0; 2],
+                    region: [area.col, area.row, area.width, area.height],
                     surfaces: item.surfaces,
                     segments: settings.sensed.segment_count,
                     tolerance: settings.tolerance,

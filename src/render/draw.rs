@@ -5,7 +5,7 @@
 use super::gpu_mesh::GpuMesh;
 use super::targets::ViewTargets;
 use crate::gpu::GpuContext;
-use crate::sensor::ViewGrid;
+use crate::sensor::{PixelRect, ViewGrid};
 use ash::vk;
 use glam::DMat4;
 
@@ -51,14 +51,17 @@ impl DrawConstants {
     }
 }
 
-/// One view to render: its pipeline, attachments, grid, and the rotation from the range
-/// frame into it (identity for the range view, R_y(−θ) for the shadow view).
+/// One view to render: its pipeline, attachments, grid, the rotation from the range frame
+/// into it (identity for the range view, R_y(−θ) for the shadow view), and the pixels to
+/// clear and draw (the whole grid, or a batch hypothesis' footprint; the rest of the
+/// attachments is left as it was and must not be read).
 pub struct ViewPass<'a> {
     pub pipeline: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub targets: &'a ViewTargets,
     pub grid: &'a ViewGrid,
     pub view_from_range: DMat4,
+    pub area: PixelRect,
 }
 
 /// Records a view pass: clears (label 0, z 0, depth 1) then draws every mesh. The caller has
@@ -68,6 +71,11 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
     let targets = pass.targets;
     // The attachments may be larger than the grid (batch slots fit their largest view).
     let extent = vk::Extent2D { width: pass.grid.width, height: pass.grid.height };
+    let a = pass.area;
+    let area = vk::Rect2D {
+        offset: vk::Offset2D { x: a.col as i32, y: a.row as i32 },
+        extent: vk::Extent2D { width: a.width, height: a.height },
+    };
     let colour = |view, clear| {
         vk::RenderingAttachmentInfo::default()
             .image_view(view)
@@ -88,7 +96,6 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
         .load_op(vk::AttachmentLoadOp::CLEAR)
         .store_op(vk::AttachmentStoreOp::DONT_CARE)
         .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-    let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
     let info = vk::RenderingInfo::default()
         .render_area(area)
         .layer_count(1)

@@ -154,19 +154,26 @@ impl Renderer {
                 targets: &range,
                 grid: &views.range,
                 view_from_range: DMat4::IDENTITY,
+                area: views.range.full(),
             };
             draw::record_view(ctx, cmd, &range_pass, draws);
             timestamps.write(cmd, 1);
             let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
             if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
-                let shadow_pass =
-                    ViewPass { pipeline: p.shadow, layout: p.raster_layout, targets: s, grid, view_from_range: to_shadow };
+                let shadow_pass = ViewPass {
+                    pipeline: p.shadow,
+                    layout: p.raster_layout,
+                    targets: s,
+                    grid,
+                    view_from_range: to_shadow,
+                    area: grid.full(),
+                };
                 draw::record_view(ctx, cmd, &shadow_pass, draws);
                 timestamps.write(cmd, 2);
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                 barrier(d, cmd, &reads, &[]);
-                b.record(ctx, cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid));
+                b.record(ctx, cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid, views.range.full()));
                 timestamps.write(cmd, 3);
                 to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
                 barrier(d, cmd, &to_copy, &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }]);

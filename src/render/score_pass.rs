@@ -18,6 +18,8 @@ pub struct ScoreConstants {
     pub counts: [u32; 2],
     pub width: u32,
     pub height: u32,
+    pub _pad: [u32; 2],
+    pub region: [u32; 4],
     pub surfaces: u32,
     pub segments: u32,
     pub tolerance: f32,
@@ -43,7 +45,7 @@ impl ScoreBindings {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.score);
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.score_layout, 0, &[self.set.set], &[]);
             d.cmd_push_constants(cmd, pipelines.score_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(constants));
-            d.cmd_dispatch(cmd, constants.width.div_ceil(8), constants.height.div_ceil(8), 1);
+            d.cmd_dispatch(cmd, constants.region[2].div_ceil(8), constants.region[3].div_ceil(8), 1);
         }
     }
 }

@@ -5,7 +5,7 @@ use super::pipelines::Pipelines;
 use super::targets::ViewTargets;
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext, StorageSet};
-use crate::sensor::{Sensor, ViewGrid};
+use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
 use std::sync::Arc;
@@ -17,6 +17,7 @@ pub struct MaskConstants {
     range_grid: [f32; 4],
     shadow_grid: [f32; 4],
     sizes: [i32; 4],
+    region: [i32; 4],
     cos_theta: f32,
     sin_theta: f32,
     bias_pitch: f32,
@@ -26,12 +27,14 @@ pub struct MaskConstants {
 }
 
 impl MaskConstants {
-    pub fn new(sensor: &Sensor, mode: ShadowMode, range: &ViewGrid, shadow: &ViewGrid) -> Self {
+    /// Constants for masking the range pixels of `region`.
+    pub fn new(sensor: &Sensor, mode: ShadowMode, range: &ViewGrid, shadow: &ViewGrid, region: PixelRect) -> Self {
         let grid = |g: &ViewGrid| [g.origin[0] as f32, g.origin[1] as f32, g.pitch[0] as f32, g.pitch[1] as f32];
         Self {
             range_grid: grid(range),
             shadow_grid: grid(shadow),
             sizes: [range.width as i32, range.height as i32, shadow.width as i32, shadow.height as i32],
+            region: [region.col, region.row, region.width, region.height].map(|v| v as i32),
             cos_theta: sensor.theta().cos() as f32,
             sin_theta: sensor.theta().sin() as f32,
             bias_pitch: (DEPTH_BIAS_PIXELS * sensor.pitch[0]) as f32,
@@ -62,7 +65,7 @@ impl MaskBindings {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask);
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask_layout, 0, &[self.set.set], &[]);
             d.cmd_push_constants(cmd, pipelines.mask_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(constants));
-            d.cmd_dispatch(cmd, groups(constants.sizes[0]), groups(constants.sizes[1]), 1);
+            d.cmd_dispatch(cmd, groups(constants.region[2]), groups(constants.region[3]), 1);
         }
     }
 }

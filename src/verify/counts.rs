@@ -3,12 +3,13 @@
 //!
 //! | words | content |
 //! |---|---|
-//! | 0..4 | N1+, N1−, N0, N1 |
-//! | 4..4+M | N_M: synthetic population of model surface m (index m − 1) |
+//! | 0..3 | N1+, N1−, N0 |
+//! | 3..3+M | N_M: synthetic population of model surface m (index m − 1) |
 //! | then K·M | t: pixels with sensed segment k and synthetic surface m, at (k − 1)·M + (m − 1) |
 //! | then 2·M | A_M in area units (area.rs), as (low, high) u32 pairs |
 //!
-//! M is the model's surface count and K the sensed image's segment count.
+//! M is the model's surface count and K the sensed image's segment count. N1 (sensed valid,
+//! synthetic not) is N_i − Σ t, so the GPU need only visit the pixels the model may cover.
 
 /// Offsets and size of one hypothesis' counts, in u32 words.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -17,7 +18,7 @@ pub struct CountsLayout {
     pub segments: u32,
 }
 
-pub const SCALARS: u32 = 4;
+pub const SCALARS: u32 = 3;
 
 impl CountsLayout {
     pub fn populations(&self) -> usize {
@@ -36,14 +37,16 @@ impl CountsLayout {
         self.areas() + 2 * self.surfaces as usize
     }
 
-    pub fn decode(&self, words: &[u32]) -> Counts {
+    /// The counts in `words`; `sensed_valid` is N_i, from which N1 follows.
+    pub fn decode(&self, words: &[u32], sensed_valid: u64) -> Counts {
         let m = self.surfaces as usize;
         let overlaps = &words[self.overlaps()..self.areas()];
+        let both_valid: u64 = overlaps.iter().map(|&t| u64::from(t)).sum();
         Counts {
             n1_plus: u64::from(words[0]),
             n1_minus: u64::from(words[1]),
             n0: u64::from(words[2]),
-            n1: u64::from(words[3]),
+            n1: sensed_valid - both_valid,
             surface_population: words[self.populations()..self.overlaps()].iter().map(|&w| u64::from(w)).collect(),
             overlap: (0..self.segments as usize)
                 .flat_map(|k| (0..m).map(move |j| (k, j)))

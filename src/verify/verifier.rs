@@ -179,11 +179,11 @@ impl Verifier {
             let shadow_pass = settings.shadow != ShadowMode::None && sensor.theta_deg != 0.0;
             for (h, item) in chunk.iter().zip(&items) {
                 let l = layout(h);
-                let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()]);
+                let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()], sensed.valid);
                 let scores = score(&counts, sensed, &h.bindings);
                 let unshadowed = match item.unshadowed_offset {
                     Some(o) if shadow_pass => {
-                        let c = l.decode(&words[o..o + l.words()]);
+                        let c = l.decode(&words[o..o + l.words()], sensed.valid);
                         let s = score(&c, sensed, &h.bindings);
                         Some((c, s))
                     }
