@@ -45,6 +45,12 @@ impl ShadowMode {
         }
     }
 
+    /// Whether a shadow pass runs at all: not in mode `none`, and not at θ = 0, where the
+    /// camera looks along the projector and nothing can be in shadow.
+    pub fn needs_shadow_pass(self, theta_deg: f64) -> bool {
+        self != ShadowMode::None && theta_deg != 0.0
+    }
+
     /// The code the shadow-mask shader switches on.
     pub(crate) fn shader_code(self) -> u32 {
         match self {

@@ -201,6 +201,9 @@ fn bad_verification_input_is_refused() {
     let i = broken.label.iter().position(|&l| l != 0).unwrap();
     broken.z[i] = f32::NAN;
     assert!(SensedImage::new(&broken, &sensor).unwrap_err().to_string().contains("Z = NaN"));
+    let finer = Sensor { pitch: [0.03, 0.035], ..sensor };
+    let err = VERIFIER.verify(&sensed, &settings(finer, ShadowMode::Depth), &[correct()], &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("pitch"), "{err}");
     let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
     assert!(VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).is_err());
 }

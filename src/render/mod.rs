@@ -1,5 +1,7 @@
 //! Rendering a scene: the range pass, the shadow pass and the shadow-mask compute pass,
-//! recorded into one command buffer with barriers between them, then read back.
+//! recorded into one command buffer with barriers between them, then read back; and, for
+//! verification, the same passes plus the score pass for many hypotheses per submission
+//! (batch.rs).
 //!
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
@@ -13,7 +15,7 @@ mod score_pass;
 mod shadow_pass;
 mod targets;
 
-pub use batch::{BatchItem, BatchSettings, SensedBuffers, SLOTS};
+pub(crate) use batch::{BatchItem, BatchSettings, SensedBuffers};
 pub use draw::Draw;
 use draw::ViewPass;
 pub use gpu_mesh::GpuMesh;
@@ -32,6 +34,7 @@ use std::sync::Arc;
 use targets::ViewTargets;
 
 pub struct Renderer {
+    // Dropped in this order: the pipelines before the context they belong to.
     pipelines: Pipelines,
     ctx: Arc<GpuContext>,
 }
@@ -42,10 +45,9 @@ pub struct Renderer {
 pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f64)], max_side: u32) -> Result<Views> {
     let z_range = depth_bounds(spheres.iter().copied());
     let range = sensor.range_grid(z_range);
-    let shadow = match mode {
-        ShadowMode::None => None,
-        _ if sensor.theta_deg == 0.0 => None,
-        _ => {
+    let shadow = match mode.needs_shadow_pass(sensor.theta_deg) {
+        false => None,
+        true => {
             let to_shadow = sensor.to_shadow_frame();
             let shadow_z = depth_bounds(spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r)));
             Some(sensor.shadow_grid(z_range, shadow_z)?)

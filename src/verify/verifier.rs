@@ -110,6 +110,12 @@ impl Verifier {
                 sensed.width, sensed.height, sensor.width, sensor.height
             )));
         }
+        if sensed.pitch != sensor.pitch {
+            return Err(Error::Scene(format!(
+                "the sensed image was measured at pitch {:?} but the sensor has pitch {:?}",
+                sensed.pitch, sensor.pitch
+            )));
+        }
         if !(settings.tolerance.is_finite() && settings.tolerance >= 0.0) {
             return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", settings.tolerance)));
         }
@@ -176,7 +182,7 @@ impl Verifier {
                 })
                 .collect();
             let words = self.renderer.count_batch(&batch, &items, offset)?;
-            let shadow_pass = settings.shadow != ShadowMode::None && sensor.theta_deg != 0.0;
+            let shadow_pass = settings.shadow.needs_shadow_pass(sensor.theta_deg);
             for (h, item) in chunk.iter().zip(&items) {
                 let l = layout(h);
                 let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()], sensed.valid);
