@@ -20,6 +20,8 @@ pub enum Access {
     TransferWrite,
     /// Mapped memory read by the host after the fence.
     HostRead,
+    /// Read as vertex or index data, or as storage by any shader: a mesh or an input image.
+    DrawAndComputeRead,
 }
 
 /// (stage, access, image layout) of each use.
@@ -40,6 +42,11 @@ fn describe(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::I
         Access::TransferRead => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
         Access::TransferWrite => (S::COPY | S::CLEAR, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL),
+        Access::DrawAndComputeRead => (
+            S::VERTEX_ATTRIBUTE_INPUT | S::INDEX_INPUT | S::VERTEX_SHADER | S::FRAGMENT_SHADER | S::COMPUTE_SHADER,
+            A::VERTEX_ATTRIBUTE_READ | A::INDEX_READ | A::SHADER_STORAGE_READ,
+            L::GENERAL,
+        ),
     }
 }
 

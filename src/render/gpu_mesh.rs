@@ -1,4 +1,5 @@
-//! A mesh uploaded once: vertex positions, triangle indices and per-triangle surface ids.
+//! A mesh uploaded once into device-local memory: vertex positions, triangle indices and
+//! per-triangle surface ids.
 //! The fragment shader reads all three through buffer device addresses, indexed by
 //! gl_PrimitiveID, to label the pixel and evaluate its triangle's plane exactly.
 
@@ -20,9 +21,9 @@ impl GpuMesh {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         Ok(Self {
-            vertices: Buffer::with_data(ctx, vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &mesh.positions, &format!("{name} vertices"))?,
-            indices: Buffer::with_data(ctx, vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &indices, &format!("{name} indices"))?,
-            surface_ids: Buffer::with_data(
+            vertices: Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &mesh.positions, &format!("{name} vertices"))?,
+            indices: Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &indices, &format!("{name} indices"))?,
+            surface_ids: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 &mesh.triangle_surfaces,

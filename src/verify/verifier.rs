@@ -129,8 +129,8 @@ impl Verifier {
             }
         }
         let ctx = self.renderer.context();
-        let segments = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.segment_index, "sensed segments")?;
-        let z = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.z, "sensed z")?;
+        let segments = Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.segment_index, "sensed segments")?;
+        let z = Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.z, "sensed z")?;
         let batch = BatchSettings {
             sensor,
             mode: settings.shadow,
