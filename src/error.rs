@@ -67,10 +67,9 @@ impl From<gpu_allocator::AllocationError> for Error {
     fn from(e: gpu_allocator::AllocationError) -> Self {
         match e {
             gpu_allocator::AllocationError::OutOfMemory => Error::OutOfMemory("allocating GPU memory".into()),
-            other => Error::Vulkan {
-                context: format!("allocating GPU memory ({other})"),
-                result: vk::Result::ERROR_UNKNOWN,
-            },
+            other => {
+                Error::Vulkan { context: format!("allocating GPU memory ({other})"), result: vk::Result::ERROR_UNKNOWN }
+            }
         }
     }
 }

@@ -19,7 +19,8 @@ pub fn pose_from_rows(rows: [[f64; 4]; 4]) -> Result<DMat4> {
     }
     let pose = DMat4::from_cols_array_2d(&rows).transpose();
     let rotation = DMat3::from_mat4(pose);
-    let error = (rotation.transpose() * rotation - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let error =
+        (rotation.transpose() * rotation - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if error > RIGIDITY_TOLERANCE || rotation.determinant() < 0.0 {
         return bad("is not a rigid transform (its 3×3 part must be a rotation)");
     }

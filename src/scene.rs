@@ -54,11 +54,10 @@ fn identity_rows() -> [[f64; 4]; 4] {
 impl Scene {
     pub fn from_file(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")))
-            .map_err(|e| match e {
-                Error::Scene(reason) => Error::file(path, reason),
-                other => other,
-            })
+        Self::from_toml(&text, path.parent().unwrap_or(Path::new("."))).map_err(|e| match e {
+            Error::Scene(reason) => Error::file(path, reason),
+            other => other,
+        })
     }
 
     /// Parses a scene; model paths are relative to `base_dir`.

@@ -44,7 +44,10 @@ impl Sensor {
             return bad(format!("the image is {}×{} pixels; both sides must be at least 1", self.width, self.height));
         }
         if self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
-            return bad(format!("the image is {}×{} pixels; sides are limited to {MAX_IMAGE_SIDE}", self.width, self.height));
+            return bad(format!(
+                "the image is {}×{} pixels; sides are limited to {MAX_IMAGE_SIDE}",
+                self.width, self.height
+            ));
         }
         if !self.pitch.iter().all(|p| p.is_finite() && *p > 0.0) {
             return bad(format!("pitch {:?} must be two positive finite numbers", self.pitch));
@@ -80,13 +83,7 @@ impl Sensor {
 
     /// The range view's grid, with its depth range set to `z_range`.
     pub fn range_grid(&self, z_range: (f64, f64)) -> ViewGrid {
-        ViewGrid {
-            origin: self.origin,
-            pitch: self.pitch,
-            width: self.width,
-            height: self.height,
-            z_range,
-        }
+        ViewGrid { origin: self.origin, pitch: self.pitch, width: self.width, height: self.height, z_range }
     }
 
     /// The shadow view's grid: same pitch and rows as the range view; columns cover the
@@ -169,9 +166,9 @@ impl ViewGrid {
 /// Depth bounds along z of spheres (centre, radius), widened by 1% and a small absolute
 /// margin so nothing sits on the near or far plane. An empty set gives (−1, 1).
 pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f64) {
-    let (lo, hi) = spheres.into_iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (c, r)| {
-        (lo.min(c.z - r), hi.max(c.z + r))
-    });
+    let (lo, hi) = spheres
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (c, r)| (lo.min(c.z - r), hi.max(c.z + r)));
     if lo > hi {
         return (-1.0, 1.0);
     }

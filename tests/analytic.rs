@@ -145,7 +145,11 @@ fn step_on_a_table_shadows_the_table_on_its_minus_x_side() {
     let w = s.width as usize;
     let table_label = 9; // after the step's 8 surfaces
     for row in 0..s.height as usize {
-        let shadowed = (0..w).filter(|&c| out.label_unshadowed[row * w + c] == table_label && out.label[row * w + c] == 0).count();
-        assert!((shadowed as f64 - 0.5 / PITCH).abs() <= 1.0, "row {row}: {shadowed} shadowed table pixels, expected 25 ± 1");
+        let shadowed =
+            (0..w).filter(|&c| out.label_unshadowed[row * w + c] == table_label && out.label[row * w + c] == 0).count();
+        assert!(
+            (shadowed as f64 - 0.5 / PITCH).abs() <= 1.0,
+            "row {row}: {shadowed} shadowed table pixels, expected 25 ± 1"
+        );
     }
 }

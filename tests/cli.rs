@@ -6,7 +6,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn rangesynth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rangesynth")).args(args).env("RANGESYNTH_VALIDATION", "1").output().expect("the binary runs")
+    Command::new(env!("CARGO_BIN_EXE_rangesynth"))
+        .args(args)
+        .env("RANGESYNTH_VALIDATION", "1")
+        .output()
+        .expect("the binary runs")
 }
 
 fn dir(name: &str) -> PathBuf {
@@ -33,7 +37,17 @@ fn demo_writes_the_images_and_a_summary() {
         assert!(out_dir.join(f).is_file(), "{f} missing");
     }
     // The low top is partly shadowed by the tall part, the high top not at all.
-    let row = |name: &str| stdout.lines().find(|l| l.contains(name)).unwrap().split_whitespace().rev().take(2).map(|v| v.parse::<u64>().unwrap()).collect::<Vec<_>>();
+    let row = |name: &str| {
+        stdout
+            .lines()
+            .find(|l| l.contains(name))
+            .unwrap()
+            .split_whitespace()
+            .rev()
+            .take(2)
+            .map(|v| v.parse::<u64>().unwrap())
+            .collect::<Vec<_>>()
+    };
     let (low_shadowed, low_valid) = (row("low_top")[0], row("low_top")[1]);
     assert!(low_shadowed > 1000 && low_valid > 1000, "{stdout}");
     assert_eq!(row("high_top")[0], 0);
@@ -83,7 +97,11 @@ fn bad_scenes_are_refused_with_a_clear_message() {
         ("zero_width", SENSOR.replace("width = 32", "width = 0") + object, "at least 1"),
         ("too_large", SENSOR.replace("height = 24", "height = 100000") + object, "limited to"),
         ("theta_90", SENSOR.replace("theta_deg = 30.0", "theta_deg = 90.0") + object, "strictly between -90 and 90"),
-        ("theta_minus_120", SENSOR.replace("theta_deg = 30.0", "theta_deg = -120.0") + object, "strictly between -90 and 90"),
+        (
+            "theta_minus_120",
+            SENSOR.replace("theta_deg = 30.0", "theta_deg = -120.0") + object,
+            "strictly between -90 and 90",
+        ),
         ("theta_nan", SENSOR.replace("theta_deg = 30.0", "theta_deg = nan") + object, "strictly between -90 and 90"),
         ("pitch_zero", SENSOR.replace("pitch = [0.1, 0.1]", "pitch = [0.0, 0.1]") + object, "positive finite"),
         ("unknown_key", SENSOR.to_string() + "colour = 3\n" + object, "unknown field `colour`"),
@@ -91,9 +109,17 @@ fn bad_scenes_are_refused_with_a_clear_message() {
         ("unknown_kind", SENSOR.replace("\"orthographic\"", "\"pinhole\"") + object, "unknown variant `pinhole`"),
         ("missing_model", SENSOR.to_string() + "[[object]]\nmodel = \"nowhere.obj\"\n", "nowhere.obj: No such file"),
         ("unknown_builtin", SENSOR.to_string() + "[[object]]\nmodel = \"builtin:teapot\"\n", "unknown built-in"),
-        ("non_rigid", SENSOR.to_string() + object + "pose = [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n", "not a rigid transform"),
+        (
+            "non_rigid",
+            SENSOR.to_string() + object + "pose = [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n",
+            "not a rigid transform",
+        ),
         ("projective", SENSOR.to_string() + object + "pose = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]]\n", "last row"),
-        ("nan_pose", SENSOR.to_string() + object + "pose = [[1,0,0,nan],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n", "non-finite"),
+        (
+            "nan_pose",
+            SENSOR.to_string() + object + "pose = [[1,0,0,nan],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n",
+            "non-finite",
+        ),
     ];
     for (name, body, expected) in cases {
         let stderr = refused(name, body);
@@ -140,7 +166,12 @@ fn an_unknown_device_name_is_refused() {
 fn sensed_example(name: &str) -> (PathBuf, PathBuf) {
     let d = dir(name);
     let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example");
-    let out = rangesynth(&["render", example.join("sensed.toml").to_str().unwrap(), "--out", d.join("sensed").to_str().unwrap()]);
+    let out = rangesynth(&[
+        "render",
+        example.join("sensed.toml").to_str().unwrap(),
+        "--out",
+        d.join("sensed").to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let exr = d.join("sensed/range.exr");
     (d, exr)
@@ -151,7 +182,15 @@ fn verify_scores_the_example_and_ranks_the_correct_hypothesis_first() {
     let (d, exr) = sensed_example("verify_example");
     let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
     let scores = d.join("scores.jsonl");
-    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", scores.to_str().unwrap(), "--compare-shadow"]);
+    let out = rangesynth(&[
+        "verify",
+        hyps.to_str().unwrap(),
+        "--scene",
+        exr.to_str().unwrap(),
+        "--out",
+        scores.to_str().unwrap(),
+        "--compare-shadow",
+    ]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
     let first_ranked = stdout.lines().find(|l| l.trim_start().starts_with("1 ")).expect("a ranked summary");
@@ -187,7 +226,16 @@ fn verify_runs_a_batch_of_1024_from_the_cli() {
     let hyps = d.join("hyps.json");
     std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
     let scores = d.join("scores.jsonl");
-    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", scores.to_str().unwrap(), "--chunk-size", "300"]);
+    let out = rangesynth(&[
+        "verify",
+        hyps.to_str().unwrap(),
+        "--scene",
+        exr.to_str().unwrap(),
+        "--out",
+        scores.to_str().unwrap(),
+        "--chunk-size",
+        "300",
+    ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let lines = std::fs::read_to_string(&scores).unwrap();
     assert_eq!(lines.lines().count(), 1024);
@@ -210,16 +258,31 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     for (name, body, expected) in cases {
         let hyps = d.join(format!("{name}.json"));
         std::fs::write(&hyps, body).unwrap();
-        let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", d.join("s.jsonl").to_str().unwrap()]);
+        let out = rangesynth(&[
+            "verify",
+            hyps.to_str().unwrap(),
+            "--scene",
+            exr.to_str().unwrap(),
+            "--out",
+            d.join("s.jsonl").to_str().unwrap(),
+        ]);
         let stderr = text(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
         assert!(stderr.contains(expected) && !stderr.contains("panicked"), "{name}: expected {expected:?} in {stderr}");
     }
     let hyps = d.join("ok.json");
-    std::fs::write(&hyps, format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}}}]}}"#)).unwrap();
+    std::fs::write(&hyps, format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}}}]}}"#))
+        .unwrap();
     let garbage = d.join("garbage.exr");
     std::fs::write(&garbage, "not an exr").unwrap();
-    let out = rangesynth(&["verify", hyps.to_str().unwrap(), "--scene", garbage.to_str().unwrap(), "--out", d.join("s.jsonl").to_str().unwrap()]);
+    let out = rangesynth(&[
+        "verify",
+        hyps.to_str().unwrap(),
+        "--scene",
+        garbage.to_str().unwrap(),
+        "--out",
+        d.join("s.jsonl").to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("not a usable OpenEXR file"), "{}", text(&out.stderr));
 }

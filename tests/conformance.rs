@@ -103,7 +103,8 @@ fn check(name: &str, scene: &Scene, out: &RenderOutput, reference: &Reference) -
         ShadowMode::Label => reference.label_paper_shadowed(),
     };
     let near_boundary = near_label_change(&expected, w, h);
-    let allowed: Vec<bool> = (0..w * h).map(|i| edges[i] || near_boundary[i] || reference.near_camera_edge[i]).collect();
+    let allowed: Vec<bool> =
+        (0..w * h).map(|i| edges[i] || near_boundary[i] || reference.near_camera_edge[i]).collect();
     let shadow = compare_labels(&format!("{name}_shadowed"), w, h, &out.label, &expected, &allowed);
     assert_eq!(shadow.outside_allowance, 0, "{name}: {shadow:?} shadow mismatches away from boundaries");
     Checked { labels, shadow, max_z_error }
@@ -113,7 +114,9 @@ fn conformance(name: &str, objects: &[(&str, DVec3)], extent: f64, seed: u64) {
     let pitch = extent / f64::from(SIZE);
     let mut totals = (LabelDiff::default(), LabelDiff::default(), 0.0f64);
     for (k, rotation) in rotations(seed).into_iter().enumerate() {
-        for (mode, theta) in [(ShadowMode::None, 0.0), (ShadowMode::Depth, 45.0), (ShadowMode::Label, 45.0), (ShadowMode::Depth, -30.0)] {
+        for (mode, theta) in
+            [(ShadowMode::None, 0.0), (ShadowMode::Depth, 45.0), (ShadowMode::Label, 45.0), (ShadowMode::Depth, -30.0)]
+        {
             let posed: Vec<(&str, DMat4)> =
                 objects.iter().map(|&(model, at)| (model, about_centre(model, rotation, at))).collect();
             let s = centred_sensor(SIZE, SIZE, pitch, [0.0, 0.0], theta);

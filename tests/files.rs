@@ -5,7 +5,9 @@ mod common;
 
 use common::*;
 use glam::DMat4;
-use rangesynth::io::{read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage};
+use rangesynth::io::{
+    read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage,
+};
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -20,15 +22,19 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
     let (w, h) = (7u32, 5u32);
     let n = (w * h) as usize;
     // Labels that a float channel would corrupt: 2^24 + 1 is not representable in f32.
-    let labels: Vec<u32> = (0..n as u32).map(|i| match i % 5 {
-        0 => 0,
-        1 => (1 << 24) + 1,
-        2 => u32::MAX,
-        3 => (1 << 31) + 12345,
-        _ => i,
-    }).collect();
+    let labels: Vec<u32> = (0..n as u32)
+        .map(|i| match i % 5 {
+            0 => 0,
+            1 => (1 << 24) + 1,
+            2 => u32::MAX,
+            3 => (1 << 31) + 12345,
+            _ => i,
+        })
+        .collect();
     let coordinate = |k: u32| -> Vec<f32> {
-        (0..n as u32).map(|i| if labels[i as usize] == 0 { f32::NAN } else { (i * 7 + k) as f32 * 0.123_456_7 - 1.0 }).collect()
+        (0..n as u32)
+            .map(|i| if labels[i as usize] == 0 { f32::NAN } else { (i * 7 + k) as f32 * 0.123_456_7 - 1.0 })
+            .collect()
     };
     let image = RangeImage {
         width: w,
@@ -69,14 +75,17 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
     assert_eq!(back.label, out.label);
     for i in 0..out.label.len() {
         match out.point(i) {
-            Some([x, y, z]) => assert_eq!([back.x[i], back.y[i], back.z[i]].map(f32::to_bits), [x, y, z].map(f32::to_bits)),
+            Some([x, y, z]) => {
+                assert_eq!([back.x[i], back.y[i], back.z[i]].map(f32::to_bits), [x, y, z].map(f32::to_bits))
+            }
             None => assert!(back.x[i].is_nan() && back.y[i].is_nan() && back.z[i].is_nan(), "pixel {i} has no data"),
         }
     }
     assert_eq!(back.sensor, Some(s));
     let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr")).unwrap();
     assert_eq!(unshadowed, out.label_unshadowed);
-    let map: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();
+    let map: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();
     let labels = map["labels"].as_array().unwrap();
     assert_eq!(labels.len(), 9, "8 step surfaces and the plane");
     assert_eq!(labels[8]["label"], 9);

@@ -37,7 +37,10 @@ fn two_segments() -> SensedImage {
 #[test]
 fn each_score_by_hand() {
     let s = two_segments();
-    assert_eq!((s.valid, s.segment_population.clone(), s.segment_area_units.clone()), (6, vec![4, 2], vec![units(1), 0]));
+    assert_eq!(
+        (s.valid, s.segment_population.clone(), s.segment_area_units.clone()),
+        (6, vec![4, 2], vec![units(1), 0])
+    );
     // Model surfaces 1 (4 px) and 2 (3 px); overlaps: (10,1) = 3, (20,1) = 1, (20,2) = 1.
     let counts = Counts {
         n1_plus: 3,
@@ -107,8 +110,9 @@ fn s5_at_ratio_exactly_2_and_beyond() {
 #[test]
 fn s6_with_a_negative_numerator_is_zero() {
     let s = sensed(&[&[10, 0], &[0, 0]]); // N_i = 1
-    // N_s = 3, N0 = 3 (none overlaps): N_i − N0 = −2.
-    let counts = Counts { n0: 3, n1: 1, surface_population: vec![3], surface_area_units: vec![0], ..Default::default() };
+                                          // N_s = 3, N0 = 3 (none overlaps): N_i − N0 = −2.
+    let counts =
+        Counts { n0: 3, n1: 1, surface_population: vec![3], surface_area_units: vec![0], ..Default::default() };
     let r = score(&counts, &s, &[(10, 1)]);
     assert_eq!(r.s6, 0.0);
     assert!(r.s.is_finite());
@@ -133,11 +137,18 @@ fn empty_images_and_missing_bindings_give_defined_scores_and_reasons() {
     assert!(r.s2.is_finite() && r.s == 0.0);
 
     // A binding to a model surface absent from the image (2 has no pixels) is left out.
-    let counts = Counts { surface_population: vec![4, 0], surface_area_units: vec![units(1), 0], ..one_binding_counts(units(1), 4) };
+    let counts = Counts {
+        surface_population: vec![4, 0],
+        surface_area_units: vec![units(1), 0],
+        ..one_binding_counts(units(1), 4)
+    };
     let with = score(&counts, &s, &[(10, 1), (10, 2)]);
     let without = score(&counts, &s, &[(10, 1)]);
     assert_eq!((with.s2, with.s4), (without.s2, without.s4));
-    assert!(with.notes.iter().any(|n| n.contains("binding (10, 2) left out") && n.contains("model surface has no pixels")));
+    assert!(with
+        .notes
+        .iter()
+        .any(|n| n.contains("binding (10, 2) left out") && n.contains("model surface has no pixels")));
     assert!(with.bindings.iter().any(|b| b.model_surface == 2 && b.absent));
     // And a binding to a scene label the image lacks.
     let r = score(&counts, &s, &[(10, 1), (99, 1)]);

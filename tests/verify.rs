@@ -34,7 +34,12 @@ fn sensed(sensor: Sensor) -> (RangeImage, SensedImage) {
 }
 
 fn hypothesis(id: &str, model: &str, pose: DMat4, bindings: &[(u32, u32)]) -> Hypothesis {
-    Hypothesis { id: id.into(), model: VERIFIER.model(model, Path::new(".")).unwrap(), pose, bindings: bindings.to_vec() }
+    Hypothesis {
+        id: id.into(),
+        model: VERIFIER.model(model, Path::new(".")).unwrap(),
+        pose,
+        bindings: bindings.to_vec(),
+    }
 }
 
 /// The step's surfaces are labels 1..=8 in the sensed image: the correct binding is identity.
@@ -65,7 +70,13 @@ fn as_cpu(c: &Counts, sensed: &SensedImage, n_i: u64) -> CpuCounts {
         overlap: c.overlap.iter().map(|&((k, m), t)| ((sensed.segments[k as usize], m), t)).collect(),
         scene_population: sensed.segments.iter().zip(&sensed.segment_population).map(|(&s, &n)| (s, n)).collect(),
         model_population: nonzero(&c.surface_population),
-        scene_area_units: sensed.segments.iter().zip(&sensed.segment_area_units).filter(|(_, &a)| a != 0).map(|(&s, &a)| (s, a)).collect(),
+        scene_area_units: sensed
+            .segments
+            .iter()
+            .zip(&sensed.segment_area_units)
+            .filter(|(_, &a)| a != 0)
+            .map(|(&s, &a)| (s, a))
+            .collect(),
         model_area_units: nonzero(&c.surface_area_units),
     }
 }
@@ -78,15 +89,23 @@ fn assert_close(name: &str, gpu: f64, cpu: f64) {
 
 #[test]
 fn gpu_counts_and_scores_match_the_cpu_scorer() {
-    for (theta, mode) in [(45.0, ShadowMode::Depth), (45.0, ShadowMode::Label), (30.0, ShadowMode::None), (-30.0, ShadowMode::Depth)] {
+    for (theta, mode) in
+        [(45.0, ShadowMode::Depth), (45.0, ShadowMode::Label), (30.0, ShadowMode::None), (-30.0, ShadowMode::Depth)]
+    {
         let sensor = test_sensor(theta);
         let (image, sensed) = sensed(sensor);
-        let wrong_pose = step_pose() * DMat4::from_rotation_z(0.3) * DMat4::from_translation(DVec3::new(0.2, 0.1, 0.05));
+        let wrong_pose =
+            step_pose() * DMat4::from_rotation_z(0.3) * DMat4::from_translation(DVec3::new(0.2, 0.1, 0.05));
         let hypotheses = [
             correct(),
             hypothesis("wrong pose", "builtin:step", wrong_pose, &[(1, 1), (2, 2), (3, 3)]),
             hypothesis("wrong model", "builtin:box", step_pose(), &[(1, 1), (2, 2)]),
-            hypothesis("sphere", "builtin:sphere:24", DMat4::from_translation(DVec3::new(-0.5, 0.2, 0.3)), &[(1, 1), (9, 1)]),
+            hypothesis(
+                "sphere",
+                "builtin:sphere:24",
+                DMat4::from_translation(DVec3::new(-0.5, 0.2, 0.3)),
+                &[(1, 1), (9, 1)],
+            ),
         ];
         let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
         for (h, v) in hypotheses.iter().zip(&results) {
@@ -145,15 +164,19 @@ fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
     let models = ["builtin:step", "builtin:box", "builtin:cylinder:12", "builtin:sphere:16"];
     let mut hypotheses: Vec<Hypothesis> = (0..40)
         .map(|i| {
-            let pose = DMat4::from_translation(DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-0.5..0.5)))
-                * DMat4::from_rotation_z(rng.gen_range(0.0..6.3))
+            let pose = DMat4::from_translation(DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-0.5..0.5),
+            )) * DMat4::from_rotation_z(rng.gen_range(0.0..6.3))
                 * DMat4::from_rotation_x(rng.gen_range(-0.5..0.5));
             hypothesis(&format!("h{i}"), models[i % 4], pose, &[(1, 1), (2, 1)])
         })
         .collect();
     hypotheses.push(correct());
     let base = settings(sensor, ShadowMode::Depth);
-    let alone: Vec<Verification> = hypotheses.iter().map(|h| verify(&sensed, &base, std::slice::from_ref(h)).remove(0)).collect();
+    let alone: Vec<Verification> =
+        hypotheses.iter().map(|h| verify(&sensed, &base, std::slice::from_ref(h)).remove(0)).collect();
     let same = |a: &Verification, b: &Verification| {
         assert_eq!(a.id, b.id);
         assert_eq!(a.counts, b.counts, "{}", a.id);
@@ -193,7 +216,12 @@ fn a_batch_of_1024_runs_in_chunks() {
 fn bad_verification_input_is_refused() {
     let sensor = test_sensor(45.0);
     let (image, sensed) = sensed(sensor);
-    let err = VERIFIER.verify(&sensed, &settings(sensor, ShadowMode::Depth), &[hypothesis("h", "builtin:box", DMat4::IDENTITY, &[(1, 7)])], &mut |_| {});
+    let err = VERIFIER.verify(
+        &sensed,
+        &settings(sensor, ShadowMode::Depth),
+        &[hypothesis("h", "builtin:box", DMat4::IDENTITY, &[(1, 7)])],
+        &mut |_| {},
+    );
     assert!(err.unwrap_err().to_string().contains("binding (1, 7) names no surface"));
     let other = centred_sensor(64, 128, 0.035, [0.0, 0.0], 45.0);
     assert!(SensedImage::new(&image, &other).unwrap_err().to_string().contains("128×128 but the sensor is 64×128"));
@@ -214,15 +242,27 @@ fn one_verifier_serves_several_threads_at_once() {
     let (_, sensed) = sensed(sensor);
     let base = settings(sensor, ShadowMode::Depth);
     let hypotheses: Vec<Hypothesis> = (0..12)
-        .map(|i| hypothesis(&format!("h{i}"), "builtin:step", step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.05), &[(1, 1), (2, 2)]))
+        .map(|i| {
+            hypothesis(
+                &format!("h{i}"),
+                "builtin:step",
+                step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.05),
+                &[(1, 1), (2, 2)],
+            )
+        })
         .collect();
     let sequential = verify(&sensed, &base, &hypotheses);
     std::thread::scope(|scope| {
-        let runs: Vec<_> = (0..4).map(|_| scope.spawn(|| VERIFIER.verify(&sensed, &base, &hypotheses, &mut |_| {}).unwrap())).collect();
+        let runs: Vec<_> = (0..4)
+            .map(|_| scope.spawn(|| VERIFIER.verify(&sensed, &base, &hypotheses, &mut |_| {}).unwrap()))
+            .collect();
         for run in runs {
             let results = run.join().expect("no panic");
             for (a, b) in sequential.iter().zip(&results) {
-                assert_eq!((a.id.as_str(), &a.counts, a.scores.s.to_bits()), (b.id.as_str(), &b.counts, b.scores.s.to_bits()));
+                assert_eq!(
+                    (a.id.as_str(), &a.counts, a.scores.s.to_bits()),
+                    (b.id.as_str(), &b.counts, b.scores.s.to_bits())
+                );
             }
         }
     });

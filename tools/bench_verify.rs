@@ -34,12 +34,19 @@ fn main() -> anyhow::Result<()> {
     for model_name in ["builtin:box", "builtin:sphere:100"] {
         let model = verifier.model(model_name, Path::new("."))?;
         for shadow in [ShadowMode::Depth, ShadowMode::None] {
-            let settings = VerifySettings { sensor: scene.sensor, shadow, tolerance: 0.1, compare_shadow: false, chunk_size: 1024 };
+            let settings = VerifySettings {
+                sensor: scene.sensor,
+                shadow,
+                tolerance: 0.1,
+                compare_shadow: false,
+                chunk_size: 1024,
+            };
             for &n in batches {
                 let hypotheses: Vec<Hypothesis> = (0..n)
                     .map(|i| {
                         let a = i as f64 * 0.002;
-                        let pose = DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44 + a);
+                        let pose =
+                            DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44 + a);
                         Hypothesis { id: format!("h{i}"), model: model.clone(), pose, bindings: vec![(1, 1), (2, 1)] }
                     })
                     .collect();

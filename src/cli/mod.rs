@@ -57,7 +57,10 @@ pub fn run(cli: Cli) -> Result<()> {
     };
     for object in &scene.objects {
         if object.mesh.dropped_degenerate > 0 {
-            eprintln!("warning: {}: dropped {} degenerate triangle(s)", object.mesh.name, object.mesh.dropped_degenerate);
+            eprintln!(
+                "warning: {}: dropped {} degenerate triangle(s)",
+                object.mesh.name, object.mesh.dropped_degenerate
+            );
         }
     }
     let renderer = Renderer::new(&options).context("starting Vulkan")?;

@@ -7,7 +7,9 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::read_range_image;
-use rangesynth::verify::{Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK};
+use rangesynth::verify::{
+    Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
+};
 use rangesynth::Renderer;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -37,7 +39,11 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
     let file = HypothesisFile::from_file(&args.hypotheses)?;
     let image = read_range_image(&args.scene)?;
     let sensor = file.sensor.or(image.sensor).with_context(|| {
-        format!("no sensor settings: neither {} has a \"sensor\" object nor {} a sensor header", args.hypotheses.display(), args.scene.display())
+        format!(
+            "no sensor settings: neither {} has a \"sensor\" object nor {} a sensor header",
+            args.hypotheses.display(),
+            args.scene.display()
+        )
     })?;
     let shadow = file.shadow.or(image.shadow).unwrap_or_default();
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
@@ -60,7 +66,10 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
     };
     let bar = if std::io::stderr().is_terminal() && hypotheses.len() > 1 {
         let bar = ProgressBar::new(hypotheses.len() as u64);
-        bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} hypotheses, {per_sec}, eta {eta}").expect("valid template"));
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} hypotheses, {per_sec}, eta {eta}")
+                .expect("valid template"),
+        );
         bar
     } else {
         ProgressBar::hidden()

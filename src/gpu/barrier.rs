@@ -94,7 +94,8 @@ pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, images: &[ImageTran
                 .size(vk::WHOLE_SIZE)
         })
         .collect();
-    let info = vk::DependencyInfo::default().image_memory_barriers(&image_barriers).buffer_memory_barriers(&buffer_barriers);
+    let info =
+        vk::DependencyInfo::default().image_memory_barriers(&image_barriers).buffer_memory_barriers(&buffer_barriers);
     // SAFETY: cmd is recording; every handle is alive for the command buffer's lifetime.
     unsafe { device.cmd_pipeline_barrier2(cmd, &info) };
 }

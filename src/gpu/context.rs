@@ -78,16 +78,19 @@ impl GpuContext {
                     .into(),
             ));
         }
-        let app = vk::ApplicationInfo::default()
-            .application_name(c"rangesynth")
-            .api_version(vk::API_VERSION_1_3);
+        let app = vk::ApplicationInfo::default().application_name(c"rangesynth").api_version(vk::API_VERSION_1_3);
         let layers = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
-        let extensions =
-            if validation { vec![ext::debug_utils::NAME.as_ptr(), ext::validation_features::NAME.as_ptr()] } else { vec![] };
+        let extensions = if validation {
+            vec![ext::debug_utils::NAME.as_ptr(), ext::validation_features::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
-        let mut info =
-            vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers).enabled_extension_names(&extensions);
+        let mut info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
         if validation {
             info = info.push_next(&mut features);
         }
@@ -110,7 +113,8 @@ impl GpuContext {
         let device_name = properties.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
 
         let priorities = [1.0];
-        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
         // gl_PrimitiveID in a fragment shader needs geometryShader.
@@ -121,7 +125,8 @@ impl GpuContext {
             .push_next(&mut v12)
             .push_next(&mut v13);
         // SAFETY: the features were checked by choose_device; pointers outlive the call.
-        let device = unsafe { instance.create_device(physical_device, &device_info, None) }.vk("creating the device")?;
+        let device =
+            unsafe { instance.create_device(physical_device, &device_info, None) }.vk("creating the device")?;
         // SAFETY: family and index 0 were requested above.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         // SAFETY: valid physical device.
@@ -199,7 +204,11 @@ impl GpuContext {
 
     /// Records commands into a fresh command buffer, submits it and waits for it to finish.
     /// Each call has its own pool, so several threads may submit at once.
-    pub(crate) fn submit_and_wait(&self, name: &str, record: impl FnOnce(vk::CommandBuffer) -> Result<()>) -> Result<()> {
+    pub(crate) fn submit_and_wait(
+        &self,
+        name: &str,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
+    ) -> Result<()> {
         let d = &self.device;
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(self.queue_family)
@@ -273,7 +282,9 @@ impl DebugMessenger {
         let loader = ext::debug_utils::Instance::new(entry, instance);
         let messages = Box::into_raw(Box::new(Mutex::new(Vec::new())));
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                     | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -341,21 +352,20 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::
             Err(why) => rejected.push(format!("{name} ({why})")),
         }
     }
-    candidates
-        .iter()
-        .find(|c| c.2)
-        .or(candidates.first())
-        .map(|&(pd, family, _)| (pd, family))
-        .ok_or_else(|| {
-            Error::NoDevice(if rejected.is_empty() {
-                "the Vulkan loader found no device (Debian: install mesa-vulkan-drivers for lavapipe)".into()
-            } else {
-                format!("none fits: {}", rejected.join("; "))
-            })
+    candidates.iter().find(|c| c.2).or(candidates.first()).map(|&(pd, family, _)| (pd, family)).ok_or_else(|| {
+        Error::NoDevice(if rejected.is_empty() {
+            "the Vulkan loader found no device (Debian: install mesa-vulkan-drivers for lavapipe)".into()
+        } else {
+            format!("none fits: {}", rejected.join("; "))
         })
+    })
 }
 
-fn suitability(instance: &ash::Instance, pd: vk::PhysicalDevice, props: &vk::PhysicalDeviceProperties) -> Result<u32, String> {
+fn suitability(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+) -> Result<u32, String> {
     if props.api_version < vk::API_VERSION_1_3 {
         return Err("needs Vulkan 1.3".into());
     }
@@ -394,7 +404,8 @@ mod tests {
     /// the capture: a real violation must show up in the log.
     #[test]
     fn validation_messages_are_captured() {
-        let ctx = GpuContext::new(&ContextOptions { validation: true, device: None }).expect("a Vulkan device with validation");
+        let ctx = GpuContext::new(&ContextOptions { validation: true, device: None })
+            .expect("a Vulkan device with validation");
         assert!(ctx.take_validation_messages().is_empty());
         // VUID-VkBufferCreateInfo-size-00912: size must be greater than 0.
         let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);

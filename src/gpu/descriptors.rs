@@ -13,23 +13,41 @@ pub struct StorageSet {
 }
 
 impl StorageSet {
-    pub fn new(ctx: &Arc<GpuContext>, layout: vk::DescriptorSetLayout, images: &[&Image], buffers: &[&Buffer], name: &str) -> Result<Self> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        layout: vk::DescriptorSetLayout,
+        images: &[&Image],
+        buffers: &[&Buffer],
+        name: &str,
+    ) -> Result<Self> {
         let d = &ctx.device;
         let mut sizes = Vec::new();
         if !images.is_empty() {
-            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: images.len() as u32 });
+            sizes.push(vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_IMAGE,
+                descriptor_count: images.len() as u32,
+            });
         }
         if !buffers.is_empty() {
-            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: buffers.len() as u32 });
+            sizes.push(vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: buffers.len() as u32,
+            });
         }
         // SAFETY: valid device.
-        let pool = unsafe { d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None) }
-            .vk(name)?;
+        let pool = unsafe {
+            d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
+        }
+        .vk(name)?;
         let mut owned = Self { ctx: ctx.clone(), pool, set: vk::DescriptorSet::null() };
         let layouts = [layout];
         // SAFETY: the pool has room for one set of this layout.
-        owned.set = unsafe { d.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts)) }
-            .vk(name)?[0];
+        owned.set = unsafe {
+            d.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
+            )
+        }
+        .vk(name)?[0];
         ctx.name_object(owned.set, name);
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = images
             .iter()
@@ -42,12 +60,9 @@ impl StorageSet {
             .iter()
             .enumerate()
             .map(|(b, info)| write(b).descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(info))
-            .chain(
-                buffer_infos
-                    .iter()
-                    .enumerate()
-                    .map(|(b, info)| write(images.len() + b).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info)),
-            )
+            .chain(buffer_infos.iter().enumerate().map(|(b, info)| {
+                write(images.len() + b).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info)
+            }))
             .collect();
         // SAFETY: the set, views and buffers are alive.
         unsafe { d.update_descriptor_sets(&writes, &[]) };

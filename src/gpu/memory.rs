@@ -84,7 +84,12 @@ impl Buffer {
     }
 
     /// A host-visible buffer filled with `data`.
-    pub fn with_data<T: bytemuck::Pod>(ctx: &Arc<GpuContext>, usage: vk::BufferUsageFlags, data: &[T], name: &str) -> Result<Self> {
+    pub fn with_data<T: bytemuck::Pod>(
+        ctx: &Arc<GpuContext>,
+        usage: vk::BufferUsageFlags,
+        data: &[T],
+        name: &str,
+    ) -> Result<Self> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let mut buffer = Self::new(ctx, BufferDesc::upload(bytes.len() as u64, usage), name)?;
         buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
@@ -112,7 +117,8 @@ impl Buffer {
             let region = [vk::BufferCopy::default().size(size.max(4))];
             // SAFETY: both buffers hold at least `size` bytes (rounded up to 4 at creation).
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
-            let ready = BufferTransition { buffer: &buffer, from: Access::TransferWrite, to: Access::DrawAndComputeRead };
+            let ready =
+                BufferTransition { buffer: &buffer, from: Access::TransferWrite, to: Access::DrawAndComputeRead };
             barrier(&ctx.device, cmd, &[], &[ready]);
             Ok(())
         })?;
@@ -178,7 +184,9 @@ impl ImageDesc {
         Self {
             format,
             extent,
-            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::TRANSFER_SRC,
         }
     }
 

@@ -9,7 +9,7 @@ pub(crate) mod shaders;
 mod timing;
 
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
-pub use descriptors::StorageSet;
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
+pub use descriptors::StorageSet;
 pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
 pub use timing::Timestamps;

@@ -51,7 +51,12 @@ impl Timestamps {
             let mut one = [0u64; 1];
             // SAFETY: the submission that wrote the query has completed.
             unsafe {
-                self.ctx.device.get_query_pool_results(pool, index, &mut one, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                self.ctx.device.get_query_pool_results(
+                    pool,
+                    index,
+                    &mut one,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
             }
             .vk("reading timestamps")?;
             *slot = one[0];

@@ -76,7 +76,10 @@ pub fn read_range_image(path: &Path) -> Result<RangeImage> {
         .map_err(|e| Error::file(path, format!("its shadow attribute is unreadable: {e}")))?;
     if let Some(s) = &sensor {
         if (s.width, s.height) != (width, height) {
-            return Err(Error::file(path, format!("its sensor says {}×{} but the image is {width}×{height}", s.width, s.height)));
+            return Err(Error::file(
+                path,
+                format!("its sensor says {}×{} but the image is {width}×{height}", s.width, s.height),
+            ));
         }
     }
     Ok(RangeImage { width, height, x, y, z, label, sensor, shadow })

@@ -11,7 +11,14 @@ use std::path::Path;
 pub const SHADOW_COLOUR: [u8; 3] = [255, 0, 255];
 
 /// Range preview. `valid[i]` says whether pixel i has data; `pitch` is dx, dy.
-pub fn write_range_preview(path: &Path, width: u32, height: u32, z: &[f32], valid: &[bool], pitch: [f64; 2]) -> Result<()> {
+pub fn write_range_preview(
+    path: &Path,
+    width: u32,
+    height: u32,
+    z: &[f32],
+    valid: &[bool],
+    pitch: [f64; 2],
+) -> Result<()> {
     let (w, h) = (width as usize, height as usize);
     let light = glam::DVec3::new(-1.0, 1.0, 2.0).normalize();
     let at = |c: usize, r: usize| valid[r * w + c].then(|| f64::from(z[r * w + c]));
@@ -28,9 +35,19 @@ pub fn write_range_preview(path: &Path, width: u32, height: u32, z: &[f32], vali
     for r in 0..h {
         for c in 0..w {
             let Some(here) = at(c, r) else { continue };
-            let dzdx = slope(here, c.checked_sub(1).and_then(|c| at(c, r)), (c + 1 < w).then(|| at(c + 1, r)).flatten(), pitch[0]);
+            let dzdx = slope(
+                here,
+                c.checked_sub(1).and_then(|c| at(c, r)),
+                (c + 1 < w).then(|| at(c + 1, r)).flatten(),
+                pitch[0],
+            );
             // Rows go down in y.
-            let dzdy = -slope(here, r.checked_sub(1).and_then(|r| at(c, r)), (r + 1 < h).then(|| at(c, r + 1)).flatten(), pitch[1]);
+            let dzdy = -slope(
+                here,
+                r.checked_sub(1).and_then(|r| at(c, r)),
+                (r + 1 < h).then(|| at(c, r + 1)).flatten(),
+                pitch[1],
+            );
             let normal = glam::DVec3::new(-dzdx, -dzdy, 1.0).normalize();
             let height = if z_hi > z_lo { (here - z_lo) / (z_hi - z_lo) } else { 1.0 };
             let grey = (0.3 + 0.7 * height) * (0.35 + 0.65 * normal.dot(light).max(0.0)) * 255.0;

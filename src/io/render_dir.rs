@@ -1,6 +1,8 @@
 //! The files a render writes into its output directory (DESIGN.md "Interfaces").
 
-use super::{write_label_image, write_label_map, write_label_preview, write_range_image, write_range_preview, RangeImage};
+use super::{
+    write_label_image, write_label_map, write_label_preview, write_range_image, write_range_preview, RangeImage,
+};
 use crate::error::{Error, Result};
 use crate::render::RenderOutput;
 use crate::scene::Scene;
@@ -12,7 +14,14 @@ pub fn write_render_directory(dir: &Path, scene: &Scene, out: &RenderOutput) -> 
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let (w, h) = (out.width(), out.height());
     let path = |name: &str| dir.join(name);
-    let written = vec![path("range.exr"), path("label_unshadowed.exr"), path("labels.json"), path("range.png"), path("label.png"), path("label_unshadowed.png")];
+    let written = vec![
+        path("range.exr"),
+        path("label_unshadowed.exr"),
+        path("labels.json"),
+        path("range.png"),
+        path("label.png"),
+        path("label_unshadowed.png"),
+    ];
     write_range_image(&written[0], &RangeImage::from(out))?;
     write_label_image(&written[1], w, h, &out.label_unshadowed)?;
     write_label_map(&written[2], scene)?;

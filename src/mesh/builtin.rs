@@ -51,8 +51,9 @@ pub fn builtin_mesh(name: &str) -> Result<Mesh> {
         "plane" => {
             let size = match parameter {
                 None => 4.0,
-                Some(p) => p.parse::<f64>().ok().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| {
-                    Error::Mesh { name: name.to_string(), reason: format!("the size `{p}` must be a positive number") }
+                Some(p) => p.parse::<f64>().ok().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| Error::Mesh {
+                    name: name.to_string(),
+                    reason: format!("the size `{p}` must be a positive number"),
                 })?,
             };
             let h = size / 2.0;

@@ -61,10 +61,7 @@ impl Mesh {
                 )));
             }
         }
-        if let Some(t) = triangle_surfaces
-            .iter()
-            .position(|&s| s == 0 || s as usize > surface_names.len())
-        {
+        if let Some(t) = triangle_surfaces.iter().position(|&s| s == 0 || s as usize > surface_names.len()) {
             return Err(invalid(format!(
                 "triangle {t} has surface id {}, outside 1..={}",
                 triangle_surfaces[t],
@@ -72,11 +69,8 @@ impl Mesh {
             )));
         }
         let given = triangles.len();
-        let (triangles, triangle_surfaces): (Vec<_>, Vec<_>) = triangles
-            .into_iter()
-            .zip(triangle_surfaces)
-            .filter(|(tri, _)| !is_degenerate(&positions, tri))
-            .unzip();
+        let (triangles, triangle_surfaces): (Vec<_>, Vec<_>) =
+            triangles.into_iter().zip(triangle_surfaces).filter(|(tri, _)| !is_degenerate(&positions, tri)).unzip();
         let dropped_degenerate = given - triangles.len();
         if triangles.is_empty() {
             return Err(invalid("it has no (non-degenerate) triangles".into()));
@@ -103,9 +97,7 @@ impl Mesh {
             hi = hi.max(self.vertex(i));
         }
         let centre = (lo + hi) * 0.5;
-        let radius = (0..self.positions.len() as u32)
-            .map(|i| self.vertex(i).distance(centre))
-            .fold(0.0, f64::max);
+        let radius = (0..self.positions.len() as u32).map(|i| self.vertex(i).distance(centre)).fold(0.0, f64::max);
         (centre, radius)
     }
 }

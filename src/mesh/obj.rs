@@ -8,12 +8,7 @@ use std::path::Path;
 
 pub fn load_obj(path: &Path) -> Result<Mesh> {
     let name = path.display().to_string();
-    let options = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
     let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => Error::Io {
             path: path.to_path_buf(),

@@ -69,7 +69,12 @@ struct Slot {
 
 impl Renderer {
     /// Records and runs one batch; returns the counts buffer (`counts_words` u32 words).
-    pub(crate) fn count_batch(&self, settings: &BatchSettings, items: &[BatchItem], counts_words: usize) -> Result<Vec<u32>> {
+    pub(crate) fn count_batch(
+        &self,
+        settings: &BatchSettings,
+        items: &[BatchItem],
+        counts_words: usize,
+    ) -> Result<Vec<u32>> {
         let ctx = &self.ctx;
         let d = &ctx.device;
         let p = &self.pipelines;
@@ -92,7 +97,11 @@ impl Renderer {
                     None => None,
                 };
                 let masked = match &shadow {
-                    Some(_) => Some(Buffer::new(ctx, BufferDesc::gpu_storage(u64::from(w) * u64::from(h) * 4), &format!("slot {i} shadowed labels"))?),
+                    Some(_) => Some(Buffer::new(
+                        ctx,
+                        BufferDesc::gpu_storage(u64::from(w) * u64::from(h) * 4),
+                        &format!("slot {i} shadowed labels"),
+                    )?),
                     None => None,
                 };
                 let mask_bindings = match (&shadow, &masked) {
@@ -112,7 +121,12 @@ impl Renderer {
         ctx.submit_and_wait("verification batch", |cmd| {
             // SAFETY: cmd is recording; the buffer is not in use.
             unsafe { d.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
-            barrier(d, cmd, &[], &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }]);
+            barrier(
+                d,
+                cmd,
+                &[],
+                &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }],
+            );
             let mut recorded = 0;
             for (item, views) in items.iter().zip(&views) {
                 let (centre, radius) = item.sphere;
@@ -127,12 +141,19 @@ impl Renderer {
                 let slot = &slots[recorded % slots.len()];
                 let first_use = recorded < slots.len();
                 recorded += 1;
-                let (colour_before, depth_before) =
-                    if first_use { (Access::Nothing, Access::Nothing) } else { (Access::ComputeRead, Access::DepthAttachmentWrite) };
+                let (colour_before, depth_before) = if first_use {
+                    (Access::Nothing, Access::Nothing)
+                } else {
+                    (Access::ComputeRead, Access::DepthAttachmentWrite)
+                };
                 let mut prepare = Vec::new();
                 for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
                     prepare.extend(targets.colour_transitions(colour_before, Access::ColorAttachmentWrite));
-                    prepare.push(ImageTransition { image: &targets.depth, from: depth_before, to: Access::DepthAttachmentWrite });
+                    prepare.push(ImageTransition {
+                        image: &targets.depth,
+                        from: depth_before,
+                        to: Access::DepthAttachmentWrite,
+                    });
                 }
                 barrier(d, cmd, &prepare, &[]);
                 let draw = [Draw { mesh: item.mesh, pose: item.pose, label_base: 0 }];
@@ -146,29 +167,49 @@ impl Renderer {
                 };
                 record_view(ctx, cmd, &range_pass, &draw);
                 let mut reads = slot.range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
-                let shadowed_labels = match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
-                    (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) => {
-                        let shadow_pass = ViewPass {
-                            pipeline: p.shadow,
-                            layout: p.raster_layout,
-                            targets,
-                            grid,
-                            view_from_range: to_shadow,
-                            area: shadow_area,
-                        };
-                        record_view(ctx, cmd, &shadow_pass, &draw);
-                        reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
-                        let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
-                        barrier(d, cmd, &reads, &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }]);
-                        bindings.record(ctx, cmd, p, &MaskConstants::new(sensor, settings.mode, &views.range, grid, area));
-                        barrier(d, cmd, &[], &[BufferTransition { buffer: masked, from: Access::ComputeWrite, to: Access::ComputeRead }]);
-                        masked.address_words()
-                    }
-                    _ => {
-                        barrier(d, cmd, &reads, &[]);
-                        [0, 0]
-                    }
-                };
+                let shadowed_labels =
+                    match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
+                        (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) => {
+                            let shadow_pass = ViewPass {
+                                pipeline: p.shadow,
+                                layout: p.raster_layout,
+                                targets,
+                                grid,
+                                view_from_range: to_shadow,
+                                area: shadow_area,
+                            };
+                            record_view(ctx, cmd, &shadow_pass, &draw);
+                            reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
+                            let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
+                            barrier(
+                                d,
+                                cmd,
+                                &reads,
+                                &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }],
+                            );
+                            bindings.record(
+                                ctx,
+                                cmd,
+                                p,
+                                &MaskConstants::new(sensor, settings.mode, &views.range, grid, area),
+                            );
+                            barrier(
+                                d,
+                                cmd,
+                                &[],
+                                &[BufferTransition {
+                                    buffer: masked,
+                                    from: Access::ComputeWrite,
+                                    to: Access::ComputeRead,
+                                }],
+                            );
+                            masked.address_words()
+                        }
+                        _ => {
+                            barrier(d, cmd, &reads, &[]);
+                            [0, 0]
+                        }
+                    };
                 let score = |labels: [u32; 2], offset: usize| ScoreConstants {
                     shadowed_labels: labels,
                     sensed_segments: settings.sensed.segments.address_words(),
@@ -193,11 +234,21 @@ impl Renderer {
                     slot.score_bindings.record(ctx, cmd, p, &score([0, 0], offset));
                 }
             }
-            barrier(d, cmd, &[], &[BufferTransition { buffer: &counts, from: Access::ComputeWrite, to: Access::TransferRead }]);
+            barrier(
+                d,
+                cmd,
+                &[],
+                &[BufferTransition { buffer: &counts, from: Access::ComputeWrite, to: Access::TransferRead }],
+            );
             let region = [vk::BufferCopy::default().size(bytes)];
             // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
             unsafe { d.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
-            barrier(d, cmd, &[], &[BufferTransition { buffer: &readback, from: Access::TransferWrite, to: Access::HostRead }]);
+            barrier(
+                d,
+                cmd,
+                &[],
+                &[BufferTransition { buffer: &readback, from: Access::TransferWrite, to: Access::HostRead }],
+            );
             Ok(())
         })?;
         let mut words: Vec<u32> = readback.read()?;

@@ -21,8 +21,18 @@ impl GpuMesh {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         Ok(Self {
-            vertices: Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &mesh.positions, &format!("{name} vertices"))?,
-            indices: Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, &indices, &format!("{name} indices"))?,
+            vertices: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                &mesh.positions,
+                &format!("{name} vertices"),
+            )?,
+            indices: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                &indices,
+                &format!("{name} indices"),
+            )?,
             surface_ids: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,

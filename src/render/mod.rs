@@ -22,7 +22,9 @@ pub use gpu_mesh::GpuMesh;
 pub use output::{PassTimings, RenderOutput};
 
 use crate::error::{Error, Result};
-use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps};
+use crate::gpu::{
+    barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps,
+};
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
@@ -175,20 +177,44 @@ impl Renderer {
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                 barrier(d, cmd, &reads, &[]);
-                b.record(ctx, cmd, p, &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid, views.range.full()));
+                b.record(
+                    ctx,
+                    cmd,
+                    p,
+                    &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid, views.range.full()),
+                );
                 timestamps.write(cmd, 3);
                 to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
-                barrier(d, cmd, &to_copy, &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }]);
+                barrier(
+                    d,
+                    cmd,
+                    &to_copy,
+                    &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }],
+                );
             } else {
                 barrier(d, cmd, &to_copy, &[]);
             }
             let region = [vk::BufferImageCopy::default()
-                .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1))
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                )
                 .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
             // SAFETY: images are in TRANSFER_SRC layout; buffers are large enough (w·h·4 bytes).
             unsafe {
-                d.cmd_copy_image_to_buffer(cmd, range.label.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, label_readback.raw, &region);
-                d.cmd_copy_image_to_buffer(cmd, range.z.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, z_readback.raw, &region);
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    range.label.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    label_readback.raw,
+                    &region,
+                );
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    range.z.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    z_readback.raw,
+                    &region,
+                );
             }
             let host: Vec<_> = [&label_readback, &z_readback]
                 .into_iter()

@@ -54,7 +54,8 @@ impl Pipelines {
         let vert = ShaderModule::new(ctx, shaders::RASTER_VERT, "raster.vert")?;
         let range_frag = ShaderModule::new(ctx, shaders::RASTER_RANGE_FRAG, "raster.frag (range view)")?;
         let shadow_frag = ShaderModule::new(ctx, shaders::RASTER_SHADOW_FRAG, "raster.frag (shadow view)")?;
-        p.range = raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &[LABEL_FORMAT, VALUE_FORMAT], "range view")?;
+        p.range =
+            raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &[LABEL_FORMAT, VALUE_FORMAT], "range view")?;
         p.shadow = raster_pipeline(
             ctx,
             p.raster_layout,
@@ -67,8 +68,13 @@ impl Pipelines {
         let mask_bindings: Vec<_> = (0..6)
             .map(|b| if b < 5 { vk::DescriptorType::STORAGE_IMAGE } else { vk::DescriptorType::STORAGE_BUFFER })
             .collect();
-        (p.mask_set_layout, p.mask_layout, p.mask) =
-            compute_pipeline(ctx, &mask_bindings, size_of::<MaskConstants>(), shaders::SHADOW_MASK_COMP, "shadow mask")?;
+        (p.mask_set_layout, p.mask_layout, p.mask) = compute_pipeline(
+            ctx,
+            &mask_bindings,
+            size_of::<MaskConstants>(),
+            shaders::SHADOW_MASK_COMP,
+            "shadow mask",
+        )?;
         (p.score_set_layout, p.score_layout, p.score) = compute_pipeline(
             ctx,
             &[vk::DescriptorType::STORAGE_IMAGE; 2],
@@ -125,13 +131,18 @@ fn compute_pipeline(
         })
         .collect();
     // SAFETY: valid device.
-    let set_layout = unsafe { d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None) }
-        .vk(&format!("creating the {name} descriptor layout"))?;
+    let set_layout = unsafe {
+        d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+    }
+    .vk(&format!("creating the {name} descriptor layout"))?;
     let push = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32)];
     let set_layouts = [set_layout];
     // SAFETY: valid device and set layout.
     let layout = unsafe {
-        d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push), None)
+        d.create_pipeline_layout(
+            &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
+            None,
+        )
     };
     let layout = match layout {
         Ok(l) => l,
@@ -142,7 +153,10 @@ fn compute_pipeline(
         }
     };
     let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
-        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module.raw).name(c"main");
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main");
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         // SAFETY: valid layout and module.
         unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
@@ -175,7 +189,10 @@ fn raster_pipeline(
 ) -> Result<vk::Pipeline> {
     let stages = [
         vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vert.raw).name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(frag.raw).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(frag.raw)
+            .name(c"main"),
     ];
     let bindings = [vk::VertexInputBindingDescription::default().stride(12).input_rate(vk::VertexInputRate::VERTEX)];
     let attributes = [vk::VertexInputAttributeDescription::default().format(vk::Format::R32G32B32_SFLOAT)];
@@ -189,7 +206,8 @@ fn raster_pipeline(
         .polygon_mode(vk::PolygonMode::FILL)
         .cull_mode(vk::CullModeFlags::NONE)
         .line_width(1.0);
-    let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let multisample =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
     // Larger z is closer and maps to smaller depth (sensor.rs), so the nearest surface wins with LESS.
     let depth = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(true)
@@ -202,8 +220,9 @@ fn raster_pipeline(
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let mut rendering =
-        vk::PipelineRenderingCreateInfo::default().color_attachment_formats(color_formats).depth_attachment_format(DEPTH_FORMAT);
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(color_formats)
+        .depth_attachment_format(DEPTH_FORMAT);
     let info = [vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)

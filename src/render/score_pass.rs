@@ -35,7 +35,9 @@ pub struct ScoreBindings {
 
 impl ScoreBindings {
     pub fn new(ctx: &Arc<GpuContext>, pipelines: &Pipelines, range: &ViewTargets) -> Result<Self> {
-        Ok(Self { set: StorageSet::new(ctx, pipelines.score_set_layout, &[&range.label, &range.z], &[], "score bindings")? })
+        Ok(Self {
+            set: StorageSet::new(ctx, pipelines.score_set_layout, &[&range.label, &range.z], &[], "score bindings")?,
+        })
     }
 
     pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &ScoreConstants) {
@@ -43,8 +45,21 @@ impl ScoreBindings {
         // SAFETY: cmd is recording; the attachments are in GENERAL layout by now.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.score);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.score_layout, 0, &[self.set.set], &[]);
-            d.cmd_push_constants(cmd, pipelines.score_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(constants));
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipelines.score_layout,
+                0,
+                &[self.set.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                pipelines.score_layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(constants),
+            );
             d.cmd_dispatch(cmd, constants.region[2].div_ceil(8), constants.region[3].div_ceil(8), 1);
         }
     }

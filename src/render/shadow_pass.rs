@@ -51,7 +51,13 @@ pub struct MaskBindings {
 }
 
 impl MaskBindings {
-    pub fn new(ctx: &Arc<GpuContext>, pipelines: &Pipelines, range: &ViewTargets, shadow: &ViewTargets, masked: &Buffer) -> Result<Self> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        pipelines: &Pipelines,
+        range: &ViewTargets,
+        shadow: &ViewTargets,
+        masked: &Buffer,
+    ) -> Result<Self> {
         let slope = shadow.slope.as_ref().unwrap_or(&shadow.z);
         let images = [&range.label, &range.z, &shadow.label, &shadow.z, slope];
         Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &[masked], "shadow mask bindings")? })
@@ -63,8 +69,21 @@ impl MaskBindings {
         // SAFETY: cmd is recording; the set's resources are in GENERAL layout by now.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask_layout, 0, &[self.set.set], &[]);
-            d.cmd_push_constants(cmd, pipelines.mask_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(constants));
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipelines.mask_layout,
+                0,
+                &[self.set.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                pipelines.mask_layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(constants),
+            );
             d.cmd_dispatch(cmd, groups(constants.region[2]), groups(constants.region[3]), 1);
         }
     }

@@ -49,10 +49,18 @@ impl<'a> Record<'a> {
                 n_s: counts.synthetic_valid(),
                 n0: counts.n0,
                 n1: counts.n1,
-                overlaps: counts.overlap.iter().map(|&((k, m), t)| [u64::from(sensed.segments[k as usize]), u64::from(m), t]).collect(),
+                overlaps: counts
+                    .overlap
+                    .iter()
+                    .map(|&((k, m), t)| [u64::from(sensed.segments[k as usize]), u64::from(m), t])
+                    .collect(),
                 surface_population: counts.surface_population.clone(),
             },
         };
-        Record { id: &v.id, scores: scores(&v.counts, &v.scores), unshadowed: v.unshadowed.as_ref().map(|(c, s)| scores(c, s)) }
+        Record {
+            id: &v.id,
+            scores: scores(&v.counts, &v.scores),
+            unshadowed: v.unshadowed.as_ref().map(|(c, s)| scores(c, s)),
+        }
     }
 }

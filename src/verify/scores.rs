@@ -69,7 +69,11 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
             let model_population = m_index.and_then(|m| counts.surface_population.get(m)).copied().unwrap_or(0);
             let model_units = m_index.and_then(|m| counts.surface_area_units.get(m)).copied().unwrap_or(0);
             let (scene_population, scene_units, overlap) = match k {
-                Some(k) => (sensed.segment_population[k as usize], sensed.segment_area_units[k as usize], overlap_of(k, surface)),
+                Some(k) => (
+                    sensed.segment_population[k as usize],
+                    sensed.segment_area_units[k as usize],
+                    overlap_of(k, surface),
+                ),
                 None => (0, 0, 0),
             };
             BindingDetail {
@@ -106,7 +110,8 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     };
 
     // s2: Π over bound pairs of t²/(N_M·N_S), over unbound overlapping pairs of 1 − t²/(N_M·N_S).
-    let is_bound = |k: u32, m: u32| sensed.segments.get(k as usize).is_some_and(|&label| bound.binary_search(&(label, m)).is_ok());
+    let is_bound =
+        |k: u32, m: u32| sensed.segments.get(k as usize).is_some_and(|&label| bound.binary_search(&(label, m)).is_ok());
     let mut log_s2 = 0.0f64;
     for &((k, m), t) in &counts.overlap {
         if !is_bound(k, m) {
@@ -133,7 +138,10 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     let mut s4 = 1.0;
     for d in details.iter().filter(|d| !d.absent) {
         if d.scene_area == 0.0 && d.model_area == 0.0 {
-            notes.push(format!("binding ({}, {}) left out of s4: neither has a 2×2 block of pixels", d.scene_label, d.model_surface));
+            notes.push(format!(
+                "binding ({}, {}) left out of s4: neither has a 2×2 block of pixels",
+                d.scene_label, d.model_surface
+            ));
             continue;
         }
         let r = d.scene_area / d.model_area;
@@ -175,7 +183,18 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     };
 
     let product = s1 * s2 * s3 * s4 * s5 * s6;
-    Scores { s1, s2, s3, s4, s5, s6, s: if rejected.is_some() { 0.0 } else { product }, rejected, notes, bindings: details }
+    Scores {
+        s1,
+        s2,
+        s3,
+        s4,
+        s5,
+        s6,
+        s: if rejected.is_some() { 0.0 } else { product },
+        rejected,
+        notes,
+        bindings: details,
+    }
 }
 
 /// t² / (N_S·N_M) in f64; every value is at most the pixel count, so the products are exact.

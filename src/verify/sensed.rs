@@ -69,7 +69,8 @@ impl SensedImage {
                 let i = r * w + c;
                 let k = segment_index[i];
                 if k != 0 && segment_index[i + 1] == k && segment_index[i + w] == k && segment_index[i + w + 1] == k {
-                    let units = block_area_units(image.z[i], image.z[i + 1], image.z[i + w], image.z[i + w + 1], dx, dy, scale);
+                    let units =
+                        block_area_units(image.z[i], image.z[i + 1], image.z[i + w], image.z[i + w + 1], dx, dy, scale);
                     segment_area_units[k as usize - 1] += units.iter().map(|&u| u64::from(u)).sum::<u64>();
                 }
             }

@@ -8,10 +8,10 @@
 //! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
 //! image.
 
+use super::area::unit_scale;
 use super::counts::{Counts, CountsLayout};
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
-use super::area::unit_scale;
 use crate::error::{Error, Result};
 use crate::gpu::Buffer;
 use crate::mesh::Mesh;
@@ -84,12 +84,20 @@ impl Verifier {
     /// The model named `reference` (a `builtin:` name, or an OBJ path relative to
     /// `base_dir`), loaded and uploaded on first use.
     pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
-        let key = if reference.starts_with("builtin:") { reference.to_string() } else { base_dir.join(reference).display().to_string() };
+        let key = if reference.starts_with("builtin:") {
+            reference.to_string()
+        } else {
+            base_dir.join(reference).display().to_string()
+        };
         if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(model.clone());
         }
         let mesh = Arc::new(load_model(reference, base_dir)?);
-        let model = Arc::new(Model { gpu: GpuMesh::upload(self.renderer.context(), &mesh)?, sphere: mesh.bounding_sphere(), mesh });
+        let model = Arc::new(Model {
+            gpu: GpuMesh::upload(self.renderer.context(), &mesh)?,
+            sphere: mesh.bounding_sphere(),
+            mesh,
+        });
         Ok(self.models.lock().unwrap_or_else(|p| p.into_inner()).entry(key).or_insert(model).clone())
     }
 
@@ -129,7 +137,12 @@ impl Verifier {
             }
         }
         let ctx = self.renderer.context();
-        let segments = Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.segment_index, "sensed segments")?;
+        let segments = Buffer::device_local_with_data(
+            ctx,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            &sensed.segment_index,
+            "sensed segments",
+        )?;
         let z = Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.z, "sensed z")?;
         let batch = BatchSettings {
             sensor,
@@ -138,7 +151,10 @@ impl Verifier {
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
             sensed: SensedBuffers { segments: &segments, z: &z, segment_count: sensed.segments.len() as u32 },
         };
-        let layout = |h: &Hypothesis| CountsLayout { surfaces: h.model.mesh.surface_count(), segments: sensed.segments.len() as u32 };
+        let layout = |h: &Hypothesis| CountsLayout {
+            surfaces: h.model.mesh.surface_count(),
+            segments: sensed.segments.len() as u32,
+        };
         let copies = if settings.compare_shadow { 2 } else { 1 };
         let per_hypothesis = |h: &Hypothesis| (layout(h).words() * copies * 4) as u64;
         let budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
@@ -159,7 +175,10 @@ impl Verifier {
             // Grow the chunk while its counts fit the budget.
             let mut end = start;
             let mut bytes = 0;
-            while end < hypotheses.len() && end - start < settings.chunk_size.clamp(1, MAX_CHUNK) && bytes + per_hypothesis(&hypotheses[end]) <= budget {
+            while end < hypotheses.len()
+                && end - start < settings.chunk_size.clamp(1, MAX_CHUNK)
+                && bytes + per_hypothesis(&hypotheses[end]) <= budget
+            {
                 bytes += per_hypothesis(&hypotheses[end]);
                 end += 1;
             }

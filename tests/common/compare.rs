@@ -12,9 +12,9 @@ pub fn near_label_change(labels: &[u32], width: usize, height: usize) -> Vec<boo
         for c in 0..width {
             let here = labels[r * width + c];
             let r_range = r.saturating_sub(1)..=(r + 1).min(height - 1);
-            let differs = r_range.into_iter().any(|rr| {
-                (c.saturating_sub(1)..=(c + 1).min(width - 1)).any(|cc| labels[rr * width + cc] != here)
-            });
+            let differs = r_range
+                .into_iter()
+                .any(|rr| (c.saturating_sub(1)..=(c + 1).min(width - 1)).any(|cc| labels[rr * width + cc] != here));
             near[r * width + c] = differs;
         }
     }
@@ -31,7 +31,14 @@ pub struct LabelDiff {
     pub allowance_pixels: usize,
 }
 
-pub fn compare_labels(name: &str, width: usize, height: usize, actual: &[u32], expected: &[u32], allowed: &[bool]) -> LabelDiff {
+pub fn compare_labels(
+    name: &str,
+    width: usize,
+    height: usize,
+    actual: &[u32],
+    expected: &[u32],
+    allowed: &[bool],
+) -> LabelDiff {
     let mut diff = LabelDiff { pixels: actual.len(), ..Default::default() };
     for i in 0..actual.len() {
         diff.allowance_pixels += usize::from(allowed[i]);

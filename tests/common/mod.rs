@@ -52,10 +52,8 @@ pub fn sensor(width: u32, height: u32, pitch: f64, origin: [f64; 2], theta_deg: 
 
 /// A sensor of `width`×`height` pixels centred on (cx, cy).
 pub fn centred_sensor(width: u32, height: u32, pitch: f64, centre: [f64; 2], theta_deg: f64) -> Sensor {
-    let origin = [
-        centre[0] - (f64::from(width) - 1.0) / 2.0 * pitch,
-        centre[1] + (f64::from(height) - 1.0) / 2.0 * pitch,
-    ];
+    let origin =
+        [centre[0] - (f64::from(width) - 1.0) / 2.0 * pitch, centre[1] + (f64::from(height) - 1.0) / 2.0 * pitch];
     sensor(width, height, pitch, origin, theta_deg)
 }
 

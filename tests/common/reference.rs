@@ -95,7 +95,8 @@ impl VerticalCaster {
 
     /// (z, label, triangle) of every triangle covering (x, y), boundary included.
     fn hits(&self, p: DVec2) -> impl Iterator<Item = (f64, u32, &Triangle)> + '_ {
-        let inside_grid = p.cmpge(self.lo).all() && p.cmple(self.lo + self.cell * DVec2::new(self.cells.0 as f64, self.cells.1 as f64)).all();
+        let inside_grid = p.cmpge(self.lo).all()
+            && p.cmple(self.lo + self.cell * DVec2::new(self.cells.0 as f64, self.cells.1 as f64)).all();
         let bin: &[u32] = if inside_grid {
             let (c, r) = Self::cell_of(self.lo, self.cell, self.cells.0, p);
             &self.bins[r * self.cells.0 + c]
@@ -174,18 +175,17 @@ pub fn reference_render(scene: &Scene) -> Reference {
     let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     let self_hit = 1e-9 * scale;
 
-    let mut reference =
-        Reference {
-            width,
-            height,
-            label: vec![0; width * height],
-            z: vec![0.0; width * height],
-            normal_z: vec![0.0; width * height],
-            z_bracket: vec![(0.0, 0.0); width * height],
-            occluded: vec![false; width * height],
-            camera_label: vec![0; width * height],
-            near_camera_edge: vec![false; width * height],
-        };
+    let mut reference = Reference {
+        width,
+        height,
+        label: vec![0; width * height],
+        z: vec![0.0; width * height],
+        normal_z: vec![0.0; width * height],
+        z_bracket: vec![(0.0, 0.0); width * height],
+        occluded: vec![false; width * height],
+        camera_label: vec![0; width * height],
+        near_camera_edge: vec![false; width * height],
+    };
     let first_seen = |p: DVec2| camera.hits(p).max_by(|a, b| a.0.total_cmp(&b.0)).map_or(0, |(_, l, _)| l);
     for row in 0..height {
         for col in 0..width {

@@ -49,7 +49,8 @@ fn areas(label: &[u32], z: &[f32], w: usize, h: usize, dx: f32, dy: f32) -> BTre
             }
             let (a, b, e) = (z[i + 1] - z[i], z[i + w + 1] - z[i], z[i + w] - z[i]);
             let level = (dx * dy) * (dx * dy);
-            let units = triangle_units(dy * a, dx * (a - b), level, scale) + triangle_units(dy * (b - e), dx * e, level, scale);
+            let units =
+                triangle_units(dy * a, dx * (a - b), level, scale) + triangle_units(dy * (b - e), dx * e, level, scale);
             *out.entry(l).or_insert(0) += units;
         }
     }
@@ -141,7 +142,11 @@ pub fn cpu_scores(c: &CpuCounts, bindings: &[(u32, u32)]) -> [f64; 7] {
         rejected = true;
         0.0
     };
-    let s6 = if ni == 0.0 || ns == 0.0 { 0.0 } else { ((ni - c.n0 as f64) * (ns - c.n1 as f64) / (ni * ns)).clamp(0.0, 1.0) };
+    let s6 = if ni == 0.0 || ns == 0.0 {
+        0.0
+    } else {
+        ((ni - c.n0 as f64) * (ns - c.n1 as f64) / (ni * ns)).clamp(0.0, 1.0)
+    };
     let s = if rejected { 0.0 } else { s1 * s2 * s3 * s4 * s5 * s6 };
     [s1, s2, s3, s4, s5, s6, s]
 }
