@@ -3,6 +3,7 @@
 //! transition at once with `vkCmdPipelineBarrier2`.
 
 use super::memory::{subresource_range, Buffer, Image};
+use super::GpuContext;
 use ash::vk;
 
 /// How a pass uses a resource.
@@ -63,7 +64,7 @@ pub struct BufferTransition<'a> {
 }
 
 /// Issues all transitions in one `vkCmdPipelineBarrier2`.
-pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, images: &[ImageTransition], buffers: &[BufferTransition]) {
+pub fn barrier(ctx: &GpuContext, cmd: vk::CommandBuffer, images: &[ImageTransition], buffers: &[BufferTransition]) {
     let image_barriers: Vec<_> = images
         .iter()
         .map(|t| {
@@ -97,5 +98,5 @@ pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, images: &[ImageTran
     let info =
         vk::DependencyInfo::default().image_memory_barriers(&image_barriers).buffer_memory_barriers(&buffer_barriers);
     // SAFETY: cmd is recording; every handle is alive for the command buffer's lifetime.
-    unsafe { device.cmd_pipeline_barrier2(cmd, &info) };
+    unsafe { ctx.cmd_pipeline_barrier2(cmd, &info) };
 }

@@ -7,9 +7,14 @@
 //!
 //! Resources hold an `Arc<GpuContext>`, so the context (allocator, then device, then
 //! instance) is torn down only after the last of them.
+//!
+//! Dynamic rendering and synchronization2 are core in Vulkan 1.3; on a 1.2 device they come
+//! from VK_KHR_dynamic_rendering and VK_KHR_synchronization2, whose entry points differ but
+//! whose semantics do not. The context picks one set at creation and every caller goes
+//! through it ([`GpuContext::cmd_pipeline_barrier2`] and its siblings).
 
 use crate::error::{Error, Result, VkResultExt};
-use ash::{ext, vk};
+use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
@@ -19,6 +24,8 @@ use std::sync::{Arc, Mutex};
 pub const DEVICE_ENV: &str = "RANGESYNTH_DEVICE";
 /// Environment variable turning validation on (`1`).
 pub const VALIDATION_ENV: &str = "RANGESYNTH_VALIDATION";
+/// Environment variable capping the Vulkan version used (`1.2` or `1.3`).
+pub const MAX_VULKAN_ENV: &str = "RANGESYNTH_MAX_VULKAN";
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -28,14 +35,23 @@ pub struct ContextOptions {
     pub validation: bool,
     /// Pick the device whose name contains this (case-insensitive).
     pub device: Option<String>,
+    /// Use at most this Vulkan version (`vk::API_VERSION_1_2` takes the extension path even
+    /// on a 1.3 device, which is how the tests cover it); `None` uses what the device has.
+    pub max_vulkan_version: Option<u32>,
 }
 
 impl ContextOptions {
-    /// Options from `RANGESYNTH_VALIDATION` and `RANGESYNTH_DEVICE`.
+    /// Options from `RANGESYNTH_VALIDATION`, `RANGESYNTH_DEVICE` and `RANGESYNTH_MAX_VULKAN`
+    /// (an unreadable version is ignored).
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"),
             device: std::env::var(DEVICE_ENV).ok().filter(|d| !d.is_empty()),
+            max_vulkan_version: std::env::var(MAX_VULKAN_ENV).ok().and_then(|v| match v.trim() {
+                "1.2" => Some(vk::API_VERSION_1_2),
+                "1.3" => Some(vk::API_VERSION_1_3),
+                _ => None,
+            }),
         }
     }
 }
@@ -47,6 +63,7 @@ pub struct GpuContext {
     pub(crate) physical_device: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     debug_names: Option<ext::debug_utils::Device>,
+    commands: Vulkan13Commands,
     queue: Mutex<vk::Queue>,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -54,6 +71,12 @@ pub struct GpuContext {
     /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
     pub(crate) timestamp_period: Option<f64>,
     device_name: String,
+}
+
+/// Where the Vulkan 1.3 commands rangesynth uses come from.
+enum Vulkan13Commands {
+    Core,
+    Extensions { rendering: khr::dynamic_rendering::Device, sync2: khr::synchronization2::Device },
 }
 
 struct DebugMessenger {
@@ -98,8 +121,9 @@ impl GpuContext {
         let instance = unsafe { entry.create_instance(&info, None) }.vk("creating the Vulkan instance")?;
         let debug = if validation { Some(DebugMessenger::new(&entry, &instance)?) } else { None };
 
-        let chosen = choose_device(&instance, options.device.as_deref());
-        let (physical_device, queue_family) = match chosen {
+        let cap = options.max_vulkan_version.unwrap_or(vk::API_VERSION_1_3);
+        let chosen = choose_device(&instance, options.device.as_deref(), cap);
+        let (physical_device, queue_family, core_1_3) = match chosen {
             Ok(found) => found,
             Err(e) => {
                 drop(debug);
@@ -117,13 +141,21 @@ impl GpuContext {
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut rendering = vk::PhysicalDeviceDynamicRenderingFeatures::default().dynamic_rendering(true);
+        let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
         // gl_PrimitiveID in a fragment shader needs geometryShader.
         let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
-        let device_info = vk::DeviceCreateInfo::default()
+        let extensions = if core_1_3 { vec![] } else { EXTENSIONS_1_2.iter().map(|e| e.as_ptr()).collect() };
+        let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&base)
-            .push_next(&mut v12)
-            .push_next(&mut v13);
+            .enabled_extension_names(&extensions)
+            .push_next(&mut v12);
+        device_info = if core_1_3 {
+            device_info.push_next(&mut v13)
+        } else {
+            device_info.push_next(&mut rendering).push_next(&mut sync2)
+        };
         // SAFETY: the features were checked by choose_device; pointers outlive the call.
         let device =
             unsafe { instance.create_device(physical_device, &device_info, None) }.vk("creating the device")?;
@@ -142,6 +174,13 @@ impl GpuContext {
             allocation_sizes: Default::default(),
         })?;
         let debug_names = debug.as_ref().map(|_| ext::debug_utils::Device::new(&instance, &device));
+        let commands = match core_1_3 {
+            true => Vulkan13Commands::Core,
+            false => Vulkan13Commands::Extensions {
+                rendering: khr::dynamic_rendering::Device::new(&instance, &device),
+                sync2: khr::synchronization2::Device::new(&instance, &device),
+            },
+        };
         Ok(Arc::new(Self {
             entry,
             instance,
@@ -149,6 +188,7 @@ impl GpuContext {
             physical_device,
             device,
             debug_names,
+            commands,
             queue: Mutex::new(queue),
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
@@ -156,6 +196,90 @@ impl GpuContext {
             timestamp_period,
             device_name,
         }))
+    }
+
+    /// Whether the device runs the core Vulkan 1.3 path (else the 1.2 extensions).
+    pub fn core_vulkan_1_3(&self) -> bool {
+        matches!(self.commands, Vulkan13Commands::Core)
+    }
+
+    /// `vkCmdBeginRendering`, core or KHR.
+    ///
+    /// # Safety
+    /// As for the Vulkan command: `cmd` is recording and everything `info` names is alive.
+    pub(crate) unsafe fn cmd_begin_rendering(&self, cmd: vk::CommandBuffer, info: &vk::RenderingInfo) {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.cmd_begin_rendering(cmd, info),
+                Vulkan13Commands::Extensions { rendering, .. } => rendering.cmd_begin_rendering(cmd, info),
+            }
+        }
+    }
+
+    /// `vkCmdEndRendering`, core or KHR.
+    ///
+    /// # Safety
+    /// `cmd` is recording inside a render pass begun with [`Self::cmd_begin_rendering`].
+    pub(crate) unsafe fn cmd_end_rendering(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.cmd_end_rendering(cmd),
+                Vulkan13Commands::Extensions { rendering, .. } => rendering.cmd_end_rendering(cmd),
+            }
+        }
+    }
+
+    /// `vkCmdPipelineBarrier2`, core or KHR.
+    ///
+    /// # Safety
+    /// `cmd` is recording; every handle in `info` is alive.
+    pub(crate) unsafe fn cmd_pipeline_barrier2(&self, cmd: vk::CommandBuffer, info: &vk::DependencyInfo) {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.cmd_pipeline_barrier2(cmd, info),
+                Vulkan13Commands::Extensions { sync2, .. } => sync2.cmd_pipeline_barrier2(cmd, info),
+            }
+        }
+    }
+
+    /// `vkCmdWriteTimestamp2`, core or KHR.
+    ///
+    /// # Safety
+    /// `cmd` is recording; `query` is within `pool` and was reset.
+    pub(crate) unsafe fn cmd_write_timestamp2(
+        &self,
+        cmd: vk::CommandBuffer,
+        stage: vk::PipelineStageFlags2,
+        pool: vk::QueryPool,
+        query: u32,
+    ) {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.cmd_write_timestamp2(cmd, stage, pool, query),
+                Vulkan13Commands::Extensions { sync2, .. } => sync2.cmd_write_timestamp2(cmd, stage, pool, query),
+            }
+        }
+    }
+
+    /// # Safety
+    /// The queue is externally synchronized; the command buffers are complete.
+    unsafe fn queue_submit2(
+        &self,
+        queue: vk::Queue,
+        submits: &[vk::SubmitInfo2],
+        fence: vk::Fence,
+    ) -> ash::prelude::VkResult<()> {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.queue_submit2(queue, submits, fence),
+                Vulkan13Commands::Extensions { sync2, .. } => sync2.queue_submit2(queue, submits, fence),
+            }
+        }
     }
 
     pub(crate) fn instance(&self) -> &ash::Instance {
@@ -233,7 +357,7 @@ impl GpuContext {
             let waited = {
                 let queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
                 // SAFETY: the command buffer is complete; the queue is externally synchronized by the Mutex.
-                unsafe { d.queue_submit2(*queue, &submit, fence) }.vk(name)
+                unsafe { self.queue_submit2(*queue, &submit, fence) }.vk(name)
             }
             // SAFETY: the fence was just submitted.
             .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, SUBMIT_TIMEOUT_NS) }.vk(name));
@@ -330,9 +454,13 @@ unsafe extern "system" fn collect_message(
     vk::FALSE
 }
 
+/// Device extensions that stand in for Vulkan 1.3 on a 1.2 device.
+const EXTENSIONS_1_2: [&CStr; 2] = [khr::dynamic_rendering::NAME, khr::synchronization2::NAME];
+
 /// The requested, else first discrete, else first device that has what rangesynth needs,
-/// with a queue family doing graphics and compute.
-fn choose_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+/// with a queue family doing graphics and compute; and whether it takes the core 1.3 path
+/// (its version, capped at `cap`, is 1.3 or later).
+fn choose_device(instance: &ash::Instance, wanted: Option<&str>, cap: u32) -> Result<(vk::PhysicalDevice, u32, bool)> {
     // SAFETY: plain enumeration.
     let devices = unsafe { instance.enumerate_physical_devices() }.vk("listing Vulkan devices")?;
     let mut candidates = Vec::new();
@@ -347,38 +475,59 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::
                 continue;
             }
         }
-        match suitability(instance, pd, &props) {
-            Ok(family) => candidates.push((pd, family, props.device_type == vk::PhysicalDeviceType::DISCRETE_GPU)),
+        let core_1_3 = props.api_version.min(cap) >= vk::API_VERSION_1_3;
+        match suitability(instance, pd, &props, core_1_3) {
+            Ok(family) => {
+                candidates.push((pd, family, props.device_type == vk::PhysicalDeviceType::DISCRETE_GPU, core_1_3))
+            }
             Err(why) => rejected.push(format!("{name} ({why})")),
         }
     }
-    candidates.iter().find(|c| c.2).or(candidates.first()).map(|&(pd, family, _)| (pd, family)).ok_or_else(|| {
-        Error::NoDevice(if rejected.is_empty() {
-            "the Vulkan loader found no device (Debian: install mesa-vulkan-drivers for lavapipe)".into()
-        } else {
-            format!("none fits: {}", rejected.join("; "))
+    candidates
+        .iter()
+        .find(|c| c.2)
+        .or(candidates.first())
+        .map(|&(pd, family, _, core_1_3)| (pd, family, core_1_3))
+        .ok_or_else(|| {
+            Error::NoDevice(if rejected.is_empty() {
+                "the Vulkan loader found no device (Debian: install mesa-vulkan-drivers for lavapipe)".into()
+            } else {
+                format!("none fits: {}", rejected.join("; "))
+            })
         })
-    })
 }
 
 fn suitability(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
     props: &vk::PhysicalDeviceProperties,
+    core_1_3: bool,
 ) -> Result<u32, String> {
-    if props.api_version < vk::API_VERSION_1_3 {
-        return Err("needs Vulkan 1.3".into());
+    if props.api_version < vk::API_VERSION_1_2 {
+        return Err("needs Vulkan 1.2".into());
+    }
+    if !core_1_3 {
+        // SAFETY: valid physical device.
+        let available = unsafe { instance.enumerate_device_extension_properties(pd) }.map_err(|e| e.to_string())?;
+        let has = |name: &CStr| available.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
+        if let Some(missing) = EXTENSIONS_1_2.iter().find(|&&name| !has(name)) {
+            return Err(format!("a Vulkan 1.2 device needs {}", missing.to_string_lossy()));
+        }
     }
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
+    // The extension feature structs are the 1.3 ones under their KHR names; querying them
+    // answers for either path.
+    let mut rendering = vk::PhysicalDeviceDynamicRenderingFeatures::default();
+    let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default();
+    let mut features =
+        vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut rendering).push_next(&mut sync2);
     // SAFETY: valid physical device; the chain outlives the call.
     unsafe { instance.get_physical_device_features2(pd, &mut features) };
     let missing: Vec<&str> = [
         (features.features.geometry_shader, "geometryShader"),
         (v12.buffer_device_address, "bufferDeviceAddress"),
-        (v13.dynamic_rendering, "dynamicRendering"),
-        (v13.synchronization2, "synchronization2"),
+        (rendering.dynamic_rendering, "dynamicRendering"),
+        (sync2.synchronization2, "synchronization2"),
     ]
     .iter()
     .filter(|(on, _)| *on == vk::FALSE)
@@ -404,7 +553,7 @@ mod tests {
     /// the capture: a real violation must show up in the log.
     #[test]
     fn validation_messages_are_captured() {
-        let ctx = GpuContext::new(&ContextOptions { validation: true, device: None })
+        let ctx = GpuContext::new(&ContextOptions { validation: true, ..Default::default() })
             .expect("a Vulkan device with validation");
         assert!(ctx.take_validation_messages().is_empty());
         // VUID-VkBufferCreateInfo-size-00912: size must be greater than 0.

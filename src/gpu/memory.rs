@@ -119,7 +119,7 @@ impl Buffer {
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
             let ready =
                 BufferTransition { buffer: &buffer, from: Access::TransferWrite, to: Access::DrawAndComputeRead };
-            barrier(&ctx.device, cmd, &[], &[ready]);
+            barrier(ctx, cmd, &[], &[ready]);
             Ok(())
         })?;
         Ok(buffer)

@@ -39,7 +39,7 @@ impl Timestamps {
     pub fn write(&self, cmd: vk::CommandBuffer, index: u32) {
         if let Some(pool) = self.pool {
             // SAFETY: cmd is recording; index < count (callers use fixed indices).
-            unsafe { self.ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, index) };
+            unsafe { self.ctx.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, index) };
         }
     }
 

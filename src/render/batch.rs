@@ -122,7 +122,7 @@ impl Renderer {
             // SAFETY: cmd is recording; the buffer is not in use.
             unsafe { d.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
             barrier(
-                d,
+                ctx,
                 cmd,
                 &[],
                 &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }],
@@ -155,7 +155,7 @@ impl Renderer {
                         to: Access::DepthAttachmentWrite,
                     });
                 }
-                barrier(d, cmd, &prepare, &[]);
+                barrier(ctx, cmd, &prepare, &[]);
                 let draw = [Draw { mesh: item.mesh, pose: item.pose, label_base: 0 }];
                 let range_pass = ViewPass {
                     pipeline: p.range,
@@ -182,7 +182,7 @@ impl Renderer {
                             reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                             let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
                             barrier(
-                                d,
+                                ctx,
                                 cmd,
                                 &reads,
                                 &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }],
@@ -194,7 +194,7 @@ impl Renderer {
                                 &MaskConstants::new(sensor, settings.mode, &views.range, grid, area),
                             );
                             barrier(
-                                d,
+                                ctx,
                                 cmd,
                                 &[],
                                 &[BufferTransition {
@@ -206,7 +206,7 @@ impl Renderer {
                             masked.address_words()
                         }
                         _ => {
-                            barrier(d, cmd, &reads, &[]);
+                            barrier(ctx, cmd, &reads, &[]);
                             [0, 0]
                         }
                     };
@@ -235,7 +235,7 @@ impl Renderer {
                 }
             }
             barrier(
-                d,
+                ctx,
                 cmd,
                 &[],
                 &[BufferTransition { buffer: &counts, from: Access::ComputeWrite, to: Access::TransferRead }],
@@ -244,7 +244,7 @@ impl Renderer {
             // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
             unsafe { d.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
             barrier(
-                d,
+                ctx,
                 cmd,
                 &[],
                 &[BufferTransition { buffer: &readback, from: Access::TransferWrite, to: Access::HostRead }],

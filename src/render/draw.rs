@@ -111,7 +111,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
     };
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
-        d.cmd_begin_rendering(cmd, &info);
+        ctx.cmd_begin_rendering(cmd, &info);
         d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipeline);
         d.cmd_set_viewport(cmd, 0, &[viewport]);
         d.cmd_set_scissor(cmd, 0, &[area]);
@@ -128,6 +128,6 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
             d.cmd_bind_index_buffer(cmd, draw.mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, draw.mesh.index_count, 1, 0, 0, 0);
         }
-        d.cmd_end_rendering(cmd);
+        ctx.cmd_end_rendering(cmd);
     }
 }

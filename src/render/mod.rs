@@ -150,7 +150,7 @@ impl Renderer {
             if let Some(s) = &shadow {
                 prepare.extend(s.prepare_for_rendering());
             }
-            barrier(d, cmd, &prepare, &[]);
+            barrier(ctx, cmd, &prepare, &[]);
             timestamps.write(cmd, 0);
             let range_pass = ViewPass {
                 pipeline: p.range,
@@ -176,7 +176,7 @@ impl Renderer {
                 timestamps.write(cmd, 2);
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
-                barrier(d, cmd, &reads, &[]);
+                barrier(ctx, cmd, &reads, &[]);
                 b.record(
                     ctx,
                     cmd,
@@ -186,13 +186,13 @@ impl Renderer {
                 timestamps.write(cmd, 3);
                 to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
                 barrier(
-                    d,
+                    ctx,
                     cmd,
                     &to_copy,
                     &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }],
                 );
             } else {
-                barrier(d, cmd, &to_copy, &[]);
+                barrier(ctx, cmd, &to_copy, &[]);
             }
             let region = [vk::BufferImageCopy::default()
                 .image_subresource(
@@ -220,7 +220,7 @@ impl Renderer {
                 .into_iter()
                 .map(|buffer| BufferTransition { buffer, from: Access::TransferWrite, to: Access::HostRead })
                 .collect();
-            barrier(d, cmd, &[] as &[ImageTransition], &host);
+            barrier(ctx, cmd, &[] as &[ImageTransition], &host);
             Ok(())
         })?;
 

@@ -19,16 +19,22 @@ use rangesynth::{RenderOutput, Renderer, Scene};
 use std::sync::{Arc, LazyLock};
 
 /// The test binary's one verifier; its renderer is the one every GPU test uses.
-pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
-    let renderer = Renderer::new(&ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok() })
+pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_renderer(None)));
+
+/// A renderer for tests: validation on, on the expected device, at most the given Vulkan
+/// version. Panics (fails the test) without a device.
+pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
+    let options =
+        ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok(), max_vulkan_version };
+    let renderer = Renderer::new(&options)
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan device with validation layers: {e}"));
     let name = renderer.context().device_name().to_string();
     if let Ok(expected) = std::env::var("RANGESYNTH_EXPECT_DEVICE") {
         assert!(name.contains(&expected), "tests ran on {name:?}, expected a device named {expected:?}");
     }
     assert!(renderer.context().validation_enabled());
-    Verifier::new(renderer)
-});
+    renderer
+}
 
 pub fn renderer() -> &'static Renderer {
     VERIFIER.renderer()
