@@ -270,9 +270,24 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
         assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
         assert!(stderr.contains(expected) && !stderr.contains("panicked"), "{name}: expected {expected:?} in {stderr}");
     }
+    // A sensed image with no sensor header, and no "sensor" in the hypothesis file.
+    let bare = d.join("bare.exr");
+    let mut image = rangesynth::io::read_range_image(&exr).unwrap();
+    image.sensor = None;
+    rangesynth::io::write_range_image(&bare, &image).unwrap();
     let hyps = d.join("ok.json");
     std::fs::write(&hyps, format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}}}]}}"#))
         .unwrap();
+    let out = rangesynth(&[
+        "verify",
+        hyps.to_str().unwrap(),
+        "--scene",
+        bare.to_str().unwrap(),
+        "--out",
+        d.join("s.jsonl").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("no sensor settings"), "{}", text(&out.stderr));
     let garbage = d.join("garbage.exr");
     std::fs::write(&garbage, "not an exr").unwrap();
     let out = rangesynth(&[

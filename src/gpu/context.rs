@@ -57,7 +57,8 @@ impl ContextOptions {
 }
 
 pub struct GpuContext {
-    entry: ash::Entry,
+    /// Keeps the Vulkan loader library loaded for as long as the instance lives.
+    _entry: ash::Entry,
     instance: ash::Instance,
     debug: Option<DebugMessenger>,
     pub(crate) physical_device: vk::PhysicalDevice,
@@ -182,7 +183,7 @@ impl GpuContext {
             },
         };
         Ok(Arc::new(Self {
-            entry,
+            _entry: entry,
             instance,
             debug,
             physical_device,
@@ -391,7 +392,6 @@ impl Drop for GpuContext {
             drop(self.debug.take());
             self.instance.destroy_instance(None);
         }
-        let _ = &self.entry;
     }
 }
 
