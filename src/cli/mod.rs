@@ -8,6 +8,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, write_render_directory};
+use rangesynth::mesh::Mesh;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
 
@@ -56,12 +57,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Verify(args) => return verify::run(&options, &args),
     };
     for object in &scene.objects {
-        if object.mesh.dropped_degenerate > 0 {
-            eprintln!(
-                "warning: {}: dropped {} degenerate triangle(s)",
-                object.mesh.name, object.mesh.dropped_degenerate
-            );
-        }
+        warn_degenerate(&object.mesh);
     }
     let renderer = Renderer::new(&options).context("starting Vulkan")?;
     let output = renderer.render(&scene)?;
@@ -69,6 +65,13 @@ pub fn run(cli: Cli) -> Result<()> {
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     check_validation(&renderer)
+}
+
+/// Tells the user about triangles the model lost (they are dropped, not rendered).
+fn warn_degenerate(mesh: &Mesh) {
+    if mesh.dropped_degenerate > 0 {
+        eprintln!("warning: {}: dropped {} degenerate triangle(s)", mesh.name, mesh.dropped_degenerate);
+    }
 }
 
 /// Fails when validation (if on) reported anything.

@@ -1,8 +1,11 @@
 //! `rangesynth verify HYPS.json --scene SENSED.exr --out SCORES.jsonl`: scores every
 //! hypothesis, writes one JSON line each, and prints a ranked summary. Sensor and shadow
 //! settings come from the hypothesis file, else from the sensed EXR's header.
+//!
+//! Hypotheses are verified a slice at a time and their lines written as each slice finishes,
+//! so beyond the parsed input only a small summary row per hypothesis is kept.
 
-use super::check_validation;
+use super::{check_validation, warn_degenerate};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::gpu::ContextOptions;
@@ -49,11 +52,15 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?);
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
+    let mut warned = std::collections::HashSet::new();
     let hypotheses = file
         .hypotheses
         .iter()
         .map(|h| {
             let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {:?}", h.id))?;
+            if warned.insert(h.model.clone()) {
+                warn_degenerate(&model.mesh);
+            }
             Ok(Hypothesis { id: h.id.clone(), model, pose: h.pose, bindings: h.bindings.clone() })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -75,26 +82,49 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
         ProgressBar::hidden()
     };
     let start = std::time::Instant::now();
-    let results = verifier.verify(&sensed, &settings, &hypotheses, &mut |done| bar.set_position(done as u64))?;
+    let file = std::fs::File::create(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut out = BufWriter::new(file);
+    let mut rows = Vec::with_capacity(hypotheses.len());
+    for (k, slice) in hypotheses.chunks(SLICE).enumerate() {
+        let done = k * SLICE;
+        let results = verifier.verify(&sensed, &settings, slice, &mut |n| bar.set_position((done + n) as u64))?;
+        for v in &results {
+            serde_json::to_writer(&mut out, &Record::new(v, &sensed))?;
+            out.write_all(b"\n")?;
+            rows.push(SummaryRow::from(v));
+        }
+    }
+    out.flush().with_context(|| format!("writing {}", args.out.display()))?;
     bar.finish_and_clear();
-    let seconds = start.elapsed().as_secs_f64();
-    write_records(&args.out, &results, &sensed)?;
-    print_summary(verifier.renderer(), &settings, &results, args.top, seconds);
+    print_summary(verifier.renderer(), &settings, &rows, args.top, start.elapsed().as_secs_f64());
     println!("wrote {}", args.out.display());
     check_validation(verifier.renderer())
 }
 
-fn write_records(path: &Path, results: &[Verification], sensed: &SensedImage) -> Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut out = BufWriter::new(file);
-    for v in results {
-        serde_json::to_writer(&mut out, &Record::new(v, sensed))?;
-        out.write_all(b"\n")?;
-    }
-    out.flush().with_context(|| format!("writing {}", path.display()))
+/// Hypotheses verified per call, and so held in memory with their full results at once.
+const SLICE: usize = 4 * MAX_CHUNK;
+
+/// What the ranked summary needs of one hypothesis.
+struct SummaryRow {
+    id: String,
+    scores: [f64; 7],
+    rejected: Option<String>,
+    unshadowed: Option<f64>,
 }
 
-fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Verification], top: usize, seconds: f64) {
+impl From<&Verification> for SummaryRow {
+    fn from(v: &Verification) -> Self {
+        let s = &v.scores;
+        Self {
+            id: v.id.clone(),
+            scores: [s.s, s.s1, s.s2, s.s3, s.s4, s.s5, s.s6],
+            rejected: s.rejected.clone(),
+            unshadowed: v.unshadowed.as_ref().map(|(_, u)| u.s),
+        }
+    }
+}
+
+fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
     let s = &settings.sensor;
     println!("device: {}", renderer.context().device_name());
     println!(
@@ -108,33 +138,26 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Veri
         seconds,
         results.len() as f64 / seconds.max(1e-9)
     );
-    let mut ranked: Vec<&Verification> = results.iter().collect();
-    ranked.sort_by(|a, b| b.scores.s.total_cmp(&a.scores.s));
+    let mut ranked: Vec<&SummaryRow> = results.iter().collect();
+    ranked.sort_by(|a, b| b.scores[0].total_cmp(&a.scores[0]));
     println!(
         "{:>4}  {:<20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}  unshadowed s / rejected",
         "rank", "id", "s", "s1", "s2", "s3", "s4", "s5", "s6"
     );
     for (rank, v) in ranked.iter().take(top).enumerate() {
-        let c = &v.scores;
-        let extra = match (&c.rejected, &v.unshadowed) {
+        let extra = match (&v.rejected, v.unshadowed) {
             (Some(reason), _) => reason.clone(),
-            (None, Some((_, u))) => format!("{:.4e}", u.s),
+            (None, Some(u)) => format!("{u:.4e}"),
             (None, None) => String::new(),
         };
+        let [s, s1, s2, s3, s4, s5, s6] = v.scores;
         println!(
-            "{:>4}  {:<20} {:>10.4e} {:>6.3} {:>6.3} {:>6.3} {:>6.3} {:>6.3} {:>6.3}  {extra}",
+            "{:>4}  {:<20} {s:>10.4e} {s1:>6.3} {s2:>6.3} {s3:>6.3} {s4:>6.3} {s5:>6.3} {s6:>6.3}  {extra}",
             rank + 1,
             v.id,
-            c.s,
-            c.s1,
-            c.s2,
-            c.s3,
-            c.s4,
-            c.s5,
-            c.s6
         );
     }
-    let rejected = results.iter().filter(|v| v.scores.rejected.is_some()).count();
+    let rejected = results.iter().filter(|v| v.rejected.is_some()).count();
     if rejected > 0 {
         println!("{rejected} of {} hypotheses rejected", results.len());
     }
