@@ -268,3 +268,35 @@ fn one_verifier_serves_several_threads_at_once() {
     });
     assert_no_validation_messages();
 }
+
+#[test]
+fn an_overlap_table_too_large_for_a_batch_is_refused() {
+    // 65,536 one-pixel segments against a 300-surface model: 65,536 × 300 counters (75 MiB)
+    // exceed what one batch may hold (at most 64 MiB).
+    let sensor = centred_sensor(256, 256, 0.02, [0.0, 0.0], 45.0);
+    let n = 256 * 256;
+    let image = RangeImage {
+        width: 256,
+        height: 256,
+        x: vec![0.0; n],
+        y: vec![0.0; n],
+        z: vec![1.0; n],
+        label: (1..=n as u32).collect(),
+        sensor: Some(sensor),
+        shadow: None,
+    };
+    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let mut obj = String::new();
+    for g in 0..300 {
+        let x = f64::from(g) * 0.01;
+        obj += &format!("g s{g}\nv {x} 0 0\nv {} 0 0\nv {x} 1 0\nf -3 -2 -1\n", x + 0.01);
+    }
+    std::fs::write(dir.join("many_surfaces.obj"), obj).unwrap();
+    let model = VERIFIER.model("many_surfaces.obj", &dir).unwrap();
+    assert_eq!(model.mesh.surface_count(), 300);
+    let h = Hypothesis { id: "big".into(), model, pose: DMat4::IDENTITY, bindings: vec![(1, 1)] };
+    let err = VERIFIER.verify(&sensed, &settings(sensor, ShadowMode::Depth), &[h], &mut |_| {}).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("65536 segments against 300 surfaces needs 75 MiB"), "{message}");
+}
