@@ -53,21 +53,22 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
     let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?);
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
+    let tolerance = file.tolerance;
     let hypotheses = file
         .hypotheses
-        .iter()
+        .into_iter()
         .map(|h| {
             let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {:?}", h.id))?;
-            if warned.insert(h.model.clone()) {
+            if warned.insert(h.model) {
                 warn_degenerate(&model.mesh);
             }
-            Ok(Hypothesis { id: h.id.clone(), model, pose: h.pose, bindings: h.bindings.clone() })
+            Ok(Hypothesis { id: h.id, model, pose: h.pose, bindings: h.bindings })
         })
         .collect::<Result<Vec<_>>>()?;
     let settings = VerifySettings {
         sensor,
         shadow: shadow.mode,
-        tolerance: file.tolerance,
+        tolerance,
         compare_shadow: args.compare_shadow,
         chunk_size: args.chunk_size,
     };
