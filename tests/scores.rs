@@ -188,3 +188,47 @@ fn s2_over_300_segments_does_not_underflow() {
     let bindings: Vec<(u32, u32)> = (1..=300).map(|l| (l, l)).collect();
     assert!(close(score(&counts, &s, &bindings).s2, 2f64.powi(-300)));
 }
+
+mod any_counts {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Whatever the counts (even inconsistent ones a caller made up), every score is a
+        /// number in [0, 1] and s is 0 exactly when rejected or a factor is 0.
+        #[test]
+        fn scores_are_never_nan_and_stay_in_0_1(
+            labels in proptest::collection::vec(0u32..4, 9),
+            scalars in proptest::collection::vec(0u64..20, 4),
+            populations in proptest::collection::vec(0u64..20, 3),
+            overlaps in proptest::collection::vec(((0u32..4, 1u32..4), 0u64..20), 0..8),
+            areas in proptest::collection::vec(0u64..200_000, 3),
+            bindings in proptest::collection::vec((0u32..5, 1u32..4), 0..4),
+        ) {
+            let rows: Vec<&[u32]> = labels.chunks(3).collect();
+            let s = sensed(&rows);
+            let mut overlap: Vec<((u32, u32), u64)> = overlaps
+                .into_iter()
+                .filter(|&((k, _), t)| (k as usize) < s.segments.len() && t > 0)
+                .collect();
+            overlap.sort_unstable_by_key(|&(key, _)| key);
+            overlap.dedup_by_key(|&mut (key, _)| key);
+            let counts = Counts {
+                n1_plus: scalars[0],
+                n1_minus: scalars[1],
+                n0: scalars[2],
+                n1: scalars[3],
+                surface_population: populations,
+                overlap,
+                surface_area_units: areas,
+            };
+            let r = score(&counts, &s, &bindings);
+            for v in [r.s1, r.s2, r.s3, r.s4, r.s5, r.s6, r.s] {
+                prop_assert!(v.is_finite() && (0.0..=1.0).contains(&v), "{:?}", r);
+            }
+            if r.rejected.is_some() {
+                prop_assert_eq!(r.s, 0.0);
+            }
+        }
+    }
+}

@@ -198,6 +198,13 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
 }
 
 /// t² / (N_S·N_M) in f64; every value is at most the pixel count, so the products are exact.
+/// Counts from the GPU keep t ≤ min(N_S, N_M), so this is at most 1; counts a caller made up
+/// are clamped to [0, 1] so that no score can become NaN.
 fn fraction(t: u64, scene: u64, model: u64) -> f64 {
-    (t as f64 * t as f64) / (scene as f64 * model as f64)
+    let x = (t as f64 * t as f64) / (scene as f64 * model as f64);
+    if x.is_nan() {
+        0.0
+    } else {
+        x.clamp(0.0, 1.0)
+    }
 }
