@@ -101,7 +101,7 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     }
 
     // s1: depth agreement over pixels valid in both.
-    let s1 = match counts.n1_plus + counts.n1_minus {
+    let s1 = match counts.n1_plus.saturating_add(counts.n1_minus) {
         0 => {
             notes.push("s1 = 0: no pixel is valid in both images".into());
             0.0
@@ -115,7 +115,9 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     let mut log_s2 = 0.0f64;
     for &((k, m), t) in &counts.overlap {
         if !is_bound(k, m) {
-            let x = fraction(t, sensed.segment_population[k as usize], counts.surface_population[m as usize - 1]);
+            let scene = sensed.segment_population.get(k as usize).copied().unwrap_or(0);
+            let model = m.checked_sub(1).and_then(|m| counts.surface_population.get(m as usize)).copied().unwrap_or(0);
+            let x = fraction(t, scene, model);
             log_s2 += (-x).ln_1p();
         }
     }
