@@ -162,6 +162,20 @@ fn an_unknown_device_name_is_refused() {
     assert!(stderr.contains("no usable Vulkan device") && stderr.contains("not named \"no-such-gpu\""), "{stderr}");
 }
 
+/// `rangesynth verify HYPS --scene SENSED --out SCORES [extra…]`.
+fn verify(hypotheses: &Path, sensed: &Path, scores: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "verify",
+        hypotheses.to_str().unwrap(),
+        "--scene",
+        sensed.to_str().unwrap(),
+        "--out",
+        scores.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    rangesynth(&args)
+}
+
 /// Renders the example's sensed scene and returns (directory, path of range.exr).
 fn sensed_example(name: &str) -> (PathBuf, PathBuf) {
     let d = dir(name);
@@ -182,15 +196,7 @@ fn verify_scores_the_example_and_ranks_the_correct_hypothesis_first() {
     let (d, exr) = sensed_example("verify_example");
     let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
     let scores = d.join("scores.jsonl");
-    let out = rangesynth(&[
-        "verify",
-        hyps.to_str().unwrap(),
-        "--scene",
-        exr.to_str().unwrap(),
-        "--out",
-        scores.to_str().unwrap(),
-        "--compare-shadow",
-    ]);
+    let out = verify(&hyps, &exr, &scores, &["--compare-shadow"]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
     let first_ranked = stdout.lines().find(|l| l.trim_start().starts_with("1 ")).expect("a ranked summary");
@@ -226,16 +232,7 @@ fn verify_runs_a_batch_of_1024_from_the_cli() {
     let hyps = d.join("hyps.json");
     std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
     let scores = d.join("scores.jsonl");
-    let out = rangesynth(&[
-        "verify",
-        hyps.to_str().unwrap(),
-        "--scene",
-        exr.to_str().unwrap(),
-        "--out",
-        scores.to_str().unwrap(),
-        "--chunk-size",
-        "300",
-    ]);
+    let out = verify(&hyps, &exr, &scores, &["--chunk-size", "300"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let lines = std::fs::read_to_string(&scores).unwrap();
     assert_eq!(lines.lines().count(), 1024);
@@ -258,14 +255,7 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     for (name, body, expected) in cases {
         let hyps = d.join(format!("{name}.json"));
         std::fs::write(&hyps, body).unwrap();
-        let out = rangesynth(&[
-            "verify",
-            hyps.to_str().unwrap(),
-            "--scene",
-            exr.to_str().unwrap(),
-            "--out",
-            d.join("s.jsonl").to_str().unwrap(),
-        ]);
+        let out = verify(&hyps, &exr, &d.join("s.jsonl"), &[]);
         let stderr = text(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
         assert!(stderr.contains(expected) && !stderr.contains("panicked"), "{name}: expected {expected:?} in {stderr}");
@@ -278,26 +268,12 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     let hyps = d.join("ok.json");
     std::fs::write(&hyps, format!(r#"{{"hypotheses": [{{"id": "a", "model": "builtin:box", "pose": {pose}}}]}}"#))
         .unwrap();
-    let out = rangesynth(&[
-        "verify",
-        hyps.to_str().unwrap(),
-        "--scene",
-        bare.to_str().unwrap(),
-        "--out",
-        d.join("s.jsonl").to_str().unwrap(),
-    ]);
+    let out = verify(&hyps, &bare, &d.join("s.jsonl"), &[]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("no sensor settings"), "{}", text(&out.stderr));
     let garbage = d.join("garbage.exr");
     std::fs::write(&garbage, "not an exr").unwrap();
-    let out = rangesynth(&[
-        "verify",
-        hyps.to_str().unwrap(),
-        "--scene",
-        garbage.to_str().unwrap(),
-        "--out",
-        d.join("s.jsonl").to_str().unwrap(),
-    ]);
+    let out = verify(&hyps, &garbage, &d.join("s.jsonl"), &[]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("not a usable OpenEXR file"), "{}", text(&out.stderr));
 }

@@ -1,5 +1,6 @@
 //! An owned descriptor set of storage images (GENERAL layout) followed by storage buffers,
-//! bound in that order from binding 0, with its own pool so dropping it frees everything.
+//! bound in that order from binding 0, with its own pool so dropping it frees everything;
+//! and the one way compute passes are recorded with it.
 
 use super::{Buffer, GpuContext, Image};
 use crate::error::{Result, VkResultExt};
@@ -67,6 +68,29 @@ impl StorageSet {
         // SAFETY: the set, views and buffers are alive.
         unsafe { d.update_descriptor_sets(&writes, &[]) };
         Ok(owned)
+    }
+}
+
+impl StorageSet {
+    /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
+    /// `constants` pushed at offset 0. The set's resources must already be in GENERAL layout.
+    pub fn dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        layout: vk::PipelineLayout,
+        constants: &[u8],
+        groups: [u32; 2],
+    ) {
+        let d = &self.ctx.device;
+        // SAFETY: cmd is recording; pipeline and layout match the set's layout; the set's
+        // resources outlive the submission.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, layout, 0, &[self.set], &[]);
+            d.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, constants);
+            d.cmd_dispatch(cmd, groups[0], groups[1], 1);
+        }
     }
 }
 

@@ -188,7 +188,6 @@ impl Renderer {
                                 &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }],
                             );
                             bindings.record(
-                                ctx,
                                 cmd,
                                 p,
                                 &MaskConstants::new(sensor, settings.mode, &views.range, grid, area),
@@ -229,9 +228,9 @@ impl Renderer {
                     dx: sensor.pitch[0] as f32,
                     dy: sensor.pitch[1] as f32,
                 };
-                slot.score_bindings.record(ctx, cmd, p, &score(shadowed_labels, item.counts_offset));
+                slot.score_bindings.record(cmd, p, &score(shadowed_labels, item.counts_offset));
                 if let (Some(offset), true) = (item.unshadowed_offset, shadowed_labels != [0, 0]) {
-                    slot.score_bindings.record(ctx, cmd, p, &score([0, 0], offset));
+                    slot.score_bindings.record(cmd, p, &score([0, 0], offset));
                 }
             }
             barrier(

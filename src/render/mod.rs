@@ -178,7 +178,6 @@ impl Renderer {
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                 barrier(ctx, cmd, &reads, &[]);
                 b.record(
-                    ctx,
                     cmd,
                     p,
                     &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid, views.range.full()),

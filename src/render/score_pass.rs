@@ -40,27 +40,9 @@ impl ScoreBindings {
         })
     }
 
-    pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &ScoreConstants) {
-        let d = &ctx.device;
-        // SAFETY: cmd is recording; the attachments are in GENERAL layout by now.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.score);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                pipelines.score_layout,
-                0,
-                &[self.set.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                pipelines.score_layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytemuck::bytes_of(constants),
-            );
-            d.cmd_dispatch(cmd, constants.region[2].div_ceil(8), constants.region[3].div_ceil(8), 1);
-        }
+    /// Records the pass over the constants' region (8×8 workgroups).
+    pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &ScoreConstants) {
+        let groups = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
+        self.set.dispatch(cmd, pipelines.score, pipelines.score_layout, bytemuck::bytes_of(constants), groups);
     }
 }

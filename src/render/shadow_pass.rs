@@ -63,28 +63,9 @@ impl MaskBindings {
         Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &[masked], "shadow mask bindings")? })
     }
 
-    pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &MaskConstants) {
-        let d = &ctx.device;
-        let groups = |n: i32| (n as u32).div_ceil(8);
-        // SAFETY: cmd is recording; the set's resources are in GENERAL layout by now.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipelines.mask);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                pipelines.mask_layout,
-                0,
-                &[self.set.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                pipelines.mask_layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytemuck::bytes_of(constants),
-            );
-            d.cmd_dispatch(cmd, groups(constants.region[2]), groups(constants.region[3]), 1);
-        }
+    /// Records the pass over the constants' region (8×8 workgroups).
+    pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &MaskConstants) {
+        let groups = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
+        self.set.dispatch(cmd, pipelines.mask, pipelines.mask_layout, bytemuck::bytes_of(constants), groups);
     }
 }
