@@ -133,8 +133,7 @@ impl Buffer {
 
     /// The device address as the (low, high) words shaders take (GL_EXT_buffer_reference_uvec2).
     pub fn address_words(&self) -> [u32; 2] {
-        let a = self.device_address();
-        [a as u32, (a >> 32) as u32]
+        address_words(self.device_address())
     }
 
     fn mapped_mut(&mut self) -> Result<&mut [u8]> {
@@ -279,6 +278,11 @@ impl Drop for Image {
             let _ = self.ctx.allocator.lock().unwrap_or_else(|p| p.into_inner()).free(a);
         }
     }
+}
+
+/// A device address as the (low, high) words shaders take (GL_EXT_buffer_reference_uvec2).
+pub fn address_words(address: u64) -> [u32; 2] {
+    [address as u32, (address >> 32) as u32]
 }
 
 pub(crate) fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {

@@ -11,5 +11,5 @@ mod timing;
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::StorageSet;
-pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
+pub use memory::{address_words, Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
 pub use timing::Timestamps;

@@ -17,7 +17,7 @@ use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::targets::ViewTargets;
 use super::{plan_views, Renderer, Views};
 use crate::error::Result;
-use crate::gpu::{barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
+use crate::gpu::{address_words, barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
 use ash::vk;
@@ -213,10 +213,7 @@ impl Renderer {
                     shadowed_labels: labels,
                     sensed_segments: settings.sensed.segments.address_words(),
                     sensed_z: settings.sensed.z.address_words(),
-                    counts: {
-                        let a = counts_address + offset as u64 * 4;
-                        [a as u32, (a >> 32) as u32]
-                    },
+                    counts: address_words(counts_address + offset as u64 * 4),
                     width: w,
                     height: h,
                     _pad: [0; 2],
