@@ -2,6 +2,7 @@
 //! embedding daemon can recover (recreate the renderer, or split a batch); every other
 //! failure names what was wrong with which input.
 
+use crate::limits::Bytes;
 use ash::vk;
 use std::path::PathBuf;
 
@@ -29,6 +30,12 @@ pub enum Error {
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: {reason}", path.display())]
     File { path: PathBuf, reason: String },
+    /// A call would need more memory than its budget allows (limits.rs); nothing was allocated.
+    #[error(
+        "{what} needs about {needed}, more than the memory budget of {budget} \
+         (raise it with --memory-budget or RANGESYNTH_MEMORY_BUDGET)"
+    )]
+    TooLarge { what: String, needed: Bytes, budget: Bytes },
 }
 
 impl Error {

@@ -2,8 +2,10 @@
 //! object hypotheses, rendered with explicit Vulkan. See README.md and DESIGN.md.
 
 pub mod error;
+mod exact_array;
 pub mod gpu;
 pub mod io;
+pub mod limits;
 pub mod mesh;
 pub mod pose;
 pub mod render;

@@ -1,4 +1,6 @@
 //! The `rangesynth` binary: errors are printed with their causes and give exit code 1.
+//! Exit codes: 0 success, 1 any error (bad input, refused work, device failure), 2 a usage
+//! error (clap), and death by SIGPIPE when stdout is closed early.
 
 mod cli;
 
@@ -6,6 +8,11 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // Like any Unix filter: when the reader of our output goes away (`rangesynth … | head`),
+    // end quietly by SIGPIPE instead of panicking in println!. Outputs are written
+    // atomically, so this never leaves a torn file.
+    // SAFETY: restoring the default disposition of one signal, before any thread starts.
+    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     match cli::run(cli::Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

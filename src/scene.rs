@@ -3,7 +3,9 @@
 //! label `label_base(k) + s`.
 
 use crate::error::{Error, Result};
-use crate::mesh::{builtin_mesh, load_obj, Mesh};
+use crate::io::read_input_text;
+use crate::limits::MemoryBudget;
+use crate::mesh::{builtin_mesh, canonical_builtin_name, load_obj, Mesh};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -43,7 +45,7 @@ struct SceneFile {
 #[serde(deny_unknown_fields)]
 struct ObjectEntry {
     model: String,
-    #[serde(default = "identity_rows")]
+    #[serde(default = "identity_rows", deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
 }
 
@@ -51,27 +53,33 @@ fn identity_rows() -> [[f64; 4]; 4] {
     DMat4::IDENTITY.to_cols_array_2d()
 }
 
+/// Bytes of memory parsing takes per byte of TOML text, at most (toml's document tree).
+const TOML_EXPANSION: u64 = 16;
+
 impl Scene {
-    pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_toml(&text, path.parent().unwrap_or(Path::new("."))).map_err(|e| match e {
+    /// Reads a scene file; files it names (and it) are loaded within `budget`.
+    pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
+        let text = read_input_text(path, "scene file", budget, TOML_EXPANSION)?;
+        Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")), budget).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,
         })
     }
 
-    /// Parses a scene; model paths are relative to `base_dir`.
-    pub fn from_toml(text: &str, base_dir: &Path) -> Result<Self> {
+    /// Parses a scene; model paths are relative to `base_dir`, and model files are loaded
+    /// within `budget`. Each model is loaded once, however many objects name it.
+    pub fn from_toml(text: &str, base_dir: &Path, budget: MemoryBudget) -> Result<Self> {
         let file: SceneFile = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
         file.sensor.validate()?;
         let mut loaded: HashMap<String, Arc<Mesh>> = HashMap::new();
         let mut objects = Vec::with_capacity(file.object.len());
         for entry in file.object {
-            let mesh = match loaded.get(&entry.model) {
+            let key = model_key(&entry.model, base_dir)?;
+            let mesh = match loaded.get(&key) {
                 Some(mesh) => mesh.clone(),
                 None => {
-                    let mesh = Arc::new(load_model(&entry.model, base_dir)?);
-                    loaded.insert(entry.model.clone(), mesh.clone());
+                    let mesh = Arc::new(load_model(&entry.model, base_dir, budget)?);
+                    loaded.insert(key, mesh.clone());
                     mesh
                 }
             };
@@ -99,12 +107,23 @@ impl Scene {
     }
 }
 
-/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`.
-pub fn load_model(reference: &str, base_dir: &Path) -> Result<Mesh> {
+/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`, within
+/// `budget`.
+pub fn load_model(reference: &str, base_dir: &Path, budget: MemoryBudget) -> Result<Mesh> {
     if reference.starts_with("builtin:") {
         builtin_mesh(reference)
     } else {
         let path: PathBuf = base_dir.join(reference);
-        load_obj(&path)
+        load_obj(&path, budget)
+    }
+}
+
+/// One key per model, for caches: a built-in's canonical name (so `builtin:sphere:032` and
+/// `builtin:sphere:32` are one model), or the file's path.
+pub fn model_key(reference: &str, base_dir: &Path) -> Result<String> {
+    if reference.starts_with("builtin:") {
+        canonical_builtin_name(reference)
+    } else {
+        Ok(base_dir.join(reference).display().to_string())
     }
 }

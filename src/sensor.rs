@@ -21,8 +21,10 @@ pub struct Sensor {
     pub width: u32,
     pub height: u32,
     /// dx, dy: model units per pixel.
+    #[serde(deserialize_with = "crate::exact_array::array")]
     pub pitch: [f64; 2],
     /// x, y of the centre of pixel (col 0, row 0).
+    #[serde(deserialize_with = "crate::exact_array::array")]
     pub origin: [f64; 2],
     /// Triangulation angle between projector and camera, degrees, in (−90, 90).
     pub theta_deg: f64,

@@ -262,7 +262,7 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     }
     // A sensed image with no sensor header, and no "sensor" in the hypothesis file.
     let bare = d.join("bare.exr");
-    let mut image = rangesynth::io::read_range_image(&exr).unwrap();
+    let mut image = rangesynth::io::read_range_image(&exr, Default::default()).unwrap();
     image.sensor = None;
     rangesynth::io::write_range_image(&bare, &image).unwrap();
     let hyps = d.join("ok.json");

@@ -5,6 +5,7 @@ mod common;
 
 use common::*;
 use glam::DMat4;
+use rangesynth::limits::MemoryBudget;
 use rangesynth::io::{
     read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage,
 };
@@ -49,7 +50,7 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
     let dir = temp_dir("files_round_trip");
     let path = dir.join("range.exr");
     write_range_image(&path, &image).unwrap();
-    let back = read_range_image(&path).unwrap();
+    let back = read_range_image(&path, MemoryBudget::default()).unwrap();
     let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&back.x), bits(&image.x));
     assert_eq!(bits(&back.y), bits(&image.y));
@@ -60,7 +61,7 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
 
     let label_path = dir.join("label.exr");
     write_label_image(&label_path, w, h, &labels).unwrap();
-    assert_eq!(read_label_image(&label_path).unwrap(), (w, h, labels));
+    assert_eq!(read_label_image(&label_path, MemoryBudget::default()).unwrap(), (w, h, labels));
 }
 
 #[test]
@@ -71,7 +72,7 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
     let dir = temp_dir("files_render_dir");
     let written = write_render_directory(&dir, &sc, &out).unwrap();
     assert_eq!(written.len(), 6);
-    let back = read_range_image(&dir.join("range.exr")).unwrap();
+    let back = read_range_image(&dir.join("range.exr"), MemoryBudget::default()).unwrap();
     assert_eq!(back.label, out.label);
     for i in 0..out.label.len() {
         match out.point(i) {
@@ -82,7 +83,7 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
         }
     }
     assert_eq!(back.sensor, Some(s));
-    let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr")).unwrap();
+    let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr"), MemoryBudget::default()).unwrap();
     assert_eq!(unshadowed, out.label_unshadowed);
     let map: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();

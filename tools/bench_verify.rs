@@ -12,6 +12,7 @@ use rangesynth::io::RangeImage;
 use rangesynth::scene::Scene;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
+use rangesynth::limits::MemoryBudget;
 use rangesynth::Renderer;
 use std::path::Path;
 use std::time::Instant;
@@ -21,7 +22,7 @@ const SENSED: &str = include_str!("../docs/example/sensed.toml");
 fn main() -> anyhow::Result<()> {
     let quick = std::env::args().any(|a| a == "--quick");
     let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?);
-    let scene = Scene::from_toml(SENSED, Path::new("."))?;
+    let scene = Scene::from_toml(SENSED, Path::new("."), MemoryBudget::default())?;
     let image = RangeImage::from(&verifier.renderer().render(&scene)?);
     let sensed = SensedImage::new(&image, &scene.sensor)?;
     println!("device: {}", verifier.renderer().context().device_name());

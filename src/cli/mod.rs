@@ -7,8 +7,10 @@ mod verify;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::gpu::ContextOptions;
-use rangesynth::io::{label_map, write_render_directory};
+use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
+use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
+use rangesynth::scene::model_key;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
 
@@ -24,6 +26,10 @@ pub struct Cli {
     /// Turn on Vulkan validation with synchronization validation (also RANGESYNTH_VALIDATION=1).
     #[arg(long, global = true)]
     validation: bool,
+    /// Refuse work that would need more memory than this, e.g. 8G (also
+    /// RANGESYNTH_MEMORY_BUDGET; default 4G).
+    #[arg(long, global = true, value_name = "SIZE")]
+    memory_budget: Option<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -51,20 +57,40 @@ pub fn run(cli: Cli) -> Result<()> {
     if cli.device.is_some() {
         options.device = cli.device;
     }
-    let (scene, out_dir) = match cli.command {
-        Command::Render { scene, out } => (Scene::from_file(&scene)?, out),
-        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."))?, out),
-        Command::Verify(args) => return verify::run(&options, &args),
+    let budget = match &cli.memory_budget {
+        Some(text) => text.parse().context("--memory-budget")?,
+        None => MemoryBudget::from_env()?,
     };
+    let (scene, out_dir, inputs) = match cli.command {
+        Command::Render { scene: path, out } => {
+            let scene = Scene::from_file(&path, budget)?;
+            let base_dir = path.parent().unwrap_or(Path::new("."));
+            let mut inputs = model_files(scene.objects.iter().map(|o| o.model_ref.as_str()), base_dir)?;
+            inputs.push(path);
+            (scene, out, inputs)
+        }
+        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
+        Command::Verify(args) => return verify::run(&options, budget, &args),
+    };
+    let outputs = RENDER_FILES.map(|name| out_dir.join(name));
+    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
-    let renderer = Renderer::new(&options).context("starting Vulkan")?;
+    let renderer = Renderer::new(&options).context("starting Vulkan")?.with_memory_budget(budget);
     let output = renderer.render(&scene)?;
     let written = write_render_directory(&out_dir, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     check_validation(&renderer)
+}
+
+/// The files behind model references (built-ins have none), relative to `base_dir`.
+fn model_files<'a>(references: impl Iterator<Item = &'a str>, base_dir: &Path) -> Result<Vec<PathBuf>> {
+    references
+        .filter(|r| !r.starts_with("builtin:"))
+        .map(|r| Ok(PathBuf::from(model_key(r, base_dir)?)))
+        .collect()
 }
 
 /// Tells the user about triangles the model lost (they are dropped, not rendered).
@@ -97,9 +123,18 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         if out.shadow_pass { "" } else { " (no shadow pass)" }
     );
     println!("{:>6}  {:<28} {:<12} {:>8} {:>9}", "label", "model", "surface", "valid", "shadowed");
-    for entry in label_map(scene)? {
-        let valid = out.label.iter().filter(|&&l| l == entry.label).count();
-        let before = out.label_unshadowed.iter().filter(|&&l| l == entry.label).count();
+    // One pass over the pixels and one over the labels: [valid, before shadowing] per label.
+    let labels = label_map(scene)?;
+    let mut populations = vec![[0u64; 2]; labels.len() + 1];
+    for (&after, &before) in out.label.iter().zip(&out.label_unshadowed) {
+        for (label, which) in [(after, 0), (before, 1)] {
+            if let Some(p) = populations.get_mut(label as usize) {
+                p[which] += 1;
+            }
+        }
+    }
+    for entry in labels {
+        let [valid, before] = populations[entry.label as usize];
         if before > 0 {
             let model = format!("{} {}", entry.object, entry.model);
             println!("{:>6}  {:<28} {:<12} {:>8} {:>9}", entry.label, model, entry.surface_name, valid, before - valid);

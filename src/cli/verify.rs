@@ -2,14 +2,18 @@
 //! hypothesis, writes one JSON line each, and prints a ranked summary. Sensor and shadow
 //! settings come from the hypothesis file, else from the sensed EXR's header.
 //!
-//! Hypotheses are verified a slice at a time and their lines written as each slice finishes,
-//! so beyond the parsed input only a small summary row per hypothesis is kept.
+//! Every hypothesis is checked (models loaded, bindings, views, memory) before anything is
+//! written. Hypotheses are then verified a slice at a time and their lines written as each
+//! slice finishes, so beyond the parsed input only a small summary row per hypothesis is kept;
+//! the lines go to a temporary file that replaces `--out` only once it is complete.
 
 use super::{check_validation, warn_degenerate};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::gpu::ContextOptions;
-use rangesynth::io::read_range_image;
+use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
+use rangesynth::limits::MemoryBudget;
+use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
 };
@@ -30,6 +34,10 @@ pub struct VerifyArgs {
     /// Also score each hypothesis without shadowing (an "unshadowed" object on each line).
     #[arg(long)]
     compare_shadow: bool,
+    /// Use the hypothesis file's "sensor" even where it differs from the sensed image's header
+    /// (without it, a difference is refused).
+    #[arg(long)]
+    override_sensor: bool,
     /// Most hypotheses per GPU submission.
     #[arg(long, default_value_t = MAX_CHUNK)]
     chunk_size: usize,
@@ -38,29 +46,41 @@ pub struct VerifyArgs {
     top: usize,
 }
 
-pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
-    let file = HypothesisFile::from_file(&args.hypotheses)?;
-    let image = read_range_image(&args.scene)?;
-    let sensor = file.sensor.or(image.sensor).with_context(|| {
-        format!(
-            "no sensor settings: neither {} has a \"sensor\" object nor {} a sensor header",
+pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) -> Result<()> {
+    let file = HypothesisFile::from_file(&args.hypotheses, budget)?;
+    let image = read_range_image(&args.scene, budget)?;
+    let sensor = match (file.sensor, image.sensor) {
+        (Some(given), Some(header)) if given != header && !args.override_sensor => anyhow::bail!(
+            "{} gives a sensor that differs from the one in {}'s header: {}; fix one of them, or pass \
+             --override-sensor to use the hypothesis file's",
             args.hypotheses.display(),
-            args.scene.display()
-        )
-    })?;
+            args.scene.display(),
+            sensor_differences(&given, &header)
+        ),
+        (given, header) => given.or(header).with_context(|| {
+            format!(
+                "no sensor settings: neither {} has a \"sensor\" object nor {} a sensor header",
+                args.hypotheses.display(),
+                args.scene.display()
+            )
+        })?,
+    };
     let shadow = file.shadow.or(image.shadow).unwrap_or_default();
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
-    let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?);
+    drop(image);
+    let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget));
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
+    let mut inputs = vec![args.hypotheses.clone(), args.scene.clone()];
     let tolerance = file.tolerance;
     let hypotheses = file
         .hypotheses
         .into_iter()
         .map(|h| {
             let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {:?}", h.id))?;
-            if warned.insert(h.model) {
+            if warned.insert(h.model.clone()) {
                 warn_degenerate(&model.mesh);
+                inputs.extend(super::model_files(std::iter::once(h.model.as_str()), base_dir)?);
             }
             Ok(Hypothesis { id: h.id, model, pose: h.pose, bindings: h.bindings })
         })
@@ -72,6 +92,9 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
         compare_shadow: args.compare_shadow,
         chunk_size: args.chunk_size,
     };
+    verifier.check(&sensed, &settings, &hypotheses)?;
+    refuse_overwriting_inputs([args.out.as_path()], inputs.iter().map(PathBuf::as_path))?;
+
     let bar = if std::io::stderr().is_terminal() && hypotheses.len() > 1 {
         let bar = ProgressBar::new(hypotheses.len() as u64);
         bar.set_style(
@@ -83,8 +106,8 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
         ProgressBar::hidden()
     };
     let start = std::time::Instant::now();
-    let file = std::fs::File::create(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut out = BufWriter::new(file);
+    let mut pending = PendingFile::new(&args.out)?;
+    let mut out = BufWriter::new(pending.file());
     let mut rows = Vec::with_capacity(hypotheses.len());
     for (k, slice) in hypotheses.chunks(SLICE).enumerate() {
         let done = k * SLICE;
@@ -96,10 +119,30 @@ pub fn run(options: &ContextOptions, args: &VerifyArgs) -> Result<()> {
         }
     }
     out.flush().with_context(|| format!("writing {}", args.out.display()))?;
+    drop(out);
+    pending.commit()?;
     bar.finish_and_clear();
     print_summary(verifier.renderer(), &settings, &rows, args.top, start.elapsed().as_secs_f64());
     println!("wrote {}", args.out.display());
     check_validation(verifier.renderer())
+}
+
+/// Each field in which two sensors differ, with both values.
+fn sensor_differences(given: &Sensor, header: &Sensor) -> String {
+    let fields = [
+        ("kind", format!("{:?}", given.kind), format!("{:?}", header.kind)),
+        ("width", given.width.to_string(), header.width.to_string()),
+        ("height", given.height.to_string(), header.height.to_string()),
+        ("pitch", format!("{:?}", given.pitch), format!("{:?}", header.pitch)),
+        ("origin", format!("{:?}", given.origin), format!("{:?}", header.origin)),
+        ("theta_deg", given.theta_deg.to_string(), header.theta_deg.to_string()),
+    ];
+    fields
+        .iter()
+        .filter(|(_, a, b)| a != b)
+        .map(|(name, a, b)| format!("{name} = {a} (header: {b})"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Hypotheses verified per call, and so held in memory with their full results at once.

@@ -3,12 +3,22 @@
 //! shadow settings go into the layer header as TOML text attributes, so `verify` can take
 //! them from the sensed image. Compression is ZIP, which is lossless, so files read back
 //! bit-identical.
+//!
+//! Reading trusts nothing in the file. The exr crate allocates an image as large as the
+//! header's data window claims before it reads a pixel, and a failed allocation aborts the
+//! process, so a 630-byte file claiming 2^29 columns would take a daemon down. The file is
+//! therefore read whole (a regular file within the budget, io/input_file.rs), its headers
+//! are parsed alone, and every size they claim is checked — each side against
+//! [`MAX_IMAGE_SIDE`], the decoded bytes against the memory budget and against what the
+//! file's own size can hold at its compression's best ratio — before the pixels are decoded.
 
-use super::RangeImage;
+use super::{read_input_file, write_atomically, RangeImage};
 use crate::error::{Error, Result};
-use crate::sensor::Sensor;
+use crate::limits::{Bytes, MemoryBudget};
+use crate::sensor::{Sensor, MAX_IMAGE_SIDE};
 use crate::shadow::ShadowSettings;
 use exr::prelude::*;
+use std::io::{Cursor, Write};
 use std::path::Path;
 
 const SENSOR_ATTRIBUTE: &str = "rangesynth_sensor";
@@ -48,11 +58,21 @@ fn write_layer(
 ) -> Result<()> {
     let size = (width as usize, height as usize);
     let layer = Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
-    Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, e))
+    write_atomically(path, |file| {
+        let mut out = std::io::BufWriter::new(file);
+        Image::from_layer(layer).write().to_buffered(&mut out).map_err(|e| exr_error(path, e))?;
+        out.flush().map_err(|e| Error::io(path, e))
+    })
 }
 
-pub fn read_range_image(path: &Path) -> Result<RangeImage> {
-    let (width, height, mut channels, attributes) = read_layer(path)?;
+/// Reads a range image (`range.exr` as `render` writes it) within `budget`.
+pub fn read_range_image(path: &Path, budget: MemoryBudget) -> Result<RangeImage> {
+    parse_range_image(&read_input_file(path, "range image", budget, 1)?, path, budget)
+}
+
+/// Decodes a range image from a file's bytes; `path` names it in messages.
+pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<RangeImage> {
+    let (width, height, mut channels, attributes) = decode_layer(bytes, path, budget)?;
     let mut take_f32 = |name: &str| match channels.iter().position(|c| c.name.eq(name)) {
         Some(i) => match channels.swap_remove(i).sample_data {
             FlatSamples::F32(v) => Ok(v),
@@ -85,9 +105,10 @@ pub fn read_range_image(path: &Path) -> Result<RangeImage> {
     Ok(RangeImage { width, height, x, y, z, label, sensor, shadow })
 }
 
-/// Reads a label-only image (`label_unshadowed.exr`): width, height, labels.
-pub fn read_label_image(path: &Path) -> Result<(u32, u32, Vec<u32>)> {
-    let (width, height, mut channels, _) = read_layer(path)?;
+/// Reads a label-only image (`label_unshadowed.exr`) within `budget`: width, height, labels.
+pub fn read_label_image(path: &Path, budget: MemoryBudget) -> Result<(u32, u32, Vec<u32>)> {
+    let bytes = read_input_file(path, "label image", budget, 1)?;
+    let (width, height, mut channels, _) = decode_layer(&bytes, path, budget)?;
     Ok((width, height, take_labels(path, &mut channels)?))
 }
 
@@ -103,19 +124,65 @@ fn take_labels(path: &Path, channels: &mut Vec<AnyChannel<FlatSamples>>) -> Resu
 
 type LayerParts = (u32, u32, Vec<AnyChannel<FlatSamples>>, LayerAttributes);
 
-fn read_layer(path: &Path) -> Result<LayerParts> {
+fn decode_layer(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<LayerParts> {
+    check_claimed_sizes(bytes, path, budget)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(Cursor::new(bytes))
         .map_err(|e| exr_error(path, e))?;
     let layer = image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());
     let to_u32 = |v: usize| u32::try_from(v).map_err(|_| Error::file(path, "image is too large"));
     Ok((to_u32(w)?, to_u32(h)?, layer.channel_data.list.into_vec(), layer.attributes))
+}
+
+/// Checks what every header of the file claims before anything is allocated for it.
+fn check_claimed_sizes(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| exr_error(path, e))?;
+    for header in meta.headers.iter() {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        if header.deep {
+            return Err(Error::file(path, "holds deep data, which a range image never does"));
+        }
+        if w > MAX_IMAGE_SIDE as usize || h > MAX_IMAGE_SIDE as usize {
+            return Err(Error::file(
+                path,
+                format!("its header claims a {w}×{h} image; sides are limited to {MAX_IMAGE_SIDE}"),
+            ));
+        }
+        let decoded = header.total_pixel_bytes() as u64;
+        let most = (bytes.len() as u64).saturating_mul(best_compression_ratio(header.compression));
+        if decoded > most {
+            return Err(Error::file(
+                path,
+                format!(
+                    "its header claims a {w}×{h} image of {}, more than its {} can hold ({:?} compression)",
+                    Bytes(decoded),
+                    Bytes(bytes.len() as u64),
+                    header.compression
+                ),
+            ));
+        }
+        budget.check(format_args!("decoding {} ({w}×{h})", path.display()), decoded)?;
+    }
+    Ok(())
+}
+
+/// The most decoded bytes one byte of a file can stand for under a compression: deflate's
+/// limit (1032:1) for the zip-based ones (PXR24 deflates 3 bytes of each f32), a run of 128
+/// bytes in 2 for RLE, and generously for the wavelet and lossy ones.
+fn best_compression_ratio(compression: Compression) -> u64 {
+    match compression {
+        Compression::Uncompressed => 1,
+        Compression::RLE => 64,
+        Compression::ZIP1 | Compression::ZIP16 => 1032,
+        Compression::PXR24 => 1376,
+        _ => 1 << 16,
+    }
 }
 
 fn exr_error(path: &Path, e: exr::error::Error) -> Error {

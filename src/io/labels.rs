@@ -1,8 +1,10 @@
 //! `labels.json`: which object and surface each label of a render stands for.
 
+use super::write_atomically;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
+use std::io::Write;
 use std::path::Path;
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -41,5 +43,5 @@ pub fn write_label_map(path: &Path, scene: &Scene) -> Result<()> {
         labels: Vec<LabelEntry>,
     }
     let text = serde_json::to_string_pretty(&File { labels: label_map(scene)? }).map_err(|e| Error::file(path, e))?;
-    std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
+    write_atomically(path, |file| file.write_all((text + "\n").as_bytes()).map_err(|e| Error::io(path, e)))
 }

@@ -3,6 +3,7 @@
 //! distinct colours, and shadowed pixels (data before shadowing, none after) in one marked
 //! colour. Pixels without data are black.
 
+use super::write_atomically;
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -90,11 +91,14 @@ fn label_colour(label: u32) -> [u8; 3] {
 }
 
 fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[u8]) -> Result<()> {
-    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| Error::file(path, e))?;
-    writer.write_image_data(pixels).map_err(|e| Error::file(path, e))?;
-    writer.finish().map_err(|e| Error::file(path, e))
+    write_atomically(path, |file| {
+        // Unbuffered: the encoder writes whole chunks, and an error on a buffered flush at drop
+        // would be lost.
+        let mut encoder = png::Encoder::new(file, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| Error::file(path, e))?;
+        writer.write_image_data(pixels).map_err(|e| Error::file(path, e))?;
+        writer.finish().map_err(|e| Error::file(path, e))
+    })
 }

@@ -6,8 +6,8 @@
 //! |---|---|---|
 //! | `builtin:box` | unit cube, x, y ∈ [−0.5, 0.5], z ∈ [0, 1] | `top`, `bottom`, `+x`, `-x`, `+y`, `-y` |
 //! | `builtin:step` | stepped block: L-shaped profile in xz, low part x ∈ [−2, 0] with top at z = 0.5, tall part x ∈ [0, 1] with top at z = 1.5, y ∈ [−0.75, 0.75] | `low_top`, `high_top`, `riser`, `low_end`, `high_end`, `bottom`, `-y`, `+y` |
-//! | `builtin:cylinder[:N]` | radius 0.5, z ∈ [0, 1], N sides (default 32) | `top`, `bottom`, `side` |
-//! | `builtin:sphere[:N]` | radius 0.5 centred at z = 0.5, N segments around, N/2 rings (default 32) | `sphere` |
+//! | `builtin:cylinder[:N]` | radius 0.5, z ∈ [0, 1], N sides (default 32, at most 4096) | `top`, `bottom`, `side` |
+//! | `builtin:sphere[:N]` | radius 0.5 centred at z = 0.5, N segments around, N/2 rings (default 32, 4 to 1024) | `sphere` |
 //! | `builtin:plane[:SIZE]` | square table top of side SIZE (default 4) at z = 0 | `plane` |
 //!
 //! The stepped block's riser (x = 0, from z = 0.5 to 1.5) faces −x: with the camera toward
@@ -22,46 +22,85 @@ use std::f64::consts::TAU;
 pub const BUILTIN_NAMES: &[&str] =
     &["builtin:box", "builtin:step", "builtin:cylinder[:N]", "builtin:sphere[:N]", "builtin:plane[:SIZE]"];
 
-/// Builds the built-in model `name` (with its `builtin:` prefix).
-pub fn builtin_mesh(name: &str) -> Result<Mesh> {
-    let unknown = || Error::Mesh {
-        name: name.to_string(),
-        reason: format!("unknown built-in model; known: {}", BUILTIN_NAMES.join(", ")),
-    };
-    let rest = name.strip_prefix("builtin:").ok_or_else(unknown)?;
-    let (shape, parameter) = match rest.split_once(':') {
-        Some((shape, p)) => (shape, Some(p)),
-        None => (rest, None),
-    };
-    let count = |default: u32| -> Result<u32> {
-        match parameter {
+/// Sides of `builtin:cylinder:N`: 4N triangles, at most 16,384.
+pub const CYLINDER_SIDES: std::ops::RangeInclusive<u32> = 3..=4096;
+/// Segments of `builtin:sphere:N`: about N² triangles, at most about a million.
+pub const SPHERE_SEGMENTS: std::ops::RangeInclusive<u32> = 4..=1024;
+
+/// A built-in model with its parameter parsed and checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Builtin {
+    Box,
+    Step,
+    Cylinder(u32),
+    Sphere(u32),
+    Plane(f64),
+}
+
+impl Builtin {
+    fn parse(name: &str) -> Result<Self> {
+        let invalid = |reason: String| Error::Mesh { name: name.to_string(), reason };
+        let unknown = || invalid(format!("unknown built-in model; known: {}", BUILTIN_NAMES.join(", ")));
+        let rest = name.strip_prefix("builtin:").ok_or_else(unknown)?;
+        let (shape, parameter) = match rest.split_once(':') {
+            Some((shape, p)) => (shape, Some(p)),
+            None => (rest, None),
+        };
+        let count = |default: u32, range: std::ops::RangeInclusive<u32>| match parameter {
             None => Ok(default),
-            Some(p) => p.parse::<u32>().ok().filter(|n| (3..=4096).contains(n)).ok_or_else(|| Error::Mesh {
-                name: name.to_string(),
-                reason: format!("the parameter `{p}` must be a whole number of sides from 3 to 4096"),
+            Some(p) => p.parse::<u32>().ok().filter(|n| range.contains(n)).ok_or_else(|| {
+                invalid(format!("the parameter `{p}` must be a whole number from {} to {}", range.start(), range.end()))
             }),
-        }
-    };
-    let mut b = Builder::default();
-    match shape {
-        "box" if parameter.is_none() => b.cuboid([-0.5, -0.5, 0.0], [0.5, 0.5, 1.0]),
-        "step" if parameter.is_none() => b.step(),
-        "cylinder" => b.cylinder(count(32)?),
-        "sphere" => b.sphere(count(32)?.max(4)),
-        "plane" => {
-            let size = match parameter {
+        };
+        Ok(match shape {
+            "box" if parameter.is_none() => Builtin::Box,
+            "step" if parameter.is_none() => Builtin::Step,
+            "cylinder" => Builtin::Cylinder(count(32, CYLINDER_SIDES)?),
+            "sphere" => Builtin::Sphere(count(32, SPHERE_SEGMENTS)?),
+            "plane" => Builtin::Plane(match parameter {
                 None => 4.0,
-                Some(p) => p.parse::<f64>().ok().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| Error::Mesh {
-                    name: name.to_string(),
-                    reason: format!("the size `{p}` must be a positive number"),
+                Some(p) => p.parse::<f64>().ok().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| {
+                    invalid(format!("the size `{p}` must be a positive number"))
                 })?,
-            };
+            }),
+            _ => return Err(unknown()),
+        })
+    }
+
+    /// One name per model: `builtin:sphere:032`, `builtin:sphere:+32` and `builtin:sphere`
+    /// are all `builtin:sphere:32`, so a cache keyed by it builds each model once.
+    fn canonical_name(self) -> String {
+        match self {
+            Builtin::Box => "builtin:box".into(),
+            Builtin::Step => "builtin:step".into(),
+            Builtin::Cylinder(n) => format!("builtin:cylinder:{n}"),
+            Builtin::Sphere(n) => format!("builtin:sphere:{n}"),
+            Builtin::Plane(size) => format!("builtin:plane:{size}"),
+        }
+    }
+}
+
+/// The canonical form of a built-in model's name (see [`builtin_mesh`]), or why it is none.
+pub fn canonical_builtin_name(name: &str) -> Result<String> {
+    Builtin::parse(name).map(Builtin::canonical_name)
+}
+
+/// Builds the built-in model `name` (with its `builtin:` prefix); the mesh is named by the
+/// canonical form of `name`.
+pub fn builtin_mesh(name: &str) -> Result<Mesh> {
+    let model = Builtin::parse(name)?;
+    let mut b = Builder::default();
+    match model {
+        Builtin::Box => b.cuboid([-0.5, -0.5, 0.0], [0.5, 0.5, 1.0]),
+        Builtin::Step => b.step(),
+        Builtin::Cylinder(sides) => b.cylinder(sides),
+        Builtin::Sphere(segments) => b.sphere(segments),
+        Builtin::Plane(size) => {
             let h = size / 2.0;
             b.quad("plane", [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]]);
         }
-        _ => return Err(unknown()),
     }
-    Mesh::new(name, b.positions, b.triangles, b.triangle_surfaces, b.surface_names)
+    Mesh::new(model.canonical_name(), b.positions, b.triangles, b.triangle_surfaces, b.surface_names)
 }
 
 #[derive(Default)]

@@ -68,6 +68,28 @@ struct Slot {
 }
 
 impl Renderer {
+    /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
+    /// counts: its slots, each a range view (label, z, depth, shadowed labels: 16 bytes a
+    /// pixel) and a shadow view as wide as the widest hypothesis needs (16 bytes a pixel).
+    /// Fails as a batch would on a hypothesis whose views cannot be planned.
+    pub(crate) fn batch_slot_memory(
+        &self,
+        sensor: &Sensor,
+        mode: ShadowMode,
+        posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
+        hypotheses: usize,
+    ) -> Result<u64> {
+        let max_side = self.ctx.limits.max_image_dimension2_d;
+        let mut shadow_width = 0;
+        for sphere in posed_spheres {
+            let views = plan_views(sensor, mode, &[sphere], max_side)?;
+            shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
+        }
+        let rows = u64::from(sensor.height);
+        let per_slot = 16 * rows * (u64::from(sensor.width) + u64::from(shadow_width));
+        Ok(per_slot * SLOTS.min(hypotheses) as u64)
+    }
+
     /// Records and runs one batch; returns the counts buffer (`counts_words` u32 words).
     pub(crate) fn count_batch(
         &self,

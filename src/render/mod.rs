@@ -25,6 +25,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{
     barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps,
 };
+use crate::limits::MemoryBudget;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
@@ -39,6 +40,7 @@ pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
     pipelines: Pipelines,
     ctx: Arc<GpuContext>,
+    budget: MemoryBudget,
 }
 
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
@@ -66,6 +68,18 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
     Ok(Views { range, shadow })
 }
 
+/// Bytes a render of these views takes at its peak, and writing its files after it (the
+/// larger of the two). Rendering: per range pixel the label, z and depth attachments and
+/// three readback buffers (24 bytes) and the returned label, unshadowed label and z (12);
+/// per shadow pixel its four attachments (16). Writing: the returned image (12), the range
+/// image's X, Y, Z and label (16) and the EXR encoder's copy of them (16), and the previews
+/// (4). Measured: a 16384² render peaked at 47 bytes per pixel.
+fn render_memory(views: &Views) -> u64 {
+    let range = u64::from(views.range.width) * u64::from(views.range.height);
+    let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
+    (36 * range + 16 * shadow).max(48 * range)
+}
+
 /// The two views of one render, with the grids they were rendered on.
 pub(crate) struct Views {
     pub range: ViewGrid,
@@ -78,8 +92,18 @@ impl Renderer {
         Self::with_context(GpuContext::new(options)?)
     }
 
+    /// A renderer on `ctx` with the default memory budget.
     pub fn with_context(ctx: Arc<GpuContext>) -> Result<Self> {
-        Ok(Self { pipelines: Pipelines::new(&ctx)?, ctx })
+        Ok(Self { pipelines: Pipelines::new(&ctx)?, ctx, budget: MemoryBudget::default() })
+    }
+
+    /// The same renderer, refusing calls that would need more than `budget`.
+    pub fn with_memory_budget(self, budget: MemoryBudget) -> Self {
+        Self { budget, ..self }
+    }
+
+    pub fn memory_budget(&self) -> MemoryBudget {
+        self.budget
     }
 
     pub fn context(&self) -> &Arc<GpuContext> {
@@ -117,6 +141,10 @@ impl Renderer {
             })
             .collect();
         let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
+        self.budget.check(
+            format_args!("rendering a {}×{} image", views.range.width, views.range.height),
+            render_memory(&views),
+        )?;
         self.render_views(scene, &views, &draws)
     }
 

@@ -2,12 +2,19 @@
 //! settings, and hypotheses, each a model, a pose and bindings (scene label, model surface).
 
 use crate::error::{Error, Result};
+use crate::io::read_input_text;
+use crate::limits::MemoryBudget;
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
 use glam::DMat4;
 use serde::Deserialize;
+use std::collections::HashSet;
 use std::path::Path;
+
+/// Bytes of memory parsing takes per byte of JSON, at most (each hypothesis' strings, pose
+/// and bindings, as parsed and as checked).
+const JSON_EXPANSION: u64 = 4;
 
 /// Default depth tolerance τ, model units (the paper's 0.1 inch).
 pub const DEFAULT_TOLERANCE: f64 = 0.1;
@@ -45,6 +52,7 @@ struct RawFile {
 struct RawHypothesis {
     id: String,
     model: String,
+    #[serde(deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
     #[serde(default)]
     bindings: Vec<(u32, u32)>,
@@ -55,8 +63,9 @@ fn default_tolerance() -> f64 {
 }
 
 impl HypothesisFile {
-    pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    /// Reads a hypothesis file within `budget`.
+    pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
+        let text = read_input_text(path, "hypothesis file", budget, JSON_EXPANSION)?;
         Self::from_json(&text).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,
@@ -70,6 +79,11 @@ impl HypothesisFile {
         }
         if let Some(sensor) = &raw.sensor {
             sensor.validate()?;
+        }
+        // Each output line is known by its id alone.
+        let mut ids = HashSet::with_capacity(raw.hypotheses.len());
+        if let Some(h) = raw.hypotheses.iter().find(|h| !ids.insert(h.id.as_str())) {
+            return Err(Error::Scene(format!("hypothesis id {:?} is used more than once; ids must be unique", h.id)));
         }
         let hypotheses = raw
             .hypotheses

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Buffer;
 use crate::mesh::Mesh;
 use crate::render::{BatchItem, BatchSettings, GpuMesh, Renderer, SensedBuffers};
-use crate::scene::load_model;
+use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
 use crate::shadow::ShadowMode;
 use ash::vk;
@@ -67,6 +67,26 @@ pub struct Verification {
     pub unshadowed: Option<(Counts, Scores)>,
 }
 
+/// What a batch's checks settle for its recording.
+#[derive(Clone, Copy)]
+struct BatchPlan {
+    /// 2 with `compare_shadow`, else 1.
+    copies: usize,
+    segments: u32,
+    /// Most bytes of counts one chunk may hold on this device.
+    counts_budget: u64,
+}
+
+impl BatchPlan {
+    fn layout(&self, h: &Hypothesis) -> CountsLayout {
+        CountsLayout { surfaces: h.model.mesh.surface_count(), segments: self.segments }
+    }
+
+    fn counts_bytes(&self, h: &Hypothesis) -> u64 {
+        (self.layout(h).words() * self.copies * 4) as u64
+    }
+}
+
 pub struct Verifier {
     renderer: Renderer,
     models: Mutex<HashMap<String, Arc<Model>>>,
@@ -84,15 +104,11 @@ impl Verifier {
     /// The model named `reference` (a `builtin:` name, or an OBJ path relative to
     /// `base_dir`), loaded and uploaded on first use.
     pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
-        let key = if reference.starts_with("builtin:") {
-            reference.to_string()
-        } else {
-            base_dir.join(reference).display().to_string()
-        };
+        let key = model_key(reference, base_dir)?;
         if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(model.clone());
         }
-        let mesh = Arc::new(load_model(reference, base_dir)?);
+        let mesh = Arc::new(load_model(reference, base_dir, self.renderer.memory_budget())?);
         let model = Arc::new(Model {
             gpu: GpuMesh::upload(self.renderer.context(), &mesh)?,
             sphere: mesh.bounding_sphere(),
@@ -101,15 +117,14 @@ impl Verifier {
         Ok(self.models.lock().unwrap_or_else(|p| p.into_inner()).entry(key).or_insert(model).clone())
     }
 
-    /// Scores every hypothesis against the sensed image, in order. `progress` is told how many
-    /// hypotheses are done after each chunk.
-    pub fn verify(
-        &self,
-        sensed: &SensedImage,
-        settings: &VerifySettings,
-        hypotheses: &[Hypothesis],
-        progress: &mut dyn FnMut(usize),
-    ) -> Result<Vec<Verification>> {
+    /// Checks everything [`Verifier::verify`] would refuse — the settings, each hypothesis'
+    /// bindings and views, and the memory the batch needs — without touching the GPU, so a
+    /// caller can refuse a whole file before it writes anything.
+    pub fn check(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<()> {
+        self.plan(sensed, settings, hypotheses).map(|_| ())
+    }
+
+    fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
         let sensor = &settings.sensor;
         sensor.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
@@ -136,7 +151,52 @@ impl Verifier {
                 )));
             }
         }
+        let plan = BatchPlan {
+            copies: if settings.compare_shadow { 2 } else { 1 },
+            segments: sensed.segments.len() as u32,
+            counts_budget: 0,
+        };
+        let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         let ctx = self.renderer.context();
+        let counts_budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
+        if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
+            return Err(Error::Scene(format!(
+                "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
+                h.id,
+                sensed.segments.len(),
+                h.model.mesh.surface_count(),
+                per_hypothesis(h) >> 20,
+                counts_budget >> 20
+            )));
+        }
+        let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
+        let slots = self.renderer.batch_slot_memory(sensor, settings.shadow, posed, hypotheses.len())?;
+        let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
+        // The sensed image on the GPU (segment index and z), the slots, and the counts with
+        // their readback.
+        let pixels = u64::from(sensor.width) * u64::from(sensor.height);
+        self.renderer.memory_budget().check(
+            format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
+            8 * pixels + slots + 2 * counts,
+        )?;
+        Ok(BatchPlan { counts_budget, ..plan })
+    }
+
+    /// Scores every hypothesis against the sensed image, in order. `progress` is told how many
+    /// hypotheses are done after each chunk.
+    pub fn verify(
+        &self,
+        sensed: &SensedImage,
+        settings: &VerifySettings,
+        hypotheses: &[Hypothesis],
+        progress: &mut dyn FnMut(usize),
+    ) -> Result<Vec<Verification>> {
+        let plan = self.plan(sensed, settings, hypotheses)?;
+        let sensor = &settings.sensor;
+        let ctx = self.renderer.context();
+        let (copies, counts_budget) = (plan.copies, plan.counts_budget);
+        let layout = |h: &Hypothesis| plan.layout(h);
+        let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         let segments = Buffer::device_local_with_data(
             ctx,
             vk::BufferUsageFlags::STORAGE_BUFFER,
@@ -151,24 +211,6 @@ impl Verifier {
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
             sensed: SensedBuffers { segments: &segments, z: &z, segment_count: sensed.segments.len() as u32 },
         };
-        let layout = |h: &Hypothesis| CountsLayout {
-            surfaces: h.model.mesh.surface_count(),
-            segments: sensed.segments.len() as u32,
-        };
-        let copies = if settings.compare_shadow { 2 } else { 1 };
-        let per_hypothesis = |h: &Hypothesis| (layout(h).words() * copies * 4) as u64;
-        let budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
-        if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > budget) {
-            return Err(Error::Scene(format!(
-                "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
-                h.id,
-                sensed.segments.len(),
-                h.model.mesh.surface_count(),
-                per_hypothesis(h) >> 20,
-                budget >> 20
-            )));
-        }
-
         let mut results = Vec::with_capacity(hypotheses.len());
         let mut start = 0;
         while start < hypotheses.len() {
@@ -177,7 +219,7 @@ impl Verifier {
             let mut bytes = 0;
             while end < hypotheses.len()
                 && end - start < settings.chunk_size.clamp(1, MAX_CHUNK)
-                && bytes + per_hypothesis(&hypotheses[end]) <= budget
+                && bytes + per_hypothesis(&hypotheses[end]) <= counts_budget
             {
                 bytes += per_hypothesis(&hypotheses[end]);
                 end += 1;

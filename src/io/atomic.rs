@@ -1,0 +1,172 @@
+//! Outputs that are never seen half-written.
+//!
+//! Every output file is written to a temporary file in its own directory (so the final
+//! rename stays on one file system, where it is atomic) and renamed over the target only once
+//! it is complete and synced: a failure, SIGINT or SIGKILL before that leaves the previous file
+//! whole, and a reader only ever sees the old file or the complete new one. A temporary file
+//! is removed when its writer fails or is dropped; a killed process can leave one behind,
+//! named `.NAME.*.tmp`, beside the target.
+//!
+//! A set of files (a render's directory) is written whole into a staging directory first,
+//! then moved in under an exclusive lock on the directory: a render that fails leaves the
+//! previous complete set, and two renders into one directory at once each leave a complete
+//! set of their own, the later one winning whole, never a mixture. (A kill during the moves
+//! themselves, a few renames long, can still leave a mixture.)
+
+use crate::error::{Error, Result};
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// An output being written; nothing appears at `path` until [`PendingFile::commit`].
+pub struct PendingFile {
+    temp: tempfile::NamedTempFile,
+    path: PathBuf,
+}
+
+impl PendingFile {
+    /// Starts writing `path`: a temporary file beside it.
+    pub fn new(path: &Path) -> Result<Self> {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let name = path.file_name().ok_or_else(|| Error::file(path, "an output must name a file"))?;
+        let temp = tempfile::Builder::new()
+            .prefix(&format!(".{}.", name.to_string_lossy()))
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .map_err(|e| Error::io(dir, e))?;
+        Ok(Self { temp, path: path.to_path_buf() })
+    }
+
+    /// The file to write into.
+    pub fn file(&mut self) -> &mut File {
+        self.temp.as_file_mut()
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Syncs the complete file and renames it over `path`.
+    pub fn commit(mut self) -> Result<()> {
+        let path = self.path;
+        self.temp.as_file_mut().flush().and_then(|()| self.temp.as_file().sync_all()).map_err(|e| Error::io(&path, e))?;
+        self.temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
+        Ok(())
+    }
+}
+
+/// Writes `path` atomically with `write`.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&mut File) -> Result<()>) -> Result<()> {
+    let mut pending = PendingFile::new(path)?;
+    write(pending.file())?;
+    pending.commit()
+}
+
+/// A set of files that belong together (a render's directory), written into a hidden
+/// staging directory inside the target directory and moved into it together.
+pub struct StagedSet {
+    staging: tempfile::TempDir,
+    target: PathBuf,
+}
+
+impl StagedSet {
+    /// Creates `target` if needed, and a staging directory in it.
+    pub fn new(target: &Path) -> Result<Self> {
+        std::fs::create_dir_all(target).map_err(|e| Error::io(target, e))?;
+        let staging =
+            tempfile::Builder::new().prefix(".staging.").tempdir_in(target).map_err(|e| Error::io(target, e))?;
+        Ok(Self { staging, target: target.to_path_buf() })
+    }
+
+    /// Where to write the set's file `name` before the commit.
+    pub fn staged(&self, name: &str) -> PathBuf {
+        self.staging.path().join(name)
+    }
+
+    /// Moves the staged files `names` into the target directory, each by an atomic rename,
+    /// all under an exclusive lock on the directory, so concurrent sets take turns. Returns
+    /// their final paths. A set not committed leaves the target directory as it was.
+    pub fn commit(self, names: &[&str]) -> Result<Vec<PathBuf>> {
+        let lock = File::open(&self.target).map_err(|e| Error::io(&self.target, e))?;
+        lock.lock().map_err(|e| Error::io(&self.target, e))?;
+        names
+            .iter()
+            .map(|name| {
+                let path = self.target.join(name);
+                std::fs::rename(self.staged(name), &path).map_err(|e| Error::io(&path, e))?;
+                Ok(path)
+            })
+            .collect()
+        // The lock is released when `lock` is closed, the staging directory removed when
+        // `self.staging` is dropped.
+    }
+}
+
+/// Refuses an output that is one of the inputs (the same file, by device and inode, so links
+/// and other spellings of a path count too): writing it would destroy what was read.
+pub fn refuse_overwriting_inputs<'a>(
+    outputs: impl IntoIterator<Item = &'a Path>,
+    inputs: impl IntoIterator<Item = &'a Path> + Clone,
+) -> Result<()> {
+    for output in outputs {
+        let Ok(out) = std::fs::metadata(output) else { continue };
+        for input in inputs.clone() {
+            if std::fs::metadata(input).is_ok_and(|i| same_file(&i, &out)) {
+                return Err(Error::file(
+                    output,
+                    format!("this output is the input {}; refusing to overwrite it", input.display()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(unix)]
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    (a.dev(), a.ino()) == (b.dev(), b.ino())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("rangesynth-atomic-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_previous_file_and_no_temporary() {
+        let dir = scratch("fail");
+        let path = dir.join("out.txt");
+        std::fs::write(&path, "old").unwrap();
+        let result = write_atomically(&path, |f| {
+            f.write_all(b"partial").unwrap();
+            Err(Error::Scene("failed halfway".into()))
+        });
+        assert!(result.is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "the temporary file was left behind");
+        write_atomically(&path, |f| f.write_all(b"new").map_err(|e| Error::io("x", e))).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+    }
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused_through_a_link() {
+        let dir = scratch("input");
+        let input = dir.join("in.json");
+        std::fs::write(&input, "{}").unwrap();
+        std::os::unix::fs::symlink(&input, dir.join("link.json")).unwrap();
+        let link = dir.join("link.json");
+        let e = refuse_overwriting_inputs([link.as_path()], [input.as_path()]).unwrap_err().to_string();
+        assert!(e.contains("refusing to overwrite"), "{e}");
+        assert!(refuse_overwriting_inputs([dir.join("new.jsonl").as_path()], [input.as_path()]).is_ok());
+    }
+}

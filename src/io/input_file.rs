@@ -1,0 +1,109 @@
+//! Reading an input file without trusting it: only a regular file is read, and never more
+//! than a stated number of bytes.
+//!
+//! A path can name `/dev/zero` (endless), a FIFO (opening it for reading blocks until a writer
+//! comes, forever), a directory or a socket. The file is opened with `O_NONBLOCK`, so opening
+//! a FIFO returns at once, and the *opened* handle is checked to be a regular file, so the
+//! path cannot be swapped between a check and the open. What loading the file will take —
+//! its size times `expansion`, the most its parsed form can grow to — is checked against the
+//! memory budget before a byte is read, and the read itself stops one byte past the size
+//! that passed, so a file that grows meanwhile is refused too.
+
+use crate::error::{Error, Result};
+use crate::limits::{Bytes, MemoryBudget};
+use std::io::Read;
+use std::path::Path;
+
+/// The whole content of the regular file at `path`, refused when loading it (`expansion`
+/// bytes of memory per byte of file) would exceed `budget`. `what` names the file's role in
+/// messages ("model", "sensed image").
+pub fn read_input_file(path: &Path, what: &str, budget: MemoryBudget, expansion: u64) -> Result<Vec<u8>> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = options.open(path).map_err(|e| Error::io(path, e))?;
+    let metadata = file.metadata().map_err(|e| Error::io(path, e))?;
+    if !metadata.is_file() {
+        return Err(Error::file(
+            path,
+            format!("the {what} is not a regular file ({}); only regular files are read", kind_of(&metadata)),
+        ));
+    }
+    let check = |size: u64| {
+        budget.check(
+            format_args!("loading the {what} {} ({})", path.display(), Bytes(size)),
+            size.saturating_mul(expansion.max(1)),
+        )
+    };
+    check(metadata.len())?;
+    let most = budget.bytes() / expansion.max(1);
+    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    file.take(most.saturating_add(1)).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    // Refuses a file that grew past what the budget allows while it was read.
+    check(bytes.len() as u64)?;
+    Ok(bytes)
+}
+
+/// The same as [`read_input_file`], as UTF-8 text.
+pub fn read_input_text(path: &Path, what: &str, budget: MemoryBudget, expansion: u64) -> Result<String> {
+    String::from_utf8(read_input_file(path, what, budget, expansion)?)
+        .map_err(|e| Error::file(path, format!("the {what} is not UTF-8 text ({e})")))
+}
+
+fn kind_of(metadata: &std::fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = metadata.file_type();
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if metadata.is_dir() {
+        "a directory"
+    } else {
+        "not a plain file"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("rangesynth-input-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn devices_directories_and_fifos_are_refused_without_blocking() {
+        let dir = scratch("kinds");
+        let fifo = dir.join("fifo");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        for (path, kind) in [(Path::new("/dev/zero"), "a device"), (dir.as_path(), "a directory"), (&fifo, "a FIFO")]
+        {
+            let e = read_input_file(path, "model", MemoryBudget::default(), 1).unwrap_err().to_string();
+            assert!(e.contains(kind) && e.contains("only regular files"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_file_that_would_not_fit_the_budget_is_refused_before_it_is_read() {
+        let path = scratch("limit").join("big");
+        std::fs::write(&path, vec![b'x'; 1000]).unwrap();
+        assert_eq!(read_input_file(&path, "model", MemoryBudget::new(4000), 4).unwrap().len(), 1000);
+        let e = read_input_file(&path, "model", MemoryBudget::new(2048), 4).unwrap_err().to_string();
+        assert!(e.contains("(1000 bytes) needs about 3.9 KiB, more than the memory budget of 2.0 KiB"), "{e}");
+    }
+}
