@@ -23,5 +23,5 @@ pub fn matrix<'de, D: Deserializer<'de>, const R: usize, const C: usize>(
 
 fn exact<T, E: Error, const N: usize>(values: Vec<T>, what: &str) -> Result<[T; N], E> {
     let len = values.len();
-    values.try_into().map_err(|_| E::custom(format!("{what} of exactly {N} values is expected, not {len}")))
+    values.try_into().map_err(|_| E::custom(format!("{what} must hold exactly {N} values, not {len}")))
 }

@@ -92,6 +92,10 @@ impl StagedSet {
     pub fn commit(self, names: &[&str]) -> Result<Vec<PathBuf>> {
         let lock = File::open(&self.target).map_err(|e| Error::io(&self.target, e))?;
         lock.lock().map_err(|e| Error::io(&self.target, e))?;
+        // A rename onto a directory is the one that can fail here; find it before moving any.
+        if let Some(path) = names.iter().map(|name| self.target.join(name)).find(|p| p.is_dir()) {
+            return Err(Error::file(path, "is a directory; the render's files were not written"));
+        }
         names
             .iter()
             .map(|name| {
