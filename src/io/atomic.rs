@@ -32,9 +32,13 @@ impl PendingFile {
             _ => Path::new("."),
         };
         let name = path.file_name().ok_or_else(|| Error::file(path, "an output must name a file"))?;
-        let temp = tempfile::Builder::new()
-            .prefix(&format!(".{}.", name.to_string_lossy()))
-            .suffix(".tmp")
+        let prefix = format!(".{}.", name.to_string_lossy());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // Like a file created in place (tempfile's default is private, 0600).
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let temp = builder
             .tempfile_in(dir)
             .map_err(|e| Error::io(dir, e))?;
         Ok(Self { temp, path: path.to_path_buf() })
@@ -160,6 +164,15 @@ mod tests {
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "the temporary file was left behind");
         write_atomically(&path, |f| f.write_all(b"new").map_err(|e| Error::io("x", e))).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        // Readable by others, as a file created in place would be (under the usual umask).
+        let mode = std::os::unix::fs::PermissionsExt::mode(&std::fs::metadata(&path).unwrap().permissions());
+        // SAFETY: umask only reads and sets this process's file mode mask; set back at once.
+        let umask = unsafe {
+            let m = libc::umask(0o022);
+            libc::umask(m);
+            m
+        };
+        assert_eq!(mode & 0o777, 0o666 & !umask as u32);
     }
 
     #[test]

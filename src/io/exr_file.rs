@@ -148,6 +148,14 @@ fn check_claimed_sizes(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Resul
         if header.deep {
             return Err(Error::file(path, "holds deep data, which a range image never does"));
         }
+        // A range image samples every channel at every pixel (and a sampling of 0 would
+        // divide by zero in the exr crate's own size arithmetic).
+        if let Some(c) = header.channels.list.iter().find(|c| c.sampling != Vec2(1, 1)) {
+            return Err(Error::file(
+                path,
+                format!("channel {} is subsampled ({:?}); range images sample every pixel", c.name, c.sampling),
+            ));
+        }
         if w > MAX_IMAGE_SIDE as usize || h > MAX_IMAGE_SIDE as usize {
             return Err(Error::file(
                 path,

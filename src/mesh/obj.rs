@@ -10,8 +10,9 @@
 //! Before tobj sees the text, each line loses its comment (`#` to the end of the line, which
 //! tobj would otherwise read as vertex colours), and each group statement is replaced by one
 //! whose name is the statement's number, so tobj's models map back to statements exactly
-//! (tobj drops empty groups and may split one at a `usemtl`). Materials are never read:
-//! nothing uses them, and a `mtllib` can name any file.
+//! (tobj drops empty groups and may split one at a `usemtl`). Materials, texture coordinates
+//! and normals are dropped: nothing uses them, a `mtllib` can name any file, and tobj's
+//! arithmetic on huge texture or normal indices overflows.
 
 use super::{merge_coplanar_surfaces, Mesh};
 use crate::error::{Error, Result};
@@ -81,7 +82,17 @@ fn tag_group_statements(text: &str) -> (String, Vec<Option<String>>) {
                 tagged.push_str(&format!("g {}\n", names.len()));
                 names.push(name);
             }
-            Some("mtllib" | "usemtl") => {}
+            // Nothing uses materials, texture coordinates or normals: dropping them spares
+            // tobj's index arithmetic on them (which overflows on huge indices).
+            Some("mtllib" | "usemtl" | "vt" | "vn") => {}
+            Some("f") => {
+                tagged.push('f');
+                for corner in words.next().unwrap_or("").split_whitespace() {
+                    tagged.push(' ');
+                    tagged.push_str(corner.split('/').next().unwrap_or(""));
+                }
+                tagged.push('\n');
+            }
             _ => {
                 tagged.push_str(line);
                 tagged.push('\n');
