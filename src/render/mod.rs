@@ -33,6 +33,7 @@ use ash::vk;
 use glam::{DMat4, DVec3};
 use pipelines::Pipelines;
 use shadow_pass::{MaskBindings, MaskConstants};
+use std::collections::hash_map::{Entry, HashMap};
 use std::sync::Arc;
 use targets::ViewTargets;
 
@@ -115,11 +116,11 @@ impl Renderer {
         let sensor = &scene.sensor;
         sensor.validate()?;
         let label_bases = scene.label_bases()?;
-        let mut uploaded: Vec<(*const crate::mesh::Mesh, GpuMesh)> = Vec::new();
+        // Each mesh once, however many objects share it (a map: scenes may hold many objects).
+        let mut uploaded: HashMap<*const crate::mesh::Mesh, GpuMesh> = HashMap::new();
         for object in &scene.objects {
-            let key = Arc::as_ptr(&object.mesh);
-            if !uploaded.iter().any(|(k, _)| *k == key) {
-                uploaded.push((key, GpuMesh::upload(&self.ctx, &object.mesh)?));
+            if let Entry::Vacant(slot) = uploaded.entry(Arc::as_ptr(&object.mesh)) {
+                slot.insert(GpuMesh::upload(&self.ctx, &object.mesh)?);
             }
         }
         let draws: Vec<Draw> = scene
@@ -127,7 +128,7 @@ impl Renderer {
             .iter()
             .zip(&label_bases)
             .map(|(object, &label_base)| Draw {
-                mesh: &uploaded.iter().find(|(k, _)| *k == Arc::as_ptr(&object.mesh)).expect("uploaded above").1,
+                mesh: &uploaded[&Arc::as_ptr(&object.mesh)],
                 pose: object.pose,
                 label_base,
             })

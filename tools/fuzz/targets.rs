@@ -35,6 +35,9 @@ pub fn range_exr(data: &[u8]) {
     let _ = parse_range_image(data, Path::new("fuzz.exr"), BUDGET);
 }
 
+/// A target: bytes in, nothing out.
+pub type Target = fn(&[u8]);
+
 /// Every target by name.
-pub const TARGETS: [(&str, fn(&[u8])); 4] =
+pub const TARGETS: [(&str, Target); 4] =
     [("scene_toml", scene_toml), ("hypothesis_json", hypothesis_json), ("obj", obj), ("range_exr", range_exr)];
