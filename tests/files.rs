@@ -5,10 +5,10 @@ mod common;
 
 use common::*;
 use glam::DMat4;
-use rangesynth::limits::MemoryBudget;
 use rangesynth::io::{
     read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage,
 };
+use rangesynth::limits::MemoryBudget;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {

@@ -201,6 +201,10 @@ fn work_beyond_the_memory_budget_is_refused_with_its_figure() {
     let hyps = write_scene(&d, "h.json", &hypotheses(ids(&["a"])).to_string());
     let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--memory-budget", "32K"]);
     refused(&out, "verify", "verifying against a 32×24 image needs about");
+    // Reading the 32×24 image (12 KiB decoded) fits 16 KiB; preparing it (28 bytes a pixel,
+    // 21 KiB) does not.
+    let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--memory-budget", "16K"]);
+    refused(&out, "verify", "preparing the 32×24 sensed image");
 }
 
 // 5. verify's output.
@@ -267,7 +271,8 @@ fn concurrent_renders_into_one_directory_each_leave_a_whole_set() {
     let d = dir("render_concurrent");
     let out = d.join("out");
     let scenes = [(32, 24), (24, 32)].map(|(w, h)| {
-        let sensor = SENSOR.replace("width = 32", &format!("width = {w}")).replace("height = 24", &format!("height = {h}"));
+        let sensor =
+            SENSOR.replace("width = 32", &format!("width = {w}")).replace("height = 24", &format!("height = {h}"));
         write_scene(&d, &format!("{w}x{h}.toml"), &format!("{sensor}[[object]]\nmodel = \"builtin:box\"\n"))
     });
     for round in 0..6 {
@@ -318,7 +323,11 @@ fn a_render_that_fails_partway_leaves_the_previous_set() {
     assert!(before == after, "the failed render replaced some of the previous files");
     // And the scene file is never an output.
     let clash = write_scene(&out, "labels.json", &format!("{SENSOR}[[object]]\nmodel = \"builtin:box\"\n"));
-    refused(&run(&["render", clash.to_str().unwrap(), "--out", out.to_str().unwrap()]), "scene in DIR", "refusing to overwrite");
+    refused(
+        &run(&["render", clash.to_str().unwrap(), "--out", out.to_str().unwrap()]),
+        "scene in DIR",
+        "refusing to overwrite",
+    );
 }
 
 // 7. Silently wrong.
@@ -330,7 +339,11 @@ fn a_sensor_that_disagrees_with_the_sensed_header_is_refused_unless_overridden()
     body["sensor"] = serde_json::json!({"kind": "orthographic", "width": 32, "height": 24, "pitch": [0.2, 0.1],
                                         "origin": [-1.5, 1.1], "theta_deg": 30.0});
     let hyps = write_scene(&d, "h.json", &body.to_string());
-    let e = refused(&verify(&hyps, &exr, &d.join("s.jsonl"), &[]), "pitch mismatch", "pitch = [0.2, 0.1] (header: [0.1, 0.1])");
+    let e = refused(
+        &verify(&hyps, &exr, &d.join("s.jsonl"), &[]),
+        "pitch mismatch",
+        "pitch = [0.2, 0.1] (header: [0.1, 0.1])",
+    );
     assert!(!e.contains("origin"), "{e}");
     let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--override-sensor"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -340,10 +353,18 @@ fn a_sensor_that_disagrees_with_the_sensed_header_is_refused_unless_overridden()
 fn toml_arrays_of_the_wrong_length_are_refused_as_json_refuses_them() {
     let object = format!("[[object]]\nmodel = \"builtin:box\"\npose = {IDENTITY}\n");
     let cases = [
-        ("3-value pitch", SENSOR.replace("pitch = [0.1, 0.1]", "pitch = [0.1, 0.1, 0.1]") + &object, "exactly 2 values"),
+        (
+            "3-value pitch",
+            SENSOR.replace("pitch = [0.1, 0.1]", "pitch = [0.1, 0.1, 0.1]") + &object,
+            "exactly 2 values",
+        ),
         ("1-value origin", SENSOR.replace("origin = [-1.5, 1.1]", "origin = [-1.5]") + &object, "exactly 2 values"),
         ("5-number row", SENSOR.to_string() + &object.replace("[1,0,0,0],", "[1,0,0,0,7],"), "exactly 4 values, not 5"),
-        ("5 rows", SENSOR.to_string() + &object.replace("[0,0,0,1]]", "[0,0,0,1],[0,0,0,1]]"), "exactly 4 values, not 5"),
+        (
+            "5 rows",
+            SENSOR.to_string() + &object.replace("[0,0,0,1]]", "[0,0,0,1],[0,0,0,1]]"),
+            "exactly 4 values, not 5",
+        ),
     ];
     for (what, body, expected) in cases {
         let e = Scene::from_toml(&body, Path::new("."), MemoryBudget::default()).unwrap_err().to_string();

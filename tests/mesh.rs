@@ -88,7 +88,10 @@ fn bad_models_are_refused_with_the_reason() {
     assert!(mesh_error("empty.obj", "# nothing\n").contains("no"));
     assert!(mesh_error("points.obj", "v 0 0 0\nv 1 0 0\n").contains("no"));
     assert!(mesh_error("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").contains("no (non-degenerate) triangles"));
-    assert!(matches!(load_obj(std::path::Path::new("/nonexistent/model.obj"), MemoryBudget::default()), Err(Error::Io { .. })));
+    assert!(matches!(
+        load_obj(std::path::Path::new("/nonexistent/model.obj"), MemoryBudget::default()),
+        Err(Error::Io { .. })
+    ));
     for bad in ["builtin:teapot", "builtin:cylinder:2", "builtin:sphere:x", "builtin:plane:-1", "builtin:box:3"] {
         assert!(matches!(builtin_mesh(bad), Err(Error::Mesh { .. })), "{bad}");
     }

@@ -9,10 +9,10 @@
 use glam::{DMat4, DVec3};
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::RangeImage;
+use rangesynth::limits::MemoryBudget;
 use rangesynth::scene::Scene;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
-use rangesynth::limits::MemoryBudget;
 use rangesynth::Renderer;
 use std::path::Path;
 use std::time::Instant;

@@ -87,10 +87,7 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// The files behind model references (built-ins have none), relative to `base_dir`.
 fn model_files<'a>(references: impl Iterator<Item = &'a str>, base_dir: &Path) -> Result<Vec<PathBuf>> {
-    references
-        .filter(|r| !r.starts_with("builtin:"))
-        .map(|r| Ok(PathBuf::from(model_key(r, base_dir)?)))
-        .collect()
+    references.filter(|r| !r.starts_with("builtin:")).map(|r| Ok(PathBuf::from(model_key(r, base_dir)?))).collect()
 }
 
 /// Tells the user about triangles the model lost (they are dropped, not rendered).

@@ -66,6 +66,12 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
         })?,
     };
     let shadow = file.shadow.or(image.shadow).unwrap_or_default();
+    // The range image as read (X, Y, Z, label) is held while the sensed image is built from it.
+    let pixels = u64::from(image.width) * u64::from(image.height);
+    budget.check(
+        format_args!("preparing the {}×{} sensed image {}", image.width, image.height, args.scene.display()),
+        (16 + SensedImage::HOST_BYTES_PER_PIXEL) * pixels,
+    )?;
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     drop(image);
     let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget));

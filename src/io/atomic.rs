@@ -38,9 +38,7 @@ impl PendingFile {
         // Like a file created in place (tempfile's default is private, 0600).
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-        let temp = builder
-            .tempfile_in(dir)
-            .map_err(|e| Error::io(dir, e))?;
+        let temp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
         Ok(Self { temp, path: path.to_path_buf() })
     }
 
@@ -56,7 +54,11 @@ impl PendingFile {
     /// Syncs the complete file and renames it over `path`.
     pub fn commit(mut self) -> Result<()> {
         let path = self.path;
-        self.temp.as_file_mut().flush().and_then(|()| self.temp.as_file().sync_all()).map_err(|e| Error::io(&path, e))?;
+        self.temp
+            .as_file_mut()
+            .flush()
+            .and_then(|()| self.temp.as_file().sync_all())
+            .map_err(|e| Error::io(&path, e))?;
         self.temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
         Ok(())
     }

@@ -91,8 +91,7 @@ mod tests {
         let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
         // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-        for (path, kind) in [(Path::new("/dev/zero"), "a device"), (dir.as_path(), "a directory"), (&fifo, "a FIFO")]
-        {
+        for (path, kind) in [(Path::new("/dev/zero"), "a device"), (dir.as_path(), "a directory"), (&fifo, "a FIFO")] {
             let e = read_input_file(path, "model", MemoryBudget::default(), 1).unwrap_err().to_string();
             assert!(e.contains(kind) && e.contains("only regular files"), "{e}");
         }

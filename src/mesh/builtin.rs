@@ -59,9 +59,11 @@ impl Builtin {
             "sphere" => Builtin::Sphere(count(32, SPHERE_SEGMENTS)?),
             "plane" => Builtin::Plane(match parameter {
                 None => 4.0,
-                Some(p) => p.parse::<f64>().ok().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| {
-                    invalid(format!("the size `{p}` must be a positive number"))
-                })?,
+                Some(p) => p
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|s| s.is_finite() && *s > 0.0)
+                    .ok_or_else(|| invalid(format!("the size `{p}` must be a positive number")))?,
             }),
             _ => return Err(unknown()),
         })

@@ -26,6 +26,12 @@ pub struct SensedImage {
 }
 
 impl SensedImage {
+    /// Host bytes a sensed image holds per pixel: its segment index and z (8), and the label
+    /// copy sorted while it is built (4).
+    pub const HOST_BYTES_PER_PIXEL: u64 = 12;
+    /// Device bytes per pixel once a verification uploads it: segment index and z.
+    pub const GPU_BYTES_PER_PIXEL: u64 = 8;
+
     /// Checks the image against the sensor it is verified with and computes its statistics.
     pub fn new(image: &RangeImage, sensor: &Sensor) -> Result<Self> {
         sensor.validate()?;

@@ -172,12 +172,13 @@ impl Verifier {
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
         let slots = self.renderer.batch_slot_memory(sensor, settings.shadow, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
-        // The sensed image on the GPU (segment index and z), the slots, and the counts with
-        // their readback.
+        // The sensed image on the host and the GPU, the slots, and the counts with their
+        // readback.
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
+        let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
         self.renderer.memory_budget().check(
             format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
-            8 * pixels + slots + 2 * counts,
+            sensed_bytes + slots + 2 * counts,
         )?;
         Ok(BatchPlan { counts_budget, ..plan })
     }
