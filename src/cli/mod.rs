@@ -10,7 +10,6 @@ use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
-use rangesynth::scene::model_key;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
 
@@ -65,7 +64,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render { scene: path, out } => {
             let scene = Scene::from_file(&path, budget)?;
             let base_dir = path.parent().unwrap_or(Path::new("."));
-            let mut inputs = model_files(scene.objects.iter().map(|o| o.model_ref.as_str()), base_dir)?;
+            let mut inputs = model_files(scene.objects.iter().map(|o| o.model_ref.as_str()), base_dir);
             inputs.push(path);
             (scene, out, inputs)
         }
@@ -86,8 +85,8 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// The files behind model references (built-ins have none), relative to `base_dir`.
-fn model_files<'a>(references: impl Iterator<Item = &'a str>, base_dir: &Path) -> Result<Vec<PathBuf>> {
-    references.filter(|r| !r.starts_with("builtin:")).map(|r| Ok(PathBuf::from(model_key(r, base_dir)?))).collect()
+fn model_files<'a>(references: impl Iterator<Item = &'a str>, base_dir: &Path) -> Vec<PathBuf> {
+    references.filter(|r| !r.starts_with("builtin:")).map(|r| base_dir.join(r)).collect()
 }
 
 /// Tells the user about triangles the model lost (they are dropped, not rendered).
