@@ -2,8 +2,10 @@
 // Writes the surface label (u32 end to end, never through a float) and the view-frame z of
 // the nearest surface, evaluated from the triangle's plane at the exact pixel centre rather
 // than interpolated: interpolation error grows with a facet's slope, the plane does not.
-// The shadow view (SHADOW_VIEW) also writes ∂z/∂column of that plane, which the depth-mode
-// shadow test extrapolates with (src/shadow.rs).
+// The plane's normal is the triangle's unit normal, computed once in f64 on the host
+// (src/render/gpu_mesh.rs): a cross product of a sliver's nearly parallel edges here, in f32,
+// would lose most of its digits. The shadow view (SHADOW_VIEW) also writes ∂z/∂column of
+// that plane, which the depth-mode shadow test extrapolates with (src/shadow.rs).
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 #include "draw.glsl"
@@ -30,7 +32,9 @@ vec3 corner(uint k) {
 void main() {
     label = draw.label_base + Words(draw.surface_ids).word[gl_PrimitiveID];
     vec3 a = corner(0u);
-    vec3 n = cross(corner(1u) - a, corner(2u) - a);
+    Floats normals = Floats(draw.normals);
+    uint t = 3u * uint(gl_PrimitiveID);
+    vec3 n = rotate_to_view(vec3(normals.value[t], normals.value[t + 1u], normals.value[t + 2u]));
     vec2 centre = vec2(draw.grid.x + (gl_FragCoord.x - 0.5) * draw.grid.z,
                        draw.grid.y - (gl_FragCoord.y - 0.5) * draw.grid.w);
     // A fragment exists only where the triangle covers area in xy, so n.z ≠ 0.

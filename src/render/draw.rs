@@ -20,6 +20,7 @@ pub struct DrawConstants {
     positions: [u32; 2],
     indices: [u32; 2],
     surface_ids: [u32; 2],
+    normals: [u32; 2],
     label_base: u32,
     _pad: u32,
 }
@@ -45,6 +46,7 @@ impl DrawConstants {
             positions: draw.mesh.vertices.address_words(),
             indices: draw.mesh.indices.address_words(),
             surface_ids: draw.mesh.surface_ids.address_words(),
+            normals: draw.mesh.normals.address_words(),
             label_base: draw.label_base,
             _pad: 0,
         }

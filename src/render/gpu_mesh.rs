@@ -1,7 +1,11 @@
-//! A mesh uploaded once into device-local memory: vertex positions, triangle indices and
-//! per-triangle surface ids.
-//! The fragment shader reads all three through buffer device addresses, indexed by
-//! gl_PrimitiveID, to label the pixel and evaluate its triangle's plane exactly.
+//! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
+//! per-triangle surface ids and per-triangle unit normals.
+//! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
+//! to label the pixel and evaluate its triangle's plane exactly.
+//!
+//! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
+//! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its
+//! digits (a box cut into aspect-1000 strips showed shadow on a face nothing can shadow).
 
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext};
@@ -13,6 +17,8 @@ pub struct GpuMesh {
     pub(crate) vertices: Buffer,
     pub(crate) indices: Buffer,
     pub(crate) surface_ids: Buffer,
+    /// xyz of each triangle's unit normal (model frame), three floats a triangle.
+    pub(crate) normals: Buffer,
     pub(crate) index_count: u32,
 }
 
@@ -39,7 +45,25 @@ impl GpuMesh {
                 &mesh.triangle_surfaces,
                 &format!("{name} surface ids"),
             )?,
+            normals: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                &unit_normals(mesh),
+                &format!("{name} normals"),
+            )?,
             index_count: indices.len() as u32,
         })
     }
+}
+
+/// Each triangle's unit normal (counter-clockwise winding), from its corners in f64.
+fn unit_normals(mesh: &Mesh) -> Vec<[f32; 3]> {
+    mesh.triangles
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (mesh.vertex(a), mesh.vertex(b), mesh.vertex(c));
+            let n = (b - a).cross(c - a).normalize();
+            [n.x as f32, n.y as f32, n.z as f32]
+        })
+        .collect()
 }

@@ -1,0 +1,104 @@
+//! Hard geometry (issue "Hard geometry stays exact"): cases where rounding, not the model,
+//! used to decide the image. Each is checked against the independent CPU reference
+//! (tests/common/reference.rs) or an exact geometric oracle.
+//!
+//! The oracle for convex bodies: a point on a convex body is lit exactly when its facet faces
+//! the camera (n · d_cam > 0), whatever the tessellation, because nothing else can lie between
+//! it and the camera. So the expected shadowed labels are the reference's hit labels, kept
+//! where the hit surface faces d_cam.
+//!
+//! Allowances, as in tests/conformance.rs: a mismatch is allowed only within one pixel
+//! (8-neighbourhood) of a change of label in the reference's hit labels or in the expected
+//! shadowed labels.
+
+mod common;
+
+use common::compare::{compare_labels, near_label_change};
+use common::reference::reference_render;
+use common::*;
+use glam::{DMat4, DVec3};
+use rangesynth::mesh::Mesh;
+use rangesynth::scene::SceneObject;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::Scene;
+use std::sync::Arc;
+
+/// The unit cube of `builtin:box` with each face cut into `strips` strips along one side, so
+/// every triangle is a sliver of aspect ratio about `strips`. Surfaces are its six faces, in
+/// builtin:box's order; returns the mesh and each face's outward normal.
+fn sliver_box(strips: u32) -> (Mesh, Vec<DVec3>) {
+    let (lo, hi) = (DVec3::new(-0.5, -0.5, 0.0), DVec3::new(0.5, 0.5, 1.0));
+    let corner = |x: usize, y: usize, z: usize| DVec3::new([lo.x, hi.x][x], [lo.y, hi.y][y], [lo.z, hi.z][z]);
+    // Faces as (name, counter-clockwise corners seen from outside, normal).
+    let faces = [
+        ("top", [corner(0, 0, 1), corner(1, 0, 1), corner(1, 1, 1), corner(0, 1, 1)], DVec3::Z),
+        ("bottom", [corner(0, 0, 0), corner(0, 1, 0), corner(1, 1, 0), corner(1, 0, 0)], -DVec3::Z),
+        ("+x", [corner(1, 0, 0), corner(1, 1, 0), corner(1, 1, 1), corner(1, 0, 1)], DVec3::X),
+        ("-x", [corner(0, 0, 0), corner(0, 0, 1), corner(0, 1, 1), corner(0, 1, 0)], -DVec3::X),
+        ("+y", [corner(0, 1, 0), corner(0, 1, 1), corner(1, 1, 1), corner(1, 1, 0)], DVec3::Y),
+        ("-y", [corner(0, 0, 0), corner(1, 0, 0), corner(1, 0, 1), corner(0, 0, 1)], -DVec3::Y),
+    ];
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut surfaces = Vec::new();
+    for (s, (_, [a, b, c, d], _)) in faces.iter().enumerate() {
+        let vertex = |p: DVec3, positions: &mut Vec<[f32; 3]>| {
+            positions.push([p.x as f32, p.y as f32, p.z as f32]);
+            positions.len() as u32 - 1
+        };
+        for k in 0..strips {
+            let t = |k: u32| f64::from(k) / f64::from(strips);
+            let p0 = vertex(a.lerp(*b, t(k)), &mut positions);
+            let p1 = vertex(a.lerp(*b, t(k + 1)), &mut positions);
+            let q1 = vertex(d.lerp(*c, t(k + 1)), &mut positions);
+            let q0 = vertex(d.lerp(*c, t(k)), &mut positions);
+            triangles.extend([[p0, p1, q1], [p0, q1, q0]]);
+            surfaces.extend([s as u32 + 1; 2]);
+        }
+    }
+    let names = faces.iter().map(|f| f.0.to_string()).collect();
+    let mesh =
+        Mesh::new(format!("sliver box ({strips} strips a face)"), positions, triangles, surfaces, names).unwrap();
+    (mesh, faces.iter().map(|f| f.2).collect())
+}
+
+/// Renders one convex mesh in depth mode and checks its shadow against the convex-body
+/// oracle; returns (wrong pixels outside the allowance, pixels of the image).
+fn convex_shadow_errors(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, size: u32, theta: f64) -> usize {
+    let (centre, radius) = mesh.bounding_sphere();
+    let at = pose.transform_point3(centre);
+    let s = centred_sensor(size, size, 2.4 * radius / f64::from(size), [at.x, at.y], theta);
+    let scene = Scene {
+        sensor: s,
+        shadow: ShadowSettings { mode: ShadowMode::Depth },
+        objects: vec![SceneObject { model_ref: name.into(), mesh: Arc::new(mesh), pose }],
+    };
+    let out = render(&scene);
+    let reference = reference_render(&scene);
+    let d_cam = s.camera_direction();
+    let facing: Vec<bool> = normals.iter().map(|n| pose.transform_vector3(*n).dot(d_cam) > 0.0).collect();
+    let expected: Vec<u32> =
+        reference.label.iter().map(|&l| if l != 0 && facing[l as usize - 1] { l } else { 0 }).collect();
+    let (w, h) = (size as usize, size as usize);
+    let hit_edges = near_label_change(&reference.label, w, h);
+    let boundaries = near_label_change(&expected, w, h);
+    let allowed: Vec<bool> = (0..w * h).map(|i| hit_edges[i] || boundaries[i]).collect();
+    let diff = compare_labels(name, w, h, &out.label, &expected, &allowed);
+    eprintln!("{name}: {diff:?}");
+    diff.outside_allowance
+}
+
+/// A rotation about z and a 10° tilt about x, as a recognizer's pose would have.
+fn turned_and_tilted() -> DMat4 {
+    DMat4::from_rotation_x(10f64.to_radians()) * DMat4::from_rotation_z(0.5)
+}
+
+#[test]
+fn sliver_triangles_shadow_like_their_faces() {
+    for strips in [1, 1000] {
+        let (mesh, normals) = sliver_box(strips);
+        let wrong =
+            convex_shadow_errors(&format!("sliver_box_{strips}"), mesh, &normals, turned_and_tilted(), 128, 45.0);
+        assert_eq!(wrong, 0, "{strips} strips a face: {wrong} pixels wrongly shadowed or lit");
+    }
+}
