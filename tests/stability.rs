@@ -102,3 +102,31 @@ fn sliver_triangles_shadow_like_their_faces() {
         assert_eq!(wrong, 0, "{strips} strips a face: {wrong} pixels wrongly shadowed or lit");
     }
 }
+
+/// Renders a scene and checks its shadowed labels against exact shadowing by the reference,
+/// with the conformance suite's allowance (near a change of label in the hit labels or the
+/// expected labels, or near an edge as the camera sees it); returns the wrong pixels outside it.
+fn shadow_errors_against_reference(name: &str, scene: &Scene) -> usize {
+    let out = renderer().render(scene).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_no_validation_messages();
+    let reference = reference_render(scene);
+    let expected = reference.label_shadowed();
+    let (w, h) = (reference.width, reference.height);
+    let hit_edges = near_label_change(&reference.label, w, h);
+    let boundaries = near_label_change(&expected, w, h);
+    let allowed: Vec<bool> =
+        (0..w * h).map(|i| hit_edges[i] || boundaries[i] || reference.near_camera_edge[i]).collect();
+    let diff = compare_labels(name, w, h, &out.label, &expected, &allowed);
+    eprintln!("{name}: {diff:?}");
+    diff.outside_allowance
+}
+
+#[test]
+fn an_object_far_away_in_depth_beside_the_image_does_not_widen_the_shadow_view() {
+    // A box beside the image at z = 1000 can put no point into it; the stepped block in view
+    // is rendered and shadowed exactly as without it.
+    let s = centred_sensor(128, 128, 4.4 / 128.0, [0.0, 0.0], 45.0);
+    let far = DMat4::from_translation(DVec3::new(40.0, 0.0, 1000.0));
+    let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY), ("builtin:box", far)]);
+    assert_eq!(shadow_errors_against_reference("far_box_beside", &sc), 0);
+}

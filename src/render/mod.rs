@@ -47,15 +47,26 @@ pub struct Renderer {
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
 /// `none` or θ = 0, the shadow grid (sensor.rs) for bounding spheres (centre, radius) given in
 /// the range frame.
+///
+/// Only what a view can show sizes it: an object whose footprint misses the range image
+/// cannot put a point into it, so it neither widens the range view's depth range nor the
+/// shadow view's columns (which cover every point the range view can see); and one whose
+/// footprint misses the shadow grid cannot shadow any of those points, so it leaves the
+/// shadow view's depth range alone. Such objects are still drawn, and clipped. A box far away
+/// in depth beside the image therefore no longer makes the shadow view impossibly wide.
 pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f64)], max_side: u32) -> Result<Views> {
-    let z_range = depth_bounds(spheres.iter().copied());
+    let full_range = sensor.range_grid((0.0, 0.0));
+    let seen = |grid: &ViewGrid, (centre, radius): (DVec3, f64)| grid.footprint(centre, radius, 1).is_some();
+    let z_range = depth_bounds(spheres.iter().copied().filter(|&s| seen(&full_range, s)));
     let range = sensor.range_grid(z_range);
     let shadow = match mode.needs_shadow_pass(sensor.theta_deg) {
         false => None,
         true => {
             let to_shadow = sensor.to_shadow_frame();
-            let shadow_z = depth_bounds(spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r)));
-            Some(sensor.shadow_grid(z_range, shadow_z)?)
+            let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
+            let columns = sensor.shadow_grid(z_range, (0.0, 0.0))?;
+            let shadow_z = depth_bounds(in_shadow_frame.filter(|&s| seen(&columns, s)));
+            Some(ViewGrid { z_range: shadow_z, ..columns })
         }
     };
     for grid in std::iter::once(&range).chain(shadow.as_ref()) {
