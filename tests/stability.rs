@@ -130,3 +130,32 @@ fn an_object_far_away_in_depth_beside_the_image_does_not_widen_the_shadow_view()
     let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY), ("builtin:box", far)]);
     assert_eq!(shadow_errors_against_reference("far_box_beside", &sc), 0);
 }
+
+#[test]
+fn depth_mode_is_exact_up_to_the_steepest_theta_and_refuses_beyond() {
+    use rangesynth::sensor::MAX_THETA_DEG;
+    assert_eq!(MAX_THETA_DEG, 89.0);
+    for theta in [85.0, 88.0, 89.0, -89.0] {
+        let s = centred_sensor(256, 256, 4.4 / 256.0, [0.0, 0.0], theta);
+        let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY)]);
+        assert_eq!(shadow_errors_against_reference(&format!("step_{theta}"), &sc), 0, "step at θ = {theta}");
+        let s = centred_sensor(256, 256, 5.0 / 256.0, [0.0, 0.0], theta);
+        let on_table =
+            |x: f64, y: f64, turn: f64| DMat4::from_translation(DVec3::new(x, y, 0.0)) * DMat4::from_rotation_z(turn);
+        let objects = [
+            ("builtin:plane:6", DMat4::IDENTITY),
+            ("builtin:step", on_table(-0.4, 0.6, 0.3)),
+            ("builtin:box", on_table(1.3, -0.9, 0.4)),
+            ("builtin:cylinder:16", on_table(-1.2, -1.1, 0.0)),
+            ("builtin:sphere:24", on_table(0.6, -0.2, 0.0)),
+            ("builtin:box", DMat4::from_translation(DVec3::new(-1.4, 1.3, 0.8)) * turned_and_tilted()),
+        ];
+        let sc = scene(s, ShadowMode::Depth, &objects);
+        assert_eq!(shadow_errors_against_reference(&format!("clutter_{theta}"), &sc), 0, "clutter at θ = {theta}");
+    }
+    // Beyond the limit (where a table clutter at 89.5° had 993 wrong pixels), a clear refusal.
+    for theta in [89.5, 89.99, -89.5] {
+        let e = centred_sensor(8, 8, 0.1, [0.0, 0.0], theta).validate().unwrap_err().to_string();
+        assert!(e.contains("theta_deg") && e.contains("89"), "θ = {theta}: {e}");
+    }
+}
