@@ -145,16 +145,9 @@ fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
 mod tests {
     use super::*;
 
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("rangesynth-atomic-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
     #[test]
     fn a_failed_write_leaves_the_previous_file_and_no_temporary() {
-        let dir = scratch("fail");
+        let dir = crate::io::scratch_dir("atomic-fail");
         let path = dir.join("out.txt");
         std::fs::write(&path, "old").unwrap();
         let result = write_atomically(&path, |f| {
@@ -179,7 +172,7 @@ mod tests {
 
     #[test]
     fn an_output_that_is_an_input_is_refused_through_a_link() {
-        let dir = scratch("input");
+        let dir = crate::io::scratch_dir("atomic-input");
         let input = dir.join("in.json");
         std::fs::write(&input, "{}").unwrap();
         std::os::unix::fs::symlink(&input, dir.join("link.json")).unwrap();

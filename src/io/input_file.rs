@@ -77,16 +77,9 @@ fn kind_of(metadata: &std::fs::Metadata) -> &'static str {
 mod tests {
     use super::*;
 
-    fn scratch(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("rangesynth-input-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
     #[test]
     fn devices_directories_and_fifos_are_refused_without_blocking() {
-        let dir = scratch("kinds");
+        let dir = crate::io::scratch_dir("input-kinds");
         let fifo = dir.join("fifo");
         let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
         // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
@@ -99,7 +92,7 @@ mod tests {
 
     #[test]
     fn a_file_that_would_not_fit_the_budget_is_refused_before_it_is_read() {
-        let path = scratch("limit").join("big");
+        let path = crate::io::scratch_dir("input-limit").join("big");
         std::fs::write(&path, vec![b'x'; 1000]).unwrap();
         assert_eq!(read_input_file(&path, "model", MemoryBudget::new(4000), 4).unwrap().len(), 1000);
         let e = read_input_file(&path, "model", MemoryBudget::new(2048), 4).unwrap_err().to_string();
