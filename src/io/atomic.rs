@@ -47,10 +47,6 @@ impl PendingFile {
         self.temp.as_file_mut()
     }
 
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Syncs the complete file and renames it over `path`.
     pub fn commit(mut self) -> Result<()> {
         let path = self.path;

@@ -1,13 +1,13 @@
 //! Reading an input file without trusting it: only a regular file is read, and never more
-//! than a stated number of bytes.
+//! than the memory budget allows.
 //!
 //! A path can name `/dev/zero` (endless), a FIFO (opening it for reading blocks until a writer
 //! comes, forever), a directory or a socket. The file is opened with `O_NONBLOCK`, so opening
 //! a FIFO returns at once, and the *opened* handle is checked to be a regular file, so the
 //! path cannot be swapped between a check and the open. What loading the file will take —
 //! its size times `expansion`, the most its parsed form can grow to — is checked against the
-//! memory budget before a byte is read, and the read itself stops one byte past the size
-//! that passed, so a file that grows meanwhile is refused too.
+//! memory budget before a byte is read, and the read itself stops one byte past the most the
+//! budget allows, so a file that grows meanwhile is refused too.
 
 use crate::error::{Error, Result};
 use crate::limits::{Bytes, MemoryBudget};

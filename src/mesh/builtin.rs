@@ -23,9 +23,9 @@ pub const BUILTIN_NAMES: &[&str] =
     &["builtin:box", "builtin:step", "builtin:cylinder[:N]", "builtin:sphere[:N]", "builtin:plane[:SIZE]"];
 
 /// Sides of `builtin:cylinder:N`: 4N triangles, at most 16,384.
-pub const CYLINDER_SIDES: std::ops::RangeInclusive<u32> = 3..=4096;
+const CYLINDER_SIDES: std::ops::RangeInclusive<u32> = 3..=4096;
 /// Segments of `builtin:sphere:N`: about N² triangles, at most about a million.
-pub const SPHERE_SEGMENTS: std::ops::RangeInclusive<u32> = 4..=1024;
+const SPHERE_SEGMENTS: std::ops::RangeInclusive<u32> = 4..=1024;
 
 /// A built-in model with its parameter parsed and checked.
 #[derive(Debug, Clone, Copy, PartialEq)]

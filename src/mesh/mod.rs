@@ -12,8 +12,8 @@ mod builtin;
 mod obj;
 mod surfaces;
 
-pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES, CYLINDER_SIDES, SPHERE_SEGMENTS};
-pub use obj::{load_obj, parse_obj, OBJ_EXPANSION};
+pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
+pub use obj::{load_obj, parse_obj};
 pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
 
 use crate::error::{Error, Result};

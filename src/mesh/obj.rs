@@ -22,7 +22,7 @@ use std::path::Path;
 
 /// Bytes of memory loading takes per byte of OBJ text, at most: tobj keeps every face as its
 /// own small vector while parsing (about 100 bytes for an 8-byte `f 1 2 3` line).
-pub const OBJ_EXPANSION: u64 = 16;
+const OBJ_EXPANSION: u64 = 16;
 
 pub fn load_obj(path: &Path, budget: MemoryBudget) -> Result<Mesh> {
     let bytes = read_input_file(path, "model", budget, OBJ_EXPANSION)?;

@@ -151,14 +151,14 @@ impl Verifier {
                 )));
             }
         }
+        let ctx = self.renderer.context();
+        let counts_budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
         let plan = BatchPlan {
             copies: if settings.compare_shadow { 2 } else { 1 },
             segments: sensed.segments.len() as u32,
-            counts_budget: 0,
+            counts_budget,
         };
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
-        let ctx = self.renderer.context();
-        let counts_budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
         if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
             return Err(Error::Scene(format!(
                 "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
@@ -180,7 +180,7 @@ impl Verifier {
             format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
             sensed_bytes + slots + 2 * counts,
         )?;
-        Ok(BatchPlan { counts_budget, ..plan })
+        Ok(plan)
     }
 
     /// Scores every hypothesis against the sensed image, in order. `progress` is told how many
