@@ -1,5 +1,10 @@
-// Push constants of one draw (one posed mesh in one view); must match render::draw::DrawConstants.
-layout(push_constant, std430) uniform Draw {
+// One posed mesh in one view: what the raster shaders get as push constants and what the
+// shadow mask reads back from the draw table (src/render/draw.rs, DrawConstants: 128 bytes,
+// std430 either way). Also the one way any shader reaches a mesh's triangles.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+struct DrawData {
     vec4 view_from_model[3]; // rows of view rotation ∘ pose, composed in f64 on the host
     vec4 grid;               // x0, y0, dx, dy: the view's pixel (0, 0) centre and pitch
     vec2 size;               // width, height in pixels
@@ -9,15 +14,49 @@ layout(push_constant, std430) uniform Draw {
     uvec2 surface_ids;       // its per-triangle surface ids,
     uvec2 normals;           // and its per-triangle unit normals (model frame, f64-derived)
     uint label_base;         // label = label_base + surface id
-} draw;
+    uint draw_index;         // this draw's entry in the draw table (shadow view)
+    uvec2 neighbours;        // device address of the triangles across each triangle's edges
+};
 
-vec3 to_view(vec3 model) {
+// A neighbour entry that links no triangle (mesh::NO_NEIGHBOUR).
+const uint NO_NEIGHBOUR = 0xffffffffu;
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words {
+    uint word[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Floats {
+    float value[];
+};
+
+vec3 to_view(DrawData d, vec3 model) {
     vec4 p = vec4(model, 1.0);
-    return vec3(dot(draw.view_from_model[0], p), dot(draw.view_from_model[1], p), dot(draw.view_from_model[2], p));
+    return vec3(dot(d.view_from_model[0], p), dot(d.view_from_model[1], p), dot(d.view_from_model[2], p));
 }
 
 // The rotation part alone: directions (normals) do not translate.
-vec3 rotate_to_view(vec3 direction) {
-    return vec3(dot(draw.view_from_model[0].xyz, direction), dot(draw.view_from_model[1].xyz, direction),
-                dot(draw.view_from_model[2].xyz, direction));
+vec3 rotate_to_view(DrawData d, vec3 direction) {
+    return vec3(dot(d.view_from_model[0].xyz, direction), dot(d.view_from_model[1].xyz, direction),
+                dot(d.view_from_model[2].xyz, direction));
+}
+
+// Corner k (0, 1, 2) of a triangle, in the view's frame.
+vec3 triangle_corner(DrawData d, uint triangle, uint k) {
+    uint v = Words(d.indices).word[3u * triangle + k];
+    Floats p = Floats(d.positions);
+    return to_view(d, vec3(p.value[3u * v], p.value[3u * v + 1u], p.value[3u * v + 2u]));
+}
+
+// A triangle's unit normal in the view's frame.
+vec3 triangle_normal(DrawData d, uint triangle) {
+    Floats n = Floats(d.normals);
+    return rotate_to_view(d, vec3(n.value[3u * triangle], n.value[3u * triangle + 1u], n.value[3u * triangle + 2u]));
+}
+
+// The triangle across edge k (corners k, k + 1) of a triangle, or NO_NEIGHBOUR.
+uint triangle_neighbour(DrawData d, uint triangle, uint k) {
+    return Words(d.neighbours).word[3u * triangle + k];
+}
+
+uint triangle_label(DrawData d, uint triangle) {
+    return d.label_base + Words(d.surface_ids).word[triangle];
 }

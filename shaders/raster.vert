@@ -3,10 +3,14 @@
 // (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½).
 #include "draw.glsl"
 
+layout(push_constant, std430) uniform Draw {
+    DrawData draw;
+};
+
 layout(location = 0) in vec3 position;
 
 void main() {
-    vec3 v = to_view(position);
+    vec3 v = to_view(draw, position);
     vec2 pixel = vec2((v.x - draw.grid.x) / draw.grid.z, (draw.grid.y - v.y) / draw.grid.w) + 0.5;
     float depth = (draw.z_range.y - v.z) / (draw.z_range.y - draw.z_range.x);
     gl_Position = vec4(2.0 * pixel / draw.size - 1.0, depth, 1.0);

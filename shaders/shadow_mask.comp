@@ -2,14 +2,20 @@
 // Triangulation shadow test (paper Fig. 4; DESIGN.md "The shadow test"; src/shadow.rs).
 // One invocation per range pixel: move its point into the shadow frame with R_y(-theta),
 // find the nearest shadow-buffer pixel and keep or drop the label.
+#include "draw.glsl"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
 layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
-layout(set = 0, binding = 2, r32ui) uniform readonly uimage2D shadow_label;
-layout(set = 0, binding = 3, r32f) uniform readonly image2D shadow_z;
-layout(set = 0, binding = 4, r32f) uniform readonly image2D shadow_slope;
-layout(set = 0, binding = 5, std430) writeonly buffer Masked { uint masked_label[]; };
+layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
+layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
+layout(set = 0, binding = 4, r32ui) uniform readonly uimage2D shadow_label;
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage2D shadow_draw;
+layout(set = 0, binding = 6, r32ui) uniform readonly uimage2D shadow_triangle;
+layout(set = 0, binding = 7, std430) writeonly buffer Masked { uint masked_label[]; };
+// The shadow view's draws, indexed by the draw index the shadow view stored per pixel.
+layout(set = 0, binding = 8, std430) readonly buffer DrawTable { DrawData draws[]; };
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -25,41 +31,160 @@ layout(push_constant, std430) uniform Mask {
 
 const uint MODE_LABEL = 1u;
 
+// Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
+float edge_function(vec2 a, vec2 b, vec2 q) {
+    return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+}
+
+// Distance from q to the segment a–b.
+float segment_distance(vec2 q, vec2 a, vec2 b) {
+    vec2 ab = b - a;
+    float t = clamp(dot(q - a, ab) / max(dot(ab, ab), 1e-30), 0.0, 1.0);
+    return length(q - (a + t * ab));
+}
+
+float l1_length(vec2 v) {
+    return abs(v.x) + abs(v.y);
+}
+
+// Steps a walk over a surface may take before giving up; see walk_to.
+const int MAX_WALK_STEPS = 32;
+// walk_to's answer when it gave up.
+const uint WALK_TOO_LONG = 0xfffffffeu;
+
+// Walks over the surface of draw d, from triangle t across edges toward the point p (shadow
+// frame xy), each step leaving through the edge p lies farthest outside of. Returns the
+// triangle whose projection holds p (edges included, within `tolerance`), NO_NEIGHBOUR where
+// this layer of the surface ends before p — a border, or a fold, where the surface turns away
+// from the camera (its silhouette) — or WALK_TOO_LONG.
+uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
+    for (int step = 0; step < MAX_WALK_STEPS; step++) {
+        vec2 v[3] = vec2[3](triangle_corner(d, t, 0u).xy, triangle_corner(d, t, 1u).xy, triangle_corner(d, t, 2u).xy);
+        float winding = edge_function(v[0], v[1], v[2]) >= 0.0 ? 1.0 : -1.0;
+        uint exit = 3u;
+        float farthest = tolerance;
+        for (uint k = 0u; k < 3u; k++) {
+            vec2 from = v[k], to = v[(k + 1u) % 3u];
+            float outside = -winding * edge_function(from, to, p) / max(length(to - from), 1e-30);
+            if (outside > farthest) {
+                farthest = outside;
+                exit = k;
+            }
+        }
+        if (exit == 3u) {
+            return t;
+        }
+        uint next = triangle_neighbour(d, t, exit);
+        if (next == NO_NEIGHBOUR) {
+            return NO_NEIGHBOUR;
+        }
+        // Across the edge the surface goes on only if the neighbour lies on the other side of
+        // the edge's line; on the same side, it folds back.
+        vec2 from = v[exit], to = v[(exit + 1u) % 3u];
+        float here = edge_function(from, to, v[(exit + 2u) % 3u]);
+        float there = 0.0;
+        for (uint k = 0u; k < 3u; k++) {
+            float f = edge_function(from, to, triangle_corner(d, next, k).xy);
+            there = abs(f) > abs(there) ? f : there;
+        }
+        if (here * there >= 0.0) {
+            return NO_NEIGHBOUR;
+        }
+        t = next;
+    }
+    return WALK_TOO_LONG;
+}
+
+// Whether the surface seen at shadow pixel q hides p' (shadow frame): the triangle over p' on
+// that surface — found by walking from the one the pixel saw, since triangles smaller than a
+// pixel are missing from the shadow buffer — rises above p' by more than the bias (exact ray
+// casting). `own` is the gradient of the surface through p', for the rare walk that gives up:
+// then the plane of the pixel's triangle, extrapolated to p', must rise above it by more than
+// a crease between them could explain (each edge bends a polyhedral surface's gradient by at
+// most their difference, over at most p''s distance from the triangle).
+bool hides(ivec2 q, vec3 ps, vec2 own, float scale, float bias) {
+    DrawData d = draws[imageLoad(shadow_draw, q).r];
+    uint seen = imageLoad(shadow_triangle, q).r;
+    uint t = walk_to(d, seen, ps.xy, m.bias_relative * scale);
+    if (t == NO_NEIGHBOUR) {
+        return false;
+    }
+    float beyond = 0.0; // how far the plane is extrapolated beyond its triangle
+    if (t == WALK_TOO_LONG) {
+        t = seen;
+        vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
+        beyond = min(segment_distance(ps.xy, a, b), min(segment_distance(ps.xy, b, c), segment_distance(ps.xy, c, a)));
+    }
+    vec3 n = triangle_normal(d, t);
+    if (n.z == 0.0) {
+        return false; // seen edge-on: it covers no area
+    }
+    vec3 a = triangle_corner(d, t, 0u);
+    vec2 gradient = -n.xy / n.z;
+    float rise = a.z + dot(gradient, ps.xy - a.xy) - ps.z;
+    // The plane's f32 evaluation errs in proportion to its steepness.
+    return rise > bias + m.bias_relative * scale * l1_length(gradient) + l1_length(gradient - own) * beyond;
+}
+
 bool shadowed(ivec2 pixel, uint label) {
     float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
     float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
     float z = imageLoad(range_z, pixel).r;
     // p' = R_y(-theta) p
-    float xs = m.cos_theta * x - m.sin_theta * z;
-    float zs = m.sin_theta * x + m.cos_theta * z;
-    float column = (xs - m.shadow_grid.x) / m.shadow_grid.z;
+    vec3 ps = vec3(m.cos_theta * x - m.sin_theta * z, y, m.sin_theta * x + m.cos_theta * z);
+    float column = (ps.x - m.shadow_grid.x) / m.shadow_grid.z;
     float row = (m.shadow_grid.y - y) / m.shadow_grid.w;
     ivec2 s = ivec2(floor(column + 0.5), floor(row + 0.5));
     // The shadow grid covers every point the range view can see (sensor.rs); a point
     // outside it can only come from rounding at its border and is treated as lit.
-    if (any(lessThan(s, ivec2(0))) || any(greaterThanEqual(s, m.sizes.zw))) {
-        return false;
-    }
-    uint occluder = imageLoad(shadow_label, s).r;
+    bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
     if (m.mode == MODE_LABEL) {
-        return occluder != label;
+        return in_grid && imageLoad(shadow_label, s).r != label;
     }
-    if (occluder == 0u) {
+    // Depth mode. The camera sees the side of a surface the projector lights only when that
+    // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).
+    vec2 gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
+    float facing = m.cos_theta - m.sin_theta * gradient.x;
+    float scale = max(max(abs(ps.x), abs(ps.y)), max(abs(ps.z), abs(z)));
+    // z came from a plane evaluated in f32, which errs in proportion to its steepness.
+    float steepness = 1.0 + l1_length(gradient);
+    float bias = m.bias_pitch + m.bias_relative * scale * (1.0 + steepness);
+    // The gradient came from an f32 normal; its error grows with the square of steepness.
+    if (facing <= m.bias_relative * steepness * steepness) {
+        return true;
+    }
+    // The same plane in the shadow frame: n = R_y(−θ)(−∂z/∂x, −∂z/∂y, 1), whose z is `facing`.
+    vec2 own = vec2(m.cos_theta * gradient.x + m.sin_theta, gradient.y) / facing;
+    if (!in_grid) {
         return false;
     }
-    // The surface seen at shadow pixel s, its plane carried along the row to the point's
-    // exact column; exact when that facet reaches the point. A crease between s and its
-    // neighbour toward the point can move the surface by at most the change of slope times
-    // the offset, so that much is allowed (src/shadow.rs).
-    float offset = column - float(s.x);
-    float slope = imageLoad(shadow_slope, s).r;
-    float front_z = imageLoad(shadow_z, s).r + slope * offset;
-    float bias = m.bias_pitch + m.bias_relative * max(max(abs(zs), abs(front_z)), max(abs(xs), abs(y)));
-    ivec2 toward = ivec2(s.x + (offset >= 0.0 ? 1 : -1), s.y);
-    if (toward.x >= 0 && toward.x < m.sizes.z && imageLoad(shadow_label, toward).r != 0u) {
-        bias += abs(slope - imageLoad(shadow_slope, toward).r) * abs(offset);
+    // Then whatever lies between the point and the camera: the surfaces seen at the shadow
+    // pixels around p', each once. Exact wherever the occluder over p' is seen at one of those
+    // nine pixel centres, or is joined by its edges to a triangle that is.
+    uvec2 tried[9];
+    int count = 0;
+    for (int dy = -1; dy <= 1; dy++) {
+        for (int dx = -1; dx <= 1; dx++) {
+            ivec2 q = s + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))
+                || imageLoad(shadow_label, q).r == 0u) {
+                continue;
+            }
+            uvec2 seen = uvec2(imageLoad(shadow_draw, q).r, imageLoad(shadow_triangle, q).r);
+            bool again = false;
+            for (int i = 0; i < count; i++) {
+                again = again || tried[i] == seen;
+            }
+            if (again) {
+                continue;
+            }
+            tried[count++] = seen;
+            if (hides(q, ps, own, scale, bias)) {
+                return true;
+            }
+        }
     }
-    return front_z - zs > bias;
+    return false;
 }
 
 void main() {
@@ -69,5 +194,7 @@ void main() {
     ivec2 pixel = m.region.xy + ivec2(gl_GlobalInvocationID.xy);
     uint label = imageLoad(range_label, pixel).r;
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
+
+
     masked_label[index] = (label != 0u && shadowed(pixel, label)) ? 0u : label;
 }

@@ -4,12 +4,25 @@
 //!   p' = R_y(−θ)·p, and the label at the nearest shadow-buffer pixel is compared with the
 //!   pixel's own; a difference means shadow. It leaves a rim of false "missing" pixels along
 //!   surface edges and cannot see a curved surface shadow itself (the paper says so).
-//! - `depth`: the shadow buffer's depth at that pixel is compared with p'.z. The buffer holds
-//!   the nearest surface's depth at the shadow pixel's centre, up to half a pixel from p';
-//!   over that offset a visible surface's depth changes by at most |∂z'/∂col| · offset, so
-//!   the bias is that slope (the larger of the hit shadow pixel's and its neighbour's toward
-//!   p', from the rasterizer's derivative) times the offset, plus [`DEPTH_BIAS_PIXELS`] of a
-//!   pixel pitch and a few f32 ulps of the depth. Catches self-shadowing within one surface.
+//! - `depth`: exact ray casting from the point toward the camera, as far as the two views can
+//!   tell. The point is in shadow when
+//!   1. the side of its surface that the projector lights turns away from the camera,
+//!      n · d_cam ≤ 0 with n = (−∂z/∂x, −∂z/∂y, 1) from the range view's plane gradient (a
+//!      surface seen from behind, or exactly edge-on, is not measured, however thin), or
+//!   2. a surface lies above p' on the camera ray through it. The shadow view is a visibility
+//!      buffer (which triangle of which draw is nearest at each pixel); for each surface seen
+//!      at the 3×3 shadow pixels around p', the test walks over that surface's edges (its
+//!      triangle neighbours, `Mesh::triangle_neighbours`) from the triangle the pixel saw to
+//!      the one over p', stopping where the surface ends or folds away (a silhouette), and
+//!      compares that triangle's plane at p' with p'.z. Triangles much smaller than a pixel,
+//!      missing from the buffer, are found this way.
+//!
+//!   Exact, up to the bias, wherever the occluder over p' is seen at one of those nine pixel
+//!   centres or joined by edges to a triangle that is: only an occluder thinner than a pixel
+//!   and seen nowhere near p' escapes. The bias is [`DEPTH_BIAS_PIXELS`] of a pixel pitch plus
+//!   f32 rounding ([`DEPTH_BIAS_RELATIVE`] of the coordinates, scaled by how steep the planes
+//!   are). A walk is at most 32 steps; one that gives up falls back on the seen triangle's
+//!   plane, extrapolated to p', with an allowance for the creases in between.
 //! - `none`: no shadow pass at all.
 
 use serde::{Deserialize, Serialize};

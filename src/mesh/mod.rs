@@ -8,10 +8,12 @@
 //! cannot be rendered (non-finite coordinates, indices out of range, no triangles) and drops
 //! degenerate triangles, counting them so callers can warn.
 
+mod adjacency;
 mod builtin;
 mod obj;
 mod surfaces;
 
+pub use adjacency::NO_NEIGHBOUR;
 pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
 pub use obj::{load_obj, parse_obj};
 pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};

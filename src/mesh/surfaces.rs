@@ -7,6 +7,7 @@
 //! within [`COPLANAR_DISTANCE_TOLERANCE`] × the model's bounding radius of the other's plane.
 //! Vertices are welded by exact position first, since OBJ files often repeat a corner per face.
 
+use super::adjacency::weld_vertices;
 use super::Mesh;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -62,15 +63,6 @@ pub fn merge_coplanar_surfaces(mut mesh: Mesh) -> Mesh {
         .collect();
     mesh.surface_names = (1..=surface_of_root.len()).map(|i| format!("face{i}")).collect();
     mesh
-}
-
-fn weld_vertices(positions: &[[f32; 3]]) -> Vec<u32> {
-    let mut first: HashMap<[u32; 3], u32> = HashMap::new();
-    positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| *first.entry(p.map(|c| (c + 0.0).to_bits())).or_insert(i as u32))
-        .collect()
 }
 
 fn coplanar(mesh: &Mesh, normals: &[DVec3], a: usize, b: usize, max_distance: f64) -> bool {

@@ -10,11 +10,11 @@
 //! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
 //! device-local buffer, zeroed first, copied to host memory at the end.
 
-use super::draw::{record_view, Draw, ViewPass};
+use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::gpu_mesh::GpuMesh;
 use super::score_pass::{ScoreBindings, ScoreConstants};
 use super::shadow_pass::{MaskBindings, MaskConstants};
-use super::targets::ViewTargets;
+use super::targets::{ViewKind, ViewTargets};
 use super::{plan_views, Renderer, Views};
 use crate::error::Result;
 use crate::gpu::{address_words, barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
@@ -26,7 +26,7 @@ use glam::DMat4;
 /// Render-target slots in flight within one submission.
 pub const SLOTS: usize = 4;
 /// Pixels added around a footprint: one for rounding, one more in the shadow view for the
-/// depth test's neighbour (shaders/shadow_mask.comp).
+/// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
 const FOOTPRINT_MARGIN: u32 = 2;
 
 /// The sensed image as the score pass reads it, uploaded once per batch.
@@ -59,6 +59,12 @@ pub struct BatchItem<'a> {
     pub unshadowed_offset: Option<usize>,
 }
 
+impl BatchItem<'_> {
+    fn draw(&self) -> Draw<'_> {
+        Draw { mesh: self.mesh, pose: self.pose, label_base: 0 }
+    }
+}
+
 struct Slot {
     range: ViewTargets,
     shadow: Option<ViewTargets>,
@@ -69,8 +75,9 @@ struct Slot {
 
 impl Renderer {
     /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
-    /// counts: its slots, each a range view (label, z, depth, shadowed labels: 16 bytes a
-    /// pixel) and a shadow view as wide as the widest hypothesis needs (16 bytes a pixel).
+    /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
+    /// bytes a pixel) and a shadow view as wide as the widest hypothesis needs (16 bytes a
+    /// pixel).
     /// Fails as a batch would on a hypothesis whose views cannot be planned.
     pub(crate) fn batch_slot_memory(
         &self,
@@ -86,7 +93,9 @@ impl Renderer {
             shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
         }
         let rows = u64::from(sensor.height);
-        let per_slot = 16 * rows * (u64::from(sensor.width) + u64::from(shadow_width));
+        let range_pixel = ViewKind::Range.bytes_per_pixel() + 4;
+        let per_slot = rows
+            * (range_pixel * u64::from(sensor.width) + ViewKind::Shadow.bytes_per_pixel() * u64::from(shadow_width));
         Ok(per_slot * SLOTS.min(hypotheses) as u64)
     }
 
@@ -111,11 +120,26 @@ impl Renderer {
             .collect::<Result<_>>()?;
         let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
         let (w, h) = (sensor.width, sensor.height);
+        let to_shadow = sensor.to_shadow_frame();
+        // Hypothesis i is draw i of the shadow view.
+        let draw_table = match shadow_width {
+            Some(_) => {
+                let entries: Vec<_> = (0..)
+                    .zip(items.iter().zip(&views))
+                    .filter_map(|(i, (item, views))| {
+                        let grid = views.shadow.as_ref()?;
+                        Some(DrawConstants::new(grid, to_shadow, &item.draw(), i))
+                    })
+                    .collect();
+                Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
+            }
+            None => None,
+        };
         let slots: Vec<Slot> = (0..SLOTS.min(items.len()))
             .map(|i| {
-                let range = ViewTargets::new(ctx, w, h, false, &format!("slot {i} range view"))?;
+                let range = ViewTargets::new(ctx, ViewKind::Range, w, h, &format!("slot {i} range view"))?;
                 let shadow = match shadow_width {
-                    Some(sw) => Some(ViewTargets::new(ctx, sw, h, true, &format!("slot {i} shadow view"))?),
+                    Some(sw) => Some(ViewTargets::new(ctx, ViewKind::Shadow, sw, h, &format!("slot {i} shadow view"))?),
                     None => None,
                 };
                 let masked = match &shadow {
@@ -126,8 +150,8 @@ impl Renderer {
                     )?),
                     None => None,
                 };
-                let mask_bindings = match (&shadow, &masked) {
-                    (Some(s), Some(m)) => Some(MaskBindings::new(ctx, p, &range, s, m)?),
+                let mask_bindings = match (&shadow, &masked, &draw_table) {
+                    (Some(s), Some(m), Some(t)) => Some(MaskBindings::new(ctx, p, &range, s, m, t)?),
                     _ => None,
                 };
                 let score_bindings = ScoreBindings::new(ctx, p, &range)?;
@@ -138,7 +162,6 @@ impl Renderer {
         let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
         let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
         let counts_address = counts.device_address();
-        let to_shadow = sensor.to_shadow_frame();
 
         ctx.submit_and_wait("verification batch", |cmd| {
             // SAFETY: cmd is recording; the buffer is not in use.
@@ -150,7 +173,7 @@ impl Renderer {
                 &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }],
             );
             let mut recorded = 0;
-            for (item, views) in items.iter().zip(&views) {
+            for (index, (item, views)) in (0..).zip(items.iter().zip(&views)) {
                 let (centre, radius) = item.sphere;
                 let centre = item.pose.transform_point3(centre);
                 let Some(area) = views.range.footprint(centre, radius, FOOTPRINT_MARGIN) else { continue };
@@ -178,7 +201,7 @@ impl Renderer {
                     });
                 }
                 barrier(ctx, cmd, &prepare, &[]);
-                let draw = [Draw { mesh: item.mesh, pose: item.pose, label_base: 0 }];
+                let draw = [item.draw()];
                 let range_pass = ViewPass {
                     pipeline: p.range,
                     layout: p.raster_layout,
@@ -187,7 +210,7 @@ impl Renderer {
                     view_from_range: DMat4::IDENTITY,
                     area,
                 };
-                record_view(ctx, cmd, &range_pass, &draw);
+                record_view(ctx, cmd, &range_pass, &draw, index);
                 let mut reads = slot.range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 let shadowed_labels =
                     match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
@@ -200,7 +223,7 @@ impl Renderer {
                                 view_from_range: to_shadow,
                                 area: shadow_area,
                             };
-                            record_view(ctx, cmd, &shadow_pass, &draw);
+                            record_view(ctx, cmd, &shadow_pass, &draw, index);
                             reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
                             let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
                             barrier(

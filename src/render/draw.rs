@@ -1,6 +1,6 @@
-//! One rasterization pass of posed meshes into a view's label, z (and slope) attachments.
-//! The range view and the shadow view differ only in their grid, their view rotation and
-//! their pipeline.
+//! One rasterization pass of posed meshes into a view's attachments (targets.rs). The range
+//! view and the shadow view differ only in their grid, their view rotation, their pipeline
+//! and what the fragment shader writes.
 
 use super::gpu_mesh::GpuMesh;
 use super::targets::ViewTargets;
@@ -9,7 +9,9 @@ use crate::sensor::{PixelRect, ViewGrid};
 use ash::vk;
 use glam::DMat4;
 
-/// Push constants of one draw; matches `shaders/draw.glsl`.
+/// One draw as the shaders see it (`DrawData` in `shaders/draw.glsl`, std430): the raster
+/// shaders' push constants, and an entry of the shadow view's draw table, which the shadow
+/// mask reads to reach the triangles the shadow view stored per pixel.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DrawConstants {
@@ -22,8 +24,12 @@ pub struct DrawConstants {
     surface_ids: [u32; 2],
     normals: [u32; 2],
     label_base: u32,
-    _pad: u32,
+    draw_index: u32,
+    neighbours: [u32; 2],
 }
+
+// The struct's std430 size; also the push-constant size every Vulkan device supports.
+const _: () = assert!(size_of::<DrawConstants>() == 128);
 
 /// One posed mesh in a view.
 pub struct Draw<'a> {
@@ -34,8 +40,9 @@ pub struct Draw<'a> {
 }
 
 impl DrawConstants {
-    /// Composes view rotation ∘ pose in f64 and rounds once to f32.
-    pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw) -> Self {
+    /// Composes view rotation ∘ pose in f64 and rounds once to f32. `draw_index` is the
+    /// draw's entry in the draw table.
+    pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw, draw_index: u32) -> Self {
         let view_from_model = view_from_range * draw.pose;
         let row = |i| view_from_model.row(i).as_vec4().to_array();
         Self {
@@ -48,7 +55,8 @@ impl DrawConstants {
             surface_ids: draw.mesh.surface_ids.address_words(),
             normals: draw.mesh.normals.address_words(),
             label_base: draw.label_base,
-            _pad: 0,
+            draw_index,
+            neighbours: draw.mesh.neighbours.address_words(),
         }
     }
 }
@@ -66,9 +74,9 @@ pub struct ViewPass<'a> {
     pub area: PixelRect,
 }
 
-/// Records a view pass: clears (label 0, z 0, depth 1) then draws every mesh. The caller has
-/// moved the attachments to their attachment layouts.
-pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw]) {
+/// Records a view pass: clears (colour 0, depth 1) then draws every mesh, numbering the draws
+/// from `first_draw_index`. The caller has moved the attachments to their attachment layouts.
+pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw], first_draw_index: u32) {
     let d = &ctx.device;
     let targets = pass.targets;
     // The attachments may be larger than the grid (batch slots fit their largest view).
@@ -78,20 +86,20 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
         offset: vk::Offset2D { x: a.col as i32, y: a.row as i32 },
         extent: vk::Extent2D { width: a.width, height: a.height },
     };
-    let colour = |view, clear| {
-        vk::RenderingAttachmentInfo::default()
-            .image_view(view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(clear)
-    };
-    let zero_u = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
-    let zero_f = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
-    let mut attachments = vec![colour(targets.label.view, zero_u), colour(targets.z.view, zero_f)];
-    if let Some(slope) = &targets.slope {
-        attachments.push(colour(slope.view, zero_f));
-    }
+    // All-zero bits: 0 as an integer and 0.0 as a float.
+    let zero = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
+    let attachments: Vec<_> = targets
+        .colour
+        .iter()
+        .map(|image| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(image.view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(zero)
+        })
+        .collect();
     let depth = vk::RenderingAttachmentInfo::default()
         .image_view(targets.depth.view)
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -117,8 +125,8 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
         d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipeline);
         d.cmd_set_viewport(cmd, 0, &[viewport]);
         d.cmd_set_scissor(cmd, 0, &[area]);
-        for draw in draws {
-            let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw);
+        for (index, draw) in (first_draw_index..).zip(draws) {
+            let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw, index);
             d.cmd_push_constants(
                 cmd,
                 pass.layout,

@@ -1,5 +1,5 @@
 //! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
-//! per-triangle surface ids and per-triangle unit normals.
+//! per-triangle surface ids, unit normals and neighbours.
 //! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
 //! to label the pixel and evaluate its triangle's plane exactly.
 //!
@@ -19,6 +19,8 @@ pub struct GpuMesh {
     pub(crate) surface_ids: Buffer,
     /// xyz of each triangle's unit normal (model frame), three floats a triangle.
     pub(crate) normals: Buffer,
+    /// The triangles across each triangle's three edges (`Mesh::triangle_neighbours`).
+    pub(crate) neighbours: Buffer,
     pub(crate) index_count: u32,
 }
 
@@ -50,6 +52,12 @@ impl GpuMesh {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 &unit_normals(mesh),
                 &format!("{name} normals"),
+            )?,
+            neighbours: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                &mesh.triangle_neighbours(),
+                &format!("{name} triangle neighbours"),
             )?,
             index_count: indices.len() as u32,
         })

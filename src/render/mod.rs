@@ -17,7 +17,7 @@ mod targets;
 
 pub(crate) use batch::{BatchItem, BatchSettings, SensedBuffers};
 pub use draw::Draw;
-use draw::ViewPass;
+use draw::{DrawConstants, ViewPass};
 pub use gpu_mesh::GpuMesh;
 pub use output::{PassTimings, RenderOutput};
 
@@ -35,7 +35,7 @@ use pipelines::Pipelines;
 use shadow_pass::{MaskBindings, MaskConstants};
 use std::collections::hash_map::{Entry, HashMap};
 use std::sync::Arc;
-use targets::ViewTargets;
+use targets::{ViewKind, ViewTargets};
 
 pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
@@ -81,15 +81,16 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 }
 
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
-/// larger of the two). Rendering: per range pixel the label, z and depth attachments and
-/// three readback buffers (24 bytes) and the returned label, unshadowed label and z (12);
-/// per shadow pixel its four attachments (16). Writing: the returned image (12), the range
-/// image's X, Y, Z and label (16) and the EXR encoder's copy of them (16), and the previews
-/// (4). Measured: a 16384² render peaked at 47 bytes per pixel.
+/// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
+/// readback buffers (12) and the returned label, unshadowed label and z (12); per shadow pixel
+/// its four attachments (16). Writing: the returned image (12), the range image's X, Y, Z and
+/// label (16) and the EXR encoder's copy of them (16), and the previews (4). Measured before
+/// the range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
 fn render_memory(views: &Views) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
-    (36 * range + 16 * shadow).max(48 * range)
+    let rendering = (ViewKind::Range.bytes_per_pixel() + 24) * range + ViewKind::Shadow.bytes_per_pixel() * shadow;
+    rendering.max(48 * range)
 }
 
 /// The two views of one render, with the grids they were rendered on.
@@ -166,23 +167,31 @@ impl Renderer {
         let p = &self.pipelines;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
-        let range = ViewTargets::new(ctx, w, h, false, "range view")?;
+        let range = ViewTargets::new(ctx, ViewKind::Range, w, h, "range view")?;
         let shadow = match &views.shadow {
-            Some(g) => Some(ViewTargets::new(ctx, g.width, g.height, true, "shadow view")?),
+            Some(g) => Some(ViewTargets::new(ctx, ViewKind::Shadow, g.width, g.height, "shadow view")?),
             None => None,
         };
+        let to_shadow = scene.sensor.to_shadow_frame();
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let masked = match &shadow {
             Some(_) => Some(Buffer::new(ctx, BufferDesc::readback(pixels * 4), "shadowed labels")?),
             None => None,
         };
-        let bindings = match (&shadow, &masked) {
-            (Some(s), Some(m)) => Some(MaskBindings::new(ctx, p, &range, s, m)?),
+        let draw_table = match &views.shadow {
+            Some(grid) => {
+                let entries: Vec<_> =
+                    (0..).zip(draws).map(|(i, draw)| DrawConstants::new(grid, to_shadow, draw, i)).collect();
+                Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
+            }
+            None => None,
+        };
+        let bindings = match (&shadow, &masked, &draw_table) {
+            (Some(s), Some(m), Some(t)) => Some(MaskBindings::new(ctx, p, &range, s, m, t)?),
             _ => None,
         };
         let timestamps = Timestamps::new(ctx, 4, "pass timestamps")?;
-        let to_shadow = scene.sensor.to_shadow_frame();
 
         ctx.submit_and_wait("render", |cmd| {
             timestamps.reset(cmd);
@@ -200,7 +209,7 @@ impl Renderer {
                 view_from_range: DMat4::IDENTITY,
                 area: views.range.full(),
             };
-            draw::record_view(ctx, cmd, &range_pass, draws);
+            draw::record_view(ctx, cmd, &range_pass, draws, 0);
             timestamps.write(cmd, 1);
             let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
             if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
@@ -212,7 +221,7 @@ impl Renderer {
                     view_from_range: to_shadow,
                     area: grid.full(),
                 };
-                draw::record_view(ctx, cmd, &shadow_pass, draws);
+                draw::record_view(ctx, cmd, &shadow_pass, draws, 0);
                 timestamps.write(cmd, 2);
                 let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
                 reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
@@ -242,14 +251,14 @@ impl Renderer {
             unsafe {
                 d.cmd_copy_image_to_buffer(
                     cmd,
-                    range.label.raw,
+                    range.label().raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     label_readback.raw,
                     &region,
                 );
                 d.cmd_copy_image_to_buffer(
                     cmd,
-                    range.z.raw,
+                    range.z().raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     z_readback.raw,
                     &region,

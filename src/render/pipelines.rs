@@ -1,10 +1,11 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
-//! rasterization pipelines (dynamic rendering into label, z and depth attachments), the
+//! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs), the
 //! shadow-mask compute pipeline and the verification-count compute pipeline.
 
 use super::draw::DrawConstants;
 use super::score_pass::ScoreConstants;
-use super::shadow_pass::MaskConstants;
+use super::shadow_pass::{MaskBindings, MaskConstants};
+use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{GpuContext, DEPTH_FORMAT};
@@ -54,19 +55,13 @@ impl Pipelines {
         let vert = ShaderModule::new(ctx, shaders::RASTER_VERT, "raster.vert")?;
         let range_frag = ShaderModule::new(ctx, shaders::RASTER_RANGE_FRAG, "raster.frag (range view)")?;
         let shadow_frag = ShaderModule::new(ctx, shaders::RASTER_SHADOW_FRAG, "raster.frag (shadow view)")?;
-        p.range =
-            raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &[LABEL_FORMAT, VALUE_FORMAT], "range view")?;
-        p.shadow = raster_pipeline(
-            ctx,
-            p.raster_layout,
-            &vert,
-            &shadow_frag,
-            &[LABEL_FORMAT, VALUE_FORMAT, VALUE_FORMAT],
-            "shadow view",
-        )?;
+        let formats = |kind: ViewKind| kind.colour_formats();
+        p.range = raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &formats(ViewKind::Range), "range view")?;
+        p.shadow =
+            raster_pipeline(ctx, p.raster_layout, &vert, &shadow_frag, &formats(ViewKind::Shadow), "shadow view")?;
 
-        let mask_bindings: Vec<_> = (0..6)
-            .map(|b| if b < 5 { vk::DescriptorType::STORAGE_IMAGE } else { vk::DescriptorType::STORAGE_BUFFER })
+        let mask_bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, MaskBindings::IMAGES)
+            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, MaskBindings::BUFFERS))
             .collect();
         (p.mask_set_layout, p.mask_layout, p.mask) = compute_pipeline(
             ctx,

@@ -36,7 +36,7 @@ pub struct ScoreBindings {
 impl ScoreBindings {
     pub fn new(ctx: &Arc<GpuContext>, pipelines: &Pipelines, range: &ViewTargets) -> Result<Self> {
         Ok(Self {
-            set: StorageSet::new(ctx, pipelines.score_set_layout, &[&range.label, &range.z], &[], "score bindings")?,
+            set: StorageSet::new(ctx, pipelines.score_set_layout, &[range.label(), range.z()], &[], "score bindings")?,
         })
     }
 

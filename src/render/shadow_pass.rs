@@ -2,9 +2,9 @@
 //! to the range view, reading both views' attachments and writing the shadowed labels.
 
 use super::pipelines::Pipelines;
-use super::targets::ViewTargets;
+use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
-use crate::gpu::{Buffer, GpuContext, StorageSet};
+use crate::gpu::{Buffer, GpuContext, Image, StorageSet};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
@@ -45,22 +45,32 @@ impl MaskConstants {
     }
 }
 
-/// The descriptor set binding both views' attachments and the output labels.
+/// The descriptor set binding both views' colour attachments (range view's, then shadow
+/// view's), the output labels and the shadow view's draw table.
 pub struct MaskBindings {
     set: StorageSet,
 }
 
 impl MaskBindings {
+    /// Storage images the mask pass binds, from binding 0.
+    pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
+    /// Storage buffers bound after them: the shadowed labels and the draw table.
+    pub const BUFFERS: usize = 2;
+
+    /// `draw_table` holds the shadow pass's [`DrawConstants`](super::draw::DrawConstants)
+    /// at the draw indices it recorded.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &Pipelines,
         range: &ViewTargets,
         shadow: &ViewTargets,
         masked: &Buffer,
+        draw_table: &Buffer,
     ) -> Result<Self> {
-        let slope = shadow.slope.as_ref().unwrap_or(&shadow.z);
-        let images = [&range.label, &range.z, &shadow.label, &shadow.z, slope];
-        Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &[masked], "shadow mask bindings")? })
+        let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
+        debug_assert_eq!(images.len(), Self::IMAGES);
+        let buffers = [masked, draw_table];
+        Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &buffers, "shadow mask bindings")? })
     }
 
     /// Records the pass over the constants' region (8×8 workgroups).

@@ -1,5 +1,10 @@
-//! The attachments of one view: label (R32_UINT), linear z (R32_SFLOAT), a depth buffer
-//! that resolves visibility, and for the shadow view the depth slope per column.
+//! The attachments of one view: its colour attachments, in the fragment shader's output
+//! order (shaders/raster.frag), and a depth buffer that resolves visibility.
+//!
+//! - Range view: label, z, ∂z/∂x, ∂z/∂y — the surface, its point and its plane's gradient,
+//!   which the depth-mode shadow test needs to know which way the surface faces.
+//! - Shadow view: label, draw index, triangle — a visibility buffer: which triangle of which
+//!   draw is nearest, so the depth-mode test can intersect the camera ray with it exactly.
 
 use super::pipelines::{LABEL_FORMAT, VALUE_FORMAT};
 use crate::error::Result;
@@ -7,34 +12,63 @@ use crate::gpu::{Access, GpuContext, Image, ImageDesc, ImageTransition};
 use ash::vk;
 use std::sync::Arc;
 
+/// Which of the two views; fixes its colour attachments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViewKind {
+    Range,
+    Shadow,
+}
+
+impl ViewKind {
+    /// (format, name) of each colour attachment, at fragment output locations 0, 1, …
+    pub const fn colour_attachments(self) -> &'static [(vk::Format, &'static str)] {
+        match self {
+            ViewKind::Range => {
+                &[(LABEL_FORMAT, "label"), (VALUE_FORMAT, "z"), (VALUE_FORMAT, "dz/dx"), (VALUE_FORMAT, "dz/dy")]
+            }
+            ViewKind::Shadow => &[(LABEL_FORMAT, "label"), (LABEL_FORMAT, "draw index"), (LABEL_FORMAT, "triangle")],
+        }
+    }
+
+    pub fn colour_formats(self) -> Vec<vk::Format> {
+        self.colour_attachments().iter().map(|&(format, _)| format).collect()
+    }
+
+    /// Bytes a pixel of this view's attachments takes (colour and depth).
+    pub fn bytes_per_pixel(self) -> u64 {
+        4 * (self.colour_attachments().len() as u64 + 1)
+    }
+}
+
 pub struct ViewTargets {
-    pub label: Image,
-    pub z: Image,
-    pub slope: Option<Image>,
+    /// In [`ViewKind::colour_attachments`] order; the label is first in both views.
+    pub colour: Vec<Image>,
     pub depth: Image,
 }
 
 impl ViewTargets {
-    pub fn new(ctx: &Arc<GpuContext>, width: u32, height: u32, with_slope: bool, name: &str) -> Result<Self> {
+    pub fn new(ctx: &Arc<GpuContext>, kind: ViewKind, width: u32, height: u32, name: &str) -> Result<Self> {
         let extent = vk::Extent2D { width, height };
-        Ok(Self {
-            label: Image::new(ctx, ImageDesc::attachment(LABEL_FORMAT, extent), &format!("{name} label"))?,
-            z: Image::new(ctx, ImageDesc::attachment(VALUE_FORMAT, extent), &format!("{name} z"))?,
-            slope: match with_slope {
-                true => Some(Image::new(ctx, ImageDesc::attachment(VALUE_FORMAT, extent), &format!("{name} slope"))?),
-                false => None,
-            },
-            depth: Image::new(ctx, ImageDesc::depth(extent), &format!("{name} depth"))?,
-        })
+        let colour = kind
+            .colour_attachments()
+            .iter()
+            .map(|&(format, what)| Image::new(ctx, ImageDesc::attachment(format, extent), &format!("{name} {what}")))
+            .collect::<Result<_>>()?;
+        Ok(Self { colour, depth: Image::new(ctx, ImageDesc::depth(extent), &format!("{name} depth"))? })
     }
 
-    /// Transitions of the colour attachments (label, z, slope) from one use to another.
+    pub fn label(&self) -> &Image {
+        &self.colour[0]
+    }
+
+    /// The range view's z.
+    pub fn z(&self) -> &Image {
+        &self.colour[1]
+    }
+
+    /// Transitions of the colour attachments from one use to another.
     pub fn colour_transitions(&self, from: Access, to: Access) -> Vec<ImageTransition<'_>> {
-        [Some(&self.label), Some(&self.z), self.slope.as_ref()]
-            .into_iter()
-            .flatten()
-            .map(|image| ImageTransition { image, from, to })
-            .collect()
+        self.colour.iter().map(|image| ImageTransition { image, from, to }).collect()
     }
 
     /// Transitions that make every attachment ready to be rendered into.

@@ -22,7 +22,9 @@ pub struct Reference {
     /// triangle's and those of triangles sharing a vertex with it that come within
     /// [`SNAP_PIXELS`] of the centre (Vulkan's minimum sub-pixel precision is 4 bits).
     pub z_bracket: Vec<(f64, f64)>,
-    /// Whether a surface lies along d_cam from the point: exact triangulation shadow.
+    /// Exact triangulation shadow: whether the camera cannot see the point, because a surface
+    /// lies along d_cam from it or because the side of its surface the projector lights (+z)
+    /// turns away from the camera (n · d_cam ≤ 0, however thin the surface).
     pub occluded: Vec<bool>,
     /// Label of the surface the camera sees at the point's position (the front-most along
     /// the camera ray through it): what an exact shadow buffer holds there, and what the
@@ -50,6 +52,10 @@ impl Reference {
 
 /// How close to a triangle edge a pixel centre may go either way, in pixels.
 pub const SNAP_PIXELS: f64 = 1.0 / 16.0;
+
+/// n · d_cam at or below which a surface counts as turned away from the camera: a surface seen
+/// exactly edge-on (0 up to rounding of its posed corners) is not measured.
+const FACING_TOLERANCE: f64 = 1e-9;
 
 struct Triangle {
     corners: [DVec3; 3],
@@ -114,9 +120,18 @@ impl VerticalCaster {
 }
 
 impl VerticalCaster {
-    /// (z, triangle) of triangles whose xy projection comes within `margin` of p.
+    /// (z, triangle) of triangles whose xy projection comes within `margin` of p: those in
+    /// the bins the square p ± margin overlaps, each once.
     fn near(&self, p: DVec2, margin: f64) -> impl Iterator<Item = (f64, &Triangle)> + '_ {
-        self.triangles.iter().filter_map(move |t| {
+        let n = self.cells.0;
+        let (c0, r0) = Self::cell_of(self.lo, self.cell, n, p - margin);
+        let (c1, r1) = Self::cell_of(self.lo, self.cell, n, p + margin);
+        let mut candidates: Vec<u32> =
+            (r0..=r1).flat_map(|r| (c0..=c1).flat_map(move |c| self.bins[r * n + c].iter().copied())).collect();
+        candidates.sort_unstable();
+        candidates.dedup();
+        candidates.into_iter().filter_map(move |i| {
+            let t = &self.triangles[i as usize];
             if (p + margin).cmplt(t.lo).any() || (p - margin).cmpgt(t.hi).any() {
                 return None;
             }
@@ -174,6 +189,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
     let camera = VerticalCaster::new(posed_triangles(scene, to_camera));
     let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     let self_hit = 1e-9 * scale;
+    let d_cam = s.camera_direction();
 
     let mut reference = Reference {
         width,
@@ -196,14 +212,17 @@ pub fn reference_render(scene: &Scene) -> Reference {
             reference.label[i] = label;
             reference.z[i] = z;
             let [a, b, c] = t.corners;
-            reference.normal_z[i] = (b - a).cross(c - a).normalize().z.abs();
+            let normal = (b - a).cross(c - a).normalize();
+            reference.normal_z[i] = normal.z.abs();
+            let lit_side = normal * normal.z.signum();
             let snap = SNAP_PIXELS * s.pitch[0].min(s.pitch[1]);
             reference.z_bracket[i] = range
                 .near(DVec2::new(x, y), snap)
                 .filter(|(_, n)| n.vertices.iter().any(|v| t.vertices.contains(v)))
                 .fold((z, z), |(lo, hi), (zn, _)| (lo.min(zn), hi.max(zn)));
             let p = to_camera.transform_point3(DVec3::new(x, y, z));
-            reference.occluded[i] = camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
+            reference.occluded[i] = lit_side.dot(d_cam) <= FACING_TOLERANCE
+                || camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
             let seen = [-1.0, 0.0, 1.0].map(|k| first_seen(p.truncate() + DVec2::new(k * s.pitch[0], 0.0)));
             reference.camera_label[i] = seen[1];
             reference.near_camera_edge[i] = seen.iter().any(|&l| l != seen[0]);
