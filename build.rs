@@ -3,13 +3,15 @@
 
 use std::path::{Path, PathBuf};
 
-/// (source, output name, macro defined). One source can yield several variants.
-const SHADERS: &[(&str, &str, Option<&str>)] = &[
-    ("raster.vert", "raster.vert.spv", None),
-    ("raster.frag", "raster_range.frag.spv", None),
-    ("raster.frag", "raster_shadow.frag.spv", Some("SHADOW_VIEW")),
-    ("shadow_mask.comp", "shadow_mask.comp.spv", None),
-    ("score.comp", "score.comp.spv", None),
+/// (source, output name, macros defined). One source can yield several variants.
+const SHADERS: &[(&str, &str, &[&str])] = &[
+    ("raster.vert", "raster.vert.spv", &[]),
+    ("raster.frag", "raster_range.frag.spv", &[]),
+    ("raster.frag", "raster_range_ties.frag.spv", &["TIES"]),
+    ("raster.frag", "raster_shadow.frag.spv", &["SHADOW_VIEW"]),
+    ("raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
+    ("shadow_mask.comp", "shadow_mask.comp.spv", &[]),
+    ("score.comp", "score.comp.spv", &[]),
 ];
 
 fn main() {
@@ -20,7 +22,7 @@ fn main() {
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let compiler = shaderc::Compiler::new().expect("shaderc initialises");
-    for &(source, output, define) in SHADERS {
+    for &(source, output, defines) in SHADERS {
         let path = dir.join(source);
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let kind = match path.extension().and_then(|e| e.to_str()) {
@@ -33,7 +35,7 @@ fn main() {
         options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_warnings_as_errors();
-        if let Some(name) = define {
+        for name in defines {
             options.add_macro_definition(name, None);
         }
         options.set_include_callback(|name, _, _, _| {

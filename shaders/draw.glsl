@@ -39,6 +39,17 @@ vec3 rotate_to_view(DrawData d, vec3 direction) {
                 dot(d.view_from_model[2].xyz, direction));
 }
 
+// Depths (0..1) closer than this to the nearest at a pixel are a tie, decided for the lower
+// label (src/render/draw.rs): coincident faces of two objects differ by the rounding of their
+// poses, a few f32 ulps of the view's largest coordinate, and that must not pick the winner.
+float tie_depth(DrawData d) {
+    const float TIE_RELATIVE = 1.0 / 131072.0; // 2^-17, about 64 ulps
+    vec2 far_corner = d.grid.xy + vec2(1.0, -1.0) * (d.size - 1.0) * d.grid.zw;
+    vec2 xy = max(abs(d.grid.xy), abs(far_corner));
+    float scale = max(max(xy.x, xy.y), max(abs(d.z_range.x), abs(d.z_range.y)));
+    return TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x);
+}
+
 // Corner k (0, 1, 2) of a triangle, in the view's frame.
 vec3 triangle_corner(DrawData d, uint triangle, uint k) {
     uint v = Words(d.indices).word[3u * triangle + k];

@@ -24,6 +24,11 @@ layout(location = 1) out float z;
 layout(location = 2) out float dz_dx;
 layout(location = 3) out float dz_dy;
 #endif
+#ifdef TIES
+// Drawn after a depth-only pass, against its depths: every fragment within the tie tolerance
+// of the nearest passes, and the last drawn (the lowest label) stays (src/render/draw.rs).
+layout(depth_less) out float gl_FragDepth;
+#endif
 
 void main() {
     uint t = uint(gl_PrimitiveID);
@@ -40,5 +45,8 @@ void main() {
     z = a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
     dz_dx = -n.x / n.z;
     dz_dy = -n.y / n.z;
+#endif
+#ifdef TIES
+    gl_FragDepth = max(gl_FragCoord.z - tie_depth(draw), 0.0);
 #endif
 }

@@ -10,8 +10,12 @@ layout(push_constant, std430) uniform Draw {
 layout(location = 0) in vec3 position;
 
 void main() {
-    vec3 v = to_view(draw, position);
-    vec2 pixel = vec2((v.x - draw.grid.x) / draw.grid.z, (draw.grid.y - v.y) / draw.grid.w) + 0.5;
-    float depth = (draw.z_range.y - v.z) / (draw.z_range.y - draw.z_range.x);
+    // The range view rasterizes twice (depth, then colour within the tie tolerance of it), in
+    // two pipelines: `precise` forbids fusing these operations differently in each, so both
+    // compute the same depth for the same vertex. (`invariant gl_Position` would say so too,
+    // but SPIR-V validation rejects it on the gl_PerVertex block glslang emits.)
+    precise vec3 v = to_view(draw, position);
+    precise vec2 pixel = vec2((v.x - draw.grid.x) / draw.grid.z, (draw.grid.y - v.y) / draw.grid.w) + 0.5;
+    precise float depth = (draw.z_range.y - v.z) / (draw.z_range.y - draw.z_range.x);
     gl_Position = vec4(2.0 * pixel / draw.size - 1.0, depth, 1.0);
 }

@@ -95,6 +95,21 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
     return WALK_TOO_LONG;
 }
 
+// How far the plane of triangle t of draw d lies above p' (shadow frame) on the camera ray
+// through it (negative: below), and how much of that f32 rounding of the plane may account
+// for, on top of the point's own `bias` (its error grows with the plane's steepness). A
+// triangle seen edge-on has no plane over p': it rises by −∞.
+vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 gradient) {
+    vec3 n = triangle_normal(d, t);
+    if (n.z == 0.0) {
+        gradient = vec2(0.0);
+        return vec2(-1.0 / 0.0, bias);
+    }
+    vec3 a = triangle_corner(d, t, 0u);
+    gradient = -n.xy / n.z;
+    return vec2(a.z + dot(gradient, ps.xy - a.xy) - ps.z, bias + m.bias_relative * scale * l1_length(gradient));
+}
+
 // Whether the surface seen at shadow pixel q hides p' (shadow frame): the triangle over p' on
 // that surface — found by walking from the one the pixel saw, since triangles smaller than a
 // pixel are missing from the shadow buffer — rises above p' by more than the bias (exact ray
@@ -115,15 +130,9 @@ bool hides(ivec2 q, vec3 ps, vec2 own, float scale, float bias) {
         vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
         beyond = min(segment_distance(ps.xy, a, b), min(segment_distance(ps.xy, b, c), segment_distance(ps.xy, c, a)));
     }
-    vec3 n = triangle_normal(d, t);
-    if (n.z == 0.0) {
-        return false; // seen edge-on: it covers no area
-    }
-    vec3 a = triangle_corner(d, t, 0u);
-    vec2 gradient = -n.xy / n.z;
-    float rise = a.z + dot(gradient, ps.xy - a.xy) - ps.z;
-    // The plane's f32 evaluation errs in proportion to its steepness.
-    return rise > bias + m.bias_relative * scale * l1_length(gradient) + l1_length(gradient - own) * beyond;
+    vec2 gradient;
+    vec2 rise = plane_rise(d, t, ps, scale, bias, gradient);
+    return rise.x > rise.y + l1_length(gradient - own) * beyond;
 }
 
 bool shadowed(ivec2 pixel, uint label) {

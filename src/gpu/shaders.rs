@@ -7,7 +7,9 @@ use ash::vk;
 
 pub const RASTER_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.vert.spv"));
 pub const RASTER_RANGE_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_range.frag.spv"));
+pub const RASTER_RANGE_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_range_ties.frag.spv"));
 pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow.frag.spv"));
+pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
 pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
 

@@ -203,7 +203,7 @@ impl Renderer {
                 barrier(ctx, cmd, &prepare, &[]);
                 let draw = [item.draw()];
                 let range_pass = ViewPass {
-                    pipeline: p.range,
+                    pipelines: &p.range,
                     layout: p.raster_layout,
                     targets: &slot.range,
                     grid: &views.range,
@@ -216,7 +216,7 @@ impl Renderer {
                     match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
                         (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) => {
                             let shadow_pass = ViewPass {
-                                pipeline: p.shadow,
+                                pipelines: &p.shadow,
                                 layout: p.raster_layout,
                                 targets,
                                 grid,

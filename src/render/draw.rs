@@ -3,6 +3,7 @@
 //! and what the fragment shader writes.
 
 use super::gpu_mesh::GpuMesh;
+use super::pipelines::ViewPipelines;
 use super::targets::ViewTargets;
 use crate::gpu::GpuContext;
 use crate::sensor::{PixelRect, ViewGrid};
@@ -61,12 +62,12 @@ impl DrawConstants {
     }
 }
 
-/// One view to render: its pipeline, attachments, grid, the rotation from the range frame
+/// One view to render: its pipelines, attachments, grid, the rotation from the range frame
 /// into it (identity for the range view, R_y(−θ) for the shadow view), and the pixels to
 /// clear and draw (the whole grid, or a batch hypothesis' footprint; the rest of the
 /// attachments is left as it was and must not be read).
 pub struct ViewPass<'a> {
-    pub pipeline: vk::Pipeline,
+    pub pipelines: &'a ViewPipelines,
     pub layout: vk::PipelineLayout,
     pub targets: &'a ViewTargets,
     pub grid: &'a ViewGrid,
@@ -122,11 +123,34 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
         ctx.cmd_begin_rendering(cmd, &info);
-        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipeline);
         d.cmd_set_viewport(cmd, 0, &[viewport]);
         d.cmd_set_scissor(cmd, 0, &[area]);
-        for (index, draw) in (first_draw_index..).zip(draws) {
-            let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw, index);
+        let mut numbered: Vec<(u32, &Draw)> = (first_draw_index..).zip(draws).collect();
+        let colour_pipeline = match numbered.len() {
+            1 => pass.pipelines.nearest,
+            _ => {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipelines.depth_only);
+                record_draws(ctx, cmd, pass, &numbered);
+                // Among ties the last drawn stays: draw the lowest label last.
+                numbered.sort_by_key(|(_, draw)| std::cmp::Reverse(draw.label_base));
+                pass.pipelines.ties
+            }
+        };
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, colour_pipeline);
+        record_draws(ctx, cmd, pass, &numbered);
+        ctx.cmd_end_rendering(cmd);
+    }
+}
+
+/// Records the draws, each with its constants and its number in the draw table, into the
+/// bound pipeline.
+fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
+    let d = &ctx.device;
+    for &(index, draw) in draws {
+        let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw, index);
+        // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
+        // bound; the meshes outlive the submission.
+        unsafe {
             d.cmd_push_constants(
                 cmd,
                 pass.layout,
@@ -138,6 +162,5 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
             d.cmd_bind_index_buffer(cmd, draw.mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, draw.mesh.index_count, 1, 0, 0, 0);
         }
-        ctx.cmd_end_rendering(cmd);
     }
 }

@@ -202,7 +202,7 @@ impl Renderer {
             barrier(ctx, cmd, &prepare, &[]);
             timestamps.write(cmd, 0);
             let range_pass = ViewPass {
-                pipeline: p.range,
+                pipelines: &p.range,
                 layout: p.raster_layout,
                 targets: &range,
                 grid: &views.range,
@@ -214,7 +214,7 @@ impl Renderer {
             let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
             if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
                 let shadow_pass = ViewPass {
-                    pipeline: p.shadow,
+                    pipelines: &p.shadow,
                     layout: p.raster_layout,
                     targets: s,
                     grid,

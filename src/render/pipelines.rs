@@ -15,11 +15,21 @@ use std::sync::Arc;
 pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 
+/// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
+/// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
+/// objects go to the lower label whatever the order of the draws (see [`Depth`]).
+#[derive(Default)]
+pub struct ViewPipelines {
+    pub nearest: vk::Pipeline,
+    pub depth_only: vk::Pipeline,
+    pub ties: vk::Pipeline,
+}
+
 pub struct Pipelines {
     ctx: Arc<GpuContext>,
     pub raster_layout: vk::PipelineLayout,
-    pub range: vk::Pipeline,
-    pub shadow: vk::Pipeline,
+    pub range: ViewPipelines,
+    pub shadow: ViewPipelines,
     pub mask_set_layout: vk::DescriptorSetLayout,
     pub mask_layout: vk::PipelineLayout,
     pub mask: vk::Pipeline,
@@ -35,8 +45,8 @@ impl Pipelines {
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),
-            range: vk::Pipeline::null(),
-            shadow: vk::Pipeline::null(),
+            range: ViewPipelines::default(),
+            shadow: ViewPipelines::default(),
             mask_set_layout: vk::DescriptorSetLayout::null(),
             mask_layout: vk::PipelineLayout::null(),
             mask: vk::Pipeline::null(),
@@ -53,12 +63,25 @@ impl Pipelines {
         }
         .vk("creating the raster pipeline layout")?;
         let vert = ShaderModule::new(ctx, shaders::RASTER_VERT, "raster.vert")?;
-        let range_frag = ShaderModule::new(ctx, shaders::RASTER_RANGE_FRAG, "raster.frag (range view)")?;
-        let shadow_frag = ShaderModule::new(ctx, shaders::RASTER_SHADOW_FRAG, "raster.frag (shadow view)")?;
-        let formats = |kind: ViewKind| kind.colour_formats();
-        p.range = raster_pipeline(ctx, p.raster_layout, &vert, &range_frag, &formats(ViewKind::Range), "range view")?;
-        p.shadow =
-            raster_pipeline(ctx, p.raster_layout, &vert, &shadow_frag, &formats(ViewKind::Shadow), "shadow view")?;
+        for kind in [ViewKind::Range, ViewKind::Shadow] {
+            let (frag, ties_frag, name) = match kind {
+                ViewKind::Range => (shaders::RASTER_RANGE_FRAG, shaders::RASTER_RANGE_TIES_FRAG, "range view"),
+                ViewKind::Shadow => (shaders::RASTER_SHADOW_FRAG, shaders::RASTER_SHADOW_TIES_FRAG, "shadow view"),
+            };
+            let frag = ShaderModule::new(ctx, frag, &format!("raster.frag ({name})"))?;
+            let ties_frag = ShaderModule::new(ctx, ties_frag, &format!("raster.frag ({name}, ties)"))?;
+            let formats = kind.colour_formats();
+            let pipeline = |frag, depth, what: &str| {
+                raster_pipeline(ctx, p.raster_layout, &vert, frag, &formats, depth, &format!("{name}{what}"))
+            };
+            let view = match kind {
+                ViewKind::Range => &mut p.range,
+                ViewKind::Shadow => &mut p.shadow,
+            };
+            view.nearest = pipeline(Some(&frag), Depth::Nearest, "")?;
+            view.depth_only = pipeline(None, Depth::Nearest, " (depth)")?;
+            view.ties = pipeline(Some(&ties_frag), Depth::Tie, " (ties)")?;
+        }
 
         let mask_bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, MaskBindings::IMAGES)
             .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, MaskBindings::BUFFERS))
@@ -77,9 +100,6 @@ impl Pipelines {
             shaders::SCORE_COMP,
             "verification counts",
         )?;
-        for (handle, name) in [(p.range, "range view"), (p.shadow, "shadow view")] {
-            ctx.name_object(handle, name);
-        }
         Ok(p)
     }
 }
@@ -96,8 +116,11 @@ impl Drop for Pipelines {
             d.destroy_pipeline(self.mask, None);
             d.destroy_pipeline_layout(self.mask_layout, None);
             d.destroy_descriptor_set_layout(self.mask_set_layout, None);
-            d.destroy_pipeline(self.shadow, None);
-            d.destroy_pipeline(self.range, None);
+            for view in [&self.range, &self.shadow] {
+                for pipeline in [view.nearest, view.depth_only, view.ties] {
+                    d.destroy_pipeline(pipeline, None);
+                }
+            }
             d.destroy_pipeline_layout(self.raster_layout, None);
         }
     }
@@ -174,21 +197,37 @@ fn compute_pipeline(
     }
 }
 
+/// How a raster pipeline uses the depth buffer.
+#[derive(Clone, Copy)]
+enum Depth {
+    /// The nearest fragment wins: depth test LESS, depth written. Without a fragment shader,
+    /// a depth-only pass (colour writes masked).
+    Nearest,
+    /// After a depth-only pass of the same draws: every fragment whose depth, less the tie
+    /// tolerance (the fragment shader writes it), reaches the nearest passes (LESS_OR_EQUAL,
+    /// depth not written), so among coincident faces the last drawn wins. The range view draws
+    /// in descending label order, so the lowest label wins a tie whatever the scene's order.
+    Tie,
+}
+
 fn raster_pipeline(
     ctx: &GpuContext,
     layout: vk::PipelineLayout,
     vert: &ShaderModule,
-    frag: &ShaderModule,
+    frag: Option<&ShaderModule>,
     color_formats: &[vk::Format],
+    depth_use: Depth,
     name: &str,
 ) -> Result<vk::Pipeline> {
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vert.raw).name(c"main"),
+    let vertex_stage =
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vert.raw).name(c"main");
+    let fragment_stage = frag.map(|frag| {
         vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::FRAGMENT)
             .module(frag.raw)
-            .name(c"main"),
-    ];
+            .name(c"main")
+    });
+    let stages: Vec<_> = std::iter::once(vertex_stage).chain(fragment_stage).collect();
     let bindings = [vk::VertexInputBindingDescription::default().stride(12).input_rate(vk::VertexInputRate::VERTEX)];
     let attributes = [vk::VertexInputAttributeDescription::default().format(vk::Format::R32G32B32_SFLOAT)];
     let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
@@ -204,13 +243,18 @@ fn raster_pipeline(
     let multisample =
         vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
     // Larger z is closer and maps to smaller depth (sensor.rs), so the nearest surface wins with LESS.
+    let (compare, write) = match depth_use {
+        Depth::Nearest => (vk::CompareOp::LESS, true),
+        Depth::Tie => (vk::CompareOp::LESS_OR_EQUAL, false),
+    };
     let depth = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::LESS);
+        .depth_write_enable(write)
+        .depth_compare_op(compare);
+    let write_mask = if frag.is_some() { vk::ColorComponentFlags::R } else { vk::ColorComponentFlags::empty() };
     let blend_attachments: Vec<_> = color_formats
         .iter()
-        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::R))
+        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask))
         .collect();
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -231,9 +275,11 @@ fn raster_pipeline(
         .layout(layout)
         .push_next(&mut rendering)];
     // SAFETY: all referenced state outlives the call.
-    unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+    let pipeline = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
         .map(|p| p[0])
-        .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
+        .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))?;
+    ctx.name_object(pipeline, name);
+    Ok(pipeline)
 }
 
 /// The attachment formats are near-universal, but a device that lacks one gets a clear error

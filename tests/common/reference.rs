@@ -53,6 +53,9 @@ impl Reference {
 /// How close to a triangle edge a pixel centre may go either way, in pixels.
 pub const SNAP_PIXELS: f64 = 1.0 / 16.0;
 
+/// Depths this close, relative to the scene's largest coordinate, are a tie: coincident faces.
+const TIE_RELATIVE: f64 = 1e-9;
+
 /// n · d_cam at or below which a surface counts as turned away from the camera: a surface seen
 /// exactly edge-on (0 up to rounding of its posed corners) is not measured.
 const FACING_TOLERANCE: f64 = 1e-9;
@@ -120,6 +123,13 @@ impl VerticalCaster {
 }
 
 impl VerticalCaster {
+    /// The nearest hit over p: largest z; of hits within `tie` of it (coincident faces), the
+    /// lowest label (the documented tie rule).
+    fn front(&self, p: DVec2, tie: f64) -> Option<(f64, u32, &Triangle)> {
+        let z = self.hits(p).map(|h| h.0).max_by(f64::total_cmp)?;
+        self.hits(p).filter(|h| h.0 >= z - tie).min_by_key(|h| h.1)
+    }
+
     /// (z, triangle) of triangles whose xy projection comes within `margin` of p: those in
     /// the bins the square p ± margin overlaps, each once.
     fn near(&self, p: DVec2, margin: f64) -> impl Iterator<Item = (f64, &Triangle)> + '_ {
@@ -202,13 +212,14 @@ pub fn reference_render(scene: &Scene) -> Reference {
         camera_label: vec![0; width * height],
         near_camera_edge: vec![false; width * height],
     };
-    let first_seen = |p: DVec2| camera.hits(p).max_by(|a, b| a.0.total_cmp(&b.0)).map_or(0, |(_, l, _)| l);
+    let tie = TIE_RELATIVE * scale;
+    let first_seen = |p: DVec2| camera.front(p, tie).map_or(0, |(_, l, _)| l);
     for row in 0..height {
         for col in 0..width {
             let i = row * width + col;
             let x = s.origin[0] + col as f64 * s.pitch[0];
             let y = s.origin[1] - row as f64 * s.pitch[1];
-            let Some((z, label, t)) = range.hits(DVec2::new(x, y)).max_by(|a, b| a.0.total_cmp(&b.0)) else { continue };
+            let Some((z, label, t)) = range.front(DVec2::new(x, y), tie) else { continue };
             reference.label[i] = label;
             reference.z[i] = z;
             let [a, b, c] = t.corners;
