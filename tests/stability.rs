@@ -189,3 +189,61 @@ fn a_dense_sphere_on_a_table_shadows_like_exact_ray_casting() {
         }
     }
 }
+
+/// Two boxes whose top faces lie in one plane and overlap, posed together: where they overlap,
+/// the lower label (the object listed first) must win, whichever is listed first, and label
+/// mode must not shadow either top. Returns (range labels, shadowed labels) wrong outside the
+/// allowance (within one pixel of a change of the expected labels).
+fn coincident_tops_errors(mode: ShadowMode, first_is_turned: bool) -> (usize, usize) {
+    let lean = turned_and_tilted();
+    let plain = lean;
+    let turned = lean * DMat4::from_translation(DVec3::new(0.45, 0.3, 0.0)) * DMat4::from_rotation_z(0.3);
+    let objects = match first_is_turned {
+        false => [("builtin:box", plain), ("builtin:box", turned)],
+        true => [("builtin:box", turned), ("builtin:box", plain)],
+    };
+    let s = centred_sensor(128, 128, 2.4 / 128.0, [0.2, 0.3], 30.0);
+    let sc = scene(s, mode, &objects);
+    let out = renderer().render(&sc).unwrap();
+    assert_no_validation_messages();
+    let reference = reference_render(&sc);
+    let (w, h) = (reference.width, reference.height);
+    let name = format!("coincident_{}_{first_is_turned}", mode.as_str());
+    let near_hit_change = near_label_change(&reference.label, w, h);
+    let hits = compare_labels(&format!("{name}_hits"), w, h, &out.label_unshadowed, &reference.label, &near_hit_change);
+    let expected = match mode {
+        ShadowMode::Label => reference.label_paper_shadowed(),
+        _ => reference.label_shadowed(),
+    };
+    let boundaries = near_label_change(&expected, w, h);
+    let allowed: Vec<bool> =
+        (0..w * h).map(|i| near_hit_change[i] || boundaries[i] || reference.near_camera_edge[i]).collect();
+    let shadowed = compare_labels(&name, w, h, &out.label, &expected, &allowed);
+    eprintln!("{name}: hits {hits:?}, shadowed {shadowed:?}");
+    (hits.outside_allowance, shadowed.outside_allowance)
+}
+
+#[test]
+fn coincident_faces_go_to_the_lower_label_in_any_order_and_cast_no_shadow() {
+    for mode in [ShadowMode::Label, ShadowMode::Depth] {
+        for first_is_turned in [false, true] {
+            let (hits, shadowed) = coincident_tops_errors(mode, first_is_turned);
+            assert_eq!((hits, shadowed), (0, 0), "{mode:?}, turned box first: {first_is_turned}");
+        }
+    }
+}
+
+/// A plate seen exactly edge-on by the camera (its plane holds d_cam) above a table: its own
+/// points are not measured (the camera grazes them), and it casts no shadow, since a plate of
+/// no thickness seen edge-on hides nothing. Depth mode once drew a one-pixel shadow line across
+/// the table there.
+#[test]
+fn a_plate_seen_edge_on_by_the_camera_casts_no_shadow_line() {
+    for theta in [30.0, 45.0, -60.0] {
+        let edge_on = DMat4::from_translation(DVec3::new(0.1, 0.05, 0.7)) * DMat4::from_rotation_y((theta - 90.0f64).to_radians());
+        let s = centred_sensor(128, 128, 3.0 / 128.0, [0.0, 0.0], theta);
+        let sc = scene(s, ShadowMode::Depth, &[("builtin:plane:4", DMat4::IDENTITY), ("builtin:plane:1", edge_on)]);
+        let wrong = shadow_errors_against_reference(&format!("edge_on_plate_{theta}"), &sc);
+        assert_eq!(wrong, 0, "θ = {theta}");
+    }
+}
