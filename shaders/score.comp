@@ -21,6 +21,7 @@ layout(push_constant, std430) uniform Score {
     uvec2 counts;           // this hypothesis' counters
     uint width;
     uint height;
+    float z_origin;         // the range view's z is stored as an offset from this
     uvec4 region;           // the pixels that may hold the model: first column, first row, width, height
     uint surfaces;          // M
     uint segments;          // K
@@ -31,6 +32,13 @@ layout(push_constant, std430) uniform Score {
 } s;
 
 const uint N1_PLUS = 0u, N1_MINUS = 1u, N0 = 2u, POPULATIONS = 3u;
+
+// The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
+// one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
+float synthetic_z(ivec2 p) {
+    precise float z = imageLoad(range_z, p).r + s.z_origin;
+    return z;
+}
 
 // The synthetic label; 0 outside the region, where the attachments were not drawn.
 uint synthetic(ivec2 p) {
@@ -73,7 +81,7 @@ void main() {
         return;
     }
     atomicAdd(c.count[POPULATIONS + m - 1u], 1u);
-    float z = imageLoad(range_z, p).r;
+    float z = synthetic_z(p);
     if (k == 0u) {
         atomicAdd(c.count[N0], 1u);
     } else {
@@ -90,9 +98,9 @@ void main() {
     ivec2 right = p + ivec2(1, 0), down = p + ivec2(0, 1), across = p + ivec2(1, 1);
     if (uint(across.x) < s.width && uint(across.y) < s.height
         && synthetic(right) == m && synthetic(down) == m && synthetic(across) == m) {
-        float z10 = imageLoad(range_z, right).r;
-        float z01 = imageLoad(range_z, down).r;
-        float z11 = imageLoad(range_z, across).r;
+        float z10 = synthetic_z(right);
+        float z01 = synthetic_z(down);
+        float z11 = synthetic_z(across);
         precise float a = z10 - z;
         precise float b = z11 - z;
         precise float e = z01 - z;

@@ -102,7 +102,12 @@ impl Sensor {
     /// shadow-frame x of every point the range view can see, i.e. the range image's
     /// footprint at any depth in `z_range` (the range frame's scene depth bounds), rotated
     /// by `R_y(−θ)`. `shadow_z_range` bounds the scene's depth in the shadow frame.
-    pub fn shadow_grid(&self, z_range: (f64, f64), shadow_z_range: (f64, f64)) -> Result<ViewGrid> {
+    ///
+    /// Column centres lie on one lattice, through the rotated range-grid origin at depth
+    /// `lattice_z` (the local origin's z, `ViewGrid::local_origin`), not wherever the depth
+    /// range happens to start: the same scene moved with its sensor keeps the same columns,
+    /// and so the same nearest shadow pixel for every point.
+    pub fn shadow_grid(&self, z_range: (f64, f64), shadow_z_range: (f64, f64), lattice_z: f64) -> Result<ViewGrid> {
         let (c, s) = (self.theta().cos(), self.theta().sin());
         let half = self.pitch[0] / 2.0;
         let x_lo = self.origin[0] - half;
@@ -113,7 +118,11 @@ impl Sensor {
             .collect();
         let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let columns = ((hi - lo) / self.pitch[0]).ceil() + 1.0;
+        let anchor = c * self.origin[0] - s * lattice_z;
+        // The lattice columns whose pixels reach lo and hi.
+        let first = ((lo - anchor) / self.pitch[0] + 0.5).floor();
+        let last = ((hi - anchor) / self.pitch[0] - 0.5).ceil();
+        let columns = last - first + 1.0;
         if columns > f64::from(MAX_IMAGE_SIDE) {
             return Err(Error::Scene(format!(
                 "the shadow view would need {columns} columns (more than {MAX_IMAGE_SIDE}): the scene's depth \
@@ -122,7 +131,7 @@ impl Sensor {
             )));
         }
         Ok(ViewGrid {
-            origin: [lo + half, self.origin[1]],
+            origin: [anchor + first * self.pitch[0], self.origin[1]],
             pitch: self.pitch,
             width: columns as u32,
             height: self.height,
@@ -155,6 +164,23 @@ impl ViewGrid {
     /// Every pixel of the grid.
     pub fn full(&self) -> PixelRect {
         PixelRect { col: 0, row: 0, width: self.width, height: self.height }
+    }
+
+    /// The point (this view's frame) the GPU measures from, so that the same geometry keeps
+    /// the same f32 precision wherever it sits: coordinates sent to shaders are offsets from
+    /// it, composed in f64. It is the grid's centre snapped to a multiple of the power of two
+    /// at least the view's extent, so a view near the frame's origin keeps the origin (and
+    /// its images bit for bit), and it is exact in f32, so adding it back to an f32 offset is
+    /// one correctly rounded f32 addition on the host or the GPU alike.
+    pub fn local_origin(&self) -> DVec3 {
+        let [x0, y0] = self.origin;
+        let [dx, dy] = self.pitch;
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let (z0, z1) = self.z_range;
+        let centre = DVec3::new(x0 + (w - 1.0) / 2.0 * dx, y0 - (h - 1.0) / 2.0 * dy, (z0 + z1) / 2.0);
+        let extent = (w * dx).max(h * dy).max(z1 - z0).max(f64::MIN_POSITIVE);
+        let step = extent.log2().ceil().exp2();
+        ((centre / step).round() * step).as_vec3().as_dvec3()
     }
 
     /// The pixels whose centres may fall on a sphere's orthographic footprint (centre in this

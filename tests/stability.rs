@@ -240,10 +240,50 @@ fn coincident_faces_go_to_the_lower_label_in_any_order_and_cast_no_shadow() {
 #[test]
 fn a_plate_seen_edge_on_by_the_camera_casts_no_shadow_line() {
     for theta in [30.0, 45.0, -60.0] {
-        let edge_on = DMat4::from_translation(DVec3::new(0.1, 0.05, 0.7)) * DMat4::from_rotation_y((theta - 90.0f64).to_radians());
+        let edge_on = DMat4::from_translation(DVec3::new(0.1, 0.05, 0.7))
+            * DMat4::from_rotation_y((theta - 90.0f64).to_radians());
         let s = centred_sensor(128, 128, 3.0 / 128.0, [0.0, 0.0], theta);
         let sc = scene(s, ShadowMode::Depth, &[("builtin:plane:4", DMat4::IDENTITY), ("builtin:plane:1", edge_on)]);
         let wrong = shadow_errors_against_reference(&format!("edge_on_plate_{theta}"), &sc);
         assert_eq!(wrong, 0, "θ = {theta}");
+    }
+}
+
+/// The same scene near the frame's origin and 10^5 units from it (in x, y and z), seen by the
+/// same sensor moved with it: the GPU works from a local origin, so the far image is the near
+/// one, label for label, and its z differs only by the f32 rounding of the stored value
+/// (half an ulp of 10^5, 2^-8). Sent to the GPU as absolute f32 coordinates, the far scene's
+/// vertices were off by up to 0.004 (a sixth of a pixel here), and its edges moved.
+#[test]
+fn far_from_the_origin_the_same_geometry_renders_the_same_image() {
+    let offset = DVec3::new(1e5, -1e5, 1e5);
+    const HALF_ULP_AT_1E5: f64 = 1.0 / 256.0; // f32 steps are 2^-7 between 2^16 and 2^17
+    let objects = |shift: DVec3| {
+        let at = |x: f64, y: f64| DMat4::from_translation(shift + DVec3::new(x, y, 0.0));
+        vec![
+            ("builtin:plane:4", at(0.0, 0.0)),
+            ("builtin:step", at(-0.5, 0.3) * DMat4::from_rotation_z(0.4)),
+            ("builtin:sphere:48", at(0.7, -0.4)),
+            ("builtin:box", at(0.5, 0.8) * turned_and_tilted()),
+        ]
+    };
+    for mode in [ShadowMode::Label, ShadowMode::Depth] {
+        let near = scene(centred_sensor(128, 128, 3.0 / 128.0, [0.1, 0.2], 45.0), mode, &objects(DVec3::ZERO));
+        let far_sensor = centred_sensor(128, 128, 3.0 / 128.0, [0.1 + offset.x, 0.2 + offset.y], 45.0);
+        let far = scene(far_sensor, mode, &objects(offset));
+        let name = format!("far_{}", mode.as_str());
+        if mode == ShadowMode::Depth {
+            assert_eq!(shadow_errors_against_reference(&name, &far), 0, "{name} against exact ray casting");
+        }
+        let (near_out, far_out) = (render(&near), render(&far));
+        let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(a, b)| a != b).count();
+        assert_eq!(differ(&near_out.label_unshadowed, &far_out.label_unshadowed), 0, "{name}: surfaces hit");
+        assert_eq!(differ(&near_out.label, &far_out.label), 0, "{name}: shadowed labels");
+        for (i, (zn, zf)) in near_out.z.iter().zip(&far_out.z).enumerate() {
+            if near_out.label_unshadowed[i] != 0 {
+                let error = (f64::from(*zf) - (f64::from(*zn) + offset.z)).abs();
+                assert!(error <= HALF_ULP_AT_1E5 + 1e-6, "{name}: pixel {i}: z {zf} for {zn} + 10^5");
+            }
+        }
     }
 }

@@ -128,7 +128,7 @@ impl Renderer {
                     .zip(items.iter().zip(&views))
                     .filter_map(|(i, (item, views))| {
                         let grid = views.shadow.as_ref()?;
-                        Some(DrawConstants::new(grid, to_shadow, &item.draw(), i))
+                        Some(DrawConstants::new(grid, to_shadow, views.origin, &item.draw(), i))
                     })
                     .collect();
                 Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
@@ -208,6 +208,7 @@ impl Renderer {
                     targets: &slot.range,
                     grid: &views.range,
                     view_from_range: DMat4::IDENTITY,
+                    origin: views.origin,
                     area,
                 };
                 record_view(ctx, cmd, &range_pass, &draw, index);
@@ -221,6 +222,7 @@ impl Renderer {
                                 targets,
                                 grid,
                                 view_from_range: to_shadow,
+                                origin: views.origin,
                                 area: shadow_area,
                             };
                             record_view(ctx, cmd, &shadow_pass, &draw, index);
@@ -232,11 +234,7 @@ impl Renderer {
                                 &reads,
                                 &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }],
                             );
-                            bindings.record(
-                                cmd,
-                                p,
-                                &MaskConstants::new(sensor, settings.mode, &views.range, grid, area),
-                            );
+                            bindings.record(cmd, p, &MaskConstants::new(sensor, settings.mode, views, grid, area));
                             barrier(
                                 ctx,
                                 cmd,
@@ -261,7 +259,8 @@ impl Renderer {
                     counts: address_words(counts_address + offset as u64 * 4),
                     width: w,
                     height: h,
-                    _pad: [0; 2],
+                    z_origin: views.origin.z as f32,
+                    _pad: 0,
                     region: [area.col, area.row, area.width, area.height],
                     surfaces: item.surfaces,
                     segments: settings.sensed.segment_count,

@@ -8,7 +8,7 @@ use super::targets::ViewTargets;
 use crate::gpu::GpuContext;
 use crate::sensor::{PixelRect, ViewGrid};
 use ash::vk;
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 
 /// One draw as the shaders see it (`DrawData` in `shaders/draw.glsl`, std430): the raster
 /// shaders' push constants, and an entry of the shadow view's draw table, which the shadow
@@ -41,16 +41,20 @@ pub struct Draw<'a> {
 }
 
 impl DrawConstants {
-    /// Composes view rotation ∘ pose in f64 and rounds once to f32. `draw_index` is the
-    /// draw's entry in the draw table.
-    pub fn new(grid: &ViewGrid, view_from_range: DMat4, draw: &Draw, draw_index: u32) -> Self {
-        let view_from_model = view_from_range * draw.pose;
+    /// Composes, in f64, the move to the view's local origin (`origin`, range frame:
+    /// `ViewGrid::local_origin`) ∘ view rotation ∘ pose, and rounds once to f32; the grid and
+    /// depth range are offsets from that origin too. `draw_index` is the draw's entry in the
+    /// draw table.
+    pub fn new(grid: &ViewGrid, view_from_range: DMat4, origin: DVec3, draw: &Draw, draw_index: u32) -> Self {
+        let local = view_from_range.transform_point3(origin);
+        let view_from_model = DMat4::from_translation(-local) * view_from_range * draw.pose;
         let row = |i| view_from_model.row(i).as_vec4().to_array();
+        let [x0, y0] = grid.origin;
         Self {
             view_from_model: [row(0), row(1), row(2)],
-            grid: [grid.origin[0], grid.origin[1], grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
+            grid: [x0 - local.x, y0 - local.y, grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
             size: [grid.width as f32, grid.height as f32],
-            z_range: [grid.z_range.0 as f32, grid.z_range.1 as f32],
+            z_range: [grid.z_range.0 - local.z, grid.z_range.1 - local.z].map(|v| v as f32),
             positions: draw.mesh.vertices.address_words(),
             indices: draw.mesh.indices.address_words(),
             surface_ids: draw.mesh.surface_ids.address_words(),
@@ -72,6 +76,8 @@ pub struct ViewPass<'a> {
     pub targets: &'a ViewTargets,
     pub grid: &'a ViewGrid,
     pub view_from_range: DMat4,
+    /// The local origin, range frame (`Views::origin`).
+    pub origin: DVec3,
     pub area: PixelRect,
 }
 
@@ -147,7 +153,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
     let d = &ctx.device;
     for &(index, draw) in draws {
-        let constants = DrawConstants::new(pass.grid, pass.view_from_range, draw, index);
+        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index);
         // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
         // bound; the meshes outlive the submission.
         unsafe {

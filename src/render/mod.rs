@@ -59,12 +59,13 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
     let seen = |grid: &ViewGrid, (centre, radius): (DVec3, f64)| grid.footprint(centre, radius, 1).is_some();
     let z_range = depth_bounds(spheres.iter().copied().filter(|&s| seen(&full_range, s)));
     let range = sensor.range_grid(z_range);
+    let origin = range.local_origin();
     let shadow = match mode.needs_shadow_pass(sensor.theta_deg) {
         false => None,
         true => {
             let to_shadow = sensor.to_shadow_frame();
             let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
-            let columns = sensor.shadow_grid(z_range, (0.0, 0.0))?;
+            let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z)?;
             let shadow_z = depth_bounds(in_shadow_frame.filter(|&s| seen(&columns, s)));
             Some(ViewGrid { z_range: shadow_z, ..columns })
         }
@@ -77,7 +78,7 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
             )));
         }
     }
-    Ok(Views { range, shadow })
+    Ok(Views { origin, range, shadow })
 }
 
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
@@ -95,6 +96,8 @@ fn render_memory(views: &Views) -> u64 {
 
 /// The two views of one render, with the grids they were rendered on.
 pub(crate) struct Views {
+    /// The local origin both views measure from (range frame; `ViewGrid::local_origin`).
+    pub origin: DVec3,
     pub range: ViewGrid,
     /// `None` when no shadow pass is recorded (mode `none` or θ = 0).
     pub shadow: Option<ViewGrid>,
@@ -181,8 +184,10 @@ impl Renderer {
         };
         let draw_table = match &views.shadow {
             Some(grid) => {
-                let entries: Vec<_> =
-                    (0..).zip(draws).map(|(i, draw)| DrawConstants::new(grid, to_shadow, draw, i)).collect();
+                let entries: Vec<_> = (0..)
+                    .zip(draws)
+                    .map(|(i, draw)| DrawConstants::new(grid, to_shadow, views.origin, draw, i))
+                    .collect();
                 Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
             }
             None => None,
@@ -207,6 +212,7 @@ impl Renderer {
                 targets: &range,
                 grid: &views.range,
                 view_from_range: DMat4::IDENTITY,
+                origin: views.origin,
                 area: views.range.full(),
             };
             draw::record_view(ctx, cmd, &range_pass, draws, 0);
@@ -219,6 +225,7 @@ impl Renderer {
                     targets: s,
                     grid,
                     view_from_range: to_shadow,
+                    origin: views.origin,
                     area: grid.full(),
                 };
                 draw::record_view(ctx, cmd, &shadow_pass, draws, 0);
@@ -229,7 +236,7 @@ impl Renderer {
                 b.record(
                     cmd,
                     p,
-                    &MaskConstants::new(&scene.sensor, scene.shadow.mode, &views.range, grid, views.range.full()),
+                    &MaskConstants::new(&scene.sensor, scene.shadow.mode, views, grid, views.range.full()),
                 );
                 timestamps.write(cmd, 3);
                 to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
@@ -277,6 +284,14 @@ impl Renderer {
             Some(m) => m.read()?,
             None => label_unshadowed.clone(),
         };
+        // Offsets from the local origin back to range-frame z, where a surface was hit.
+        let z_origin = views.origin.z as f32;
+        let mut z: Vec<f32> = z_readback.read()?;
+        for (z, &label) in z.iter_mut().zip(&label_unshadowed) {
+            if label != 0 {
+                *z += z_origin;
+            }
+        }
         let timings = PassTimings {
             range_ms: timestamps.millis_between(0, 1)?,
             shadow_ms: if shadow.is_some() { timestamps.millis_between(1, 2)? } else { None },
@@ -288,7 +303,7 @@ impl Renderer {
             shadow_pass: views.shadow.is_some(),
             label,
             label_unshadowed,
-            z: z_readback.read()?,
+            z,
             timings,
         })
     }

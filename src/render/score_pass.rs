@@ -18,7 +18,9 @@ pub struct ScoreConstants {
     pub counts: [u32; 2],
     pub width: u32,
     pub height: u32,
-    pub _pad: [u32; 2],
+    /// The range view's local origin's z: z = stored offset + z_origin (`ViewGrid::local_origin`).
+    pub z_origin: f32,
+    pub _pad: u32,
     pub region: [u32; 4],
     pub surfaces: u32,
     pub segments: u32,

@@ -3,11 +3,13 @@
 
 use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
+use super::Views;
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext, Image, StorageSet};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
+use glam::DVec3;
 use std::sync::Arc;
 
 /// Push constants of the mask pass; matches `shaders/shadow_mask.comp`.
@@ -27,12 +29,16 @@ pub struct MaskConstants {
 }
 
 impl MaskConstants {
-    /// Constants for masking the range pixels of `region`.
-    pub fn new(sensor: &Sensor, mode: ShadowMode, range: &ViewGrid, shadow: &ViewGrid, region: PixelRect) -> Self {
-        let grid = |g: &ViewGrid| [g.origin[0] as f32, g.origin[1] as f32, g.pitch[0] as f32, g.pitch[1] as f32];
+    /// Constants for masking the range pixels of `region`. Both grids are given from the
+    /// views' local origin, as the views were rendered (draw.rs).
+    pub fn new(sensor: &Sensor, mode: ShadowMode, views: &Views, shadow: &ViewGrid, region: PixelRect) -> Self {
+        let range = &views.range;
+        let grid = |g: &ViewGrid, origin: DVec3| {
+            [g.origin[0] - origin.x, g.origin[1] - origin.y, g.pitch[0], g.pitch[1]].map(|v| v as f32)
+        };
         Self {
-            range_grid: grid(range),
-            shadow_grid: grid(shadow),
+            range_grid: grid(range, views.origin),
+            shadow_grid: grid(shadow, sensor.to_shadow_frame().transform_point3(views.origin)),
             sizes: [range.width as i32, range.height as i32, shadow.width as i32, shadow.height as i32],
             region: [region.col, region.row, region.width, region.height].map(|v| v as i32),
             cos_theta: sensor.theta().cos() as f32,
