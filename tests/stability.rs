@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::compare::{compare_labels, near_label_change};
+use common::compare::{compare_labels, near_label_change, LabelDiff};
 use common::reference::reference_render;
 use common::*;
 use glam::{DMat4, DVec3};
@@ -105,8 +105,8 @@ fn sliver_triangles_shadow_like_their_faces() {
 
 /// Renders a scene and checks its shadowed labels against exact shadowing by the reference,
 /// with the conformance suite's allowance (near a change of label in the hit labels or the
-/// expected labels, or near an edge as the camera sees it); returns the wrong pixels outside it.
-fn shadow_errors_against_reference(name: &str, scene: &Scene) -> usize {
+/// expected labels, or near an edge as the camera sees it).
+fn shadow_diff_against_reference(name: &str, scene: &Scene) -> LabelDiff {
     let out = renderer().render(scene).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_no_validation_messages();
     let reference = reference_render(scene);
@@ -118,7 +118,12 @@ fn shadow_errors_against_reference(name: &str, scene: &Scene) -> usize {
         (0..w * h).map(|i| hit_edges[i] || boundaries[i] || reference.near_camera_edge[i]).collect();
     let diff = compare_labels(name, w, h, &out.label, &expected, &allowed);
     eprintln!("{name}: {diff:?}");
-    diff.outside_allowance
+    diff
+}
+
+/// As [`shadow_diff_against_reference`]: the wrong pixels outside the allowance.
+fn shadow_errors_against_reference(name: &str, scene: &Scene) -> usize {
+    shadow_diff_against_reference(name, scene).outside_allowance
 }
 
 #[test]
@@ -172,18 +177,9 @@ fn a_dense_sphere_on_a_table_shadows_like_exact_ray_casting() {
             let s = centred_sensor(size, size, 2.2 / f64::from(size), [0.3, 0.0], theta);
             let objects = [("builtin:plane:4", DMat4::IDENTITY), ("builtin:sphere:320", turned_and_tilted())];
             let sc = scene(s, ShadowMode::Depth, &objects);
-            let out = renderer().render(&sc).unwrap();
-            assert_no_validation_messages();
-            let reference = reference_render(&sc);
-            let expected = reference.label_shadowed();
-            let (w, h) = (reference.width, reference.height);
-            let hit_edges = near_label_change(&reference.label, w, h);
-            let boundaries = near_label_change(&expected, w, h);
-            let allowed: Vec<bool> =
-                (0..w * h).map(|i| hit_edges[i] || boundaries[i] || reference.near_camera_edge[i]).collect();
             let name = format!("dense_sphere_{size}_{theta}");
-            let diff = compare_labels(&name, w, h, &out.label, &expected, &allowed);
-            eprintln!("{name}: {diff:?}");
+            let diff = shadow_diff_against_reference(&name, &sc);
+            let (w, h) = (size as usize, size as usize);
             assert_eq!(diff.outside_allowance, 0, "{name}");
             assert!(diff.mismatched * 5000 <= w * h, "{name}: {} wrong pixels, more than 0.02%", diff.mismatched);
         }
