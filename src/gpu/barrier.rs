@@ -25,6 +25,13 @@ pub enum Access {
     DrawAndComputeRead,
 }
 
+impl Access {
+    /// Whether the use only reads, so that the same use again needs no barrier.
+    pub fn is_read_only(self) -> bool {
+        matches!(self, Access::ComputeRead | Access::TransferRead | Access::HostRead | Access::DrawAndComputeRead)
+    }
+}
+
 /// (stage, access, image layout) of each use.
 fn describe(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::ImageLayout) {
     use vk::{AccessFlags2 as A, ImageLayout as L, PipelineStageFlags2 as S};

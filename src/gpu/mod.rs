@@ -4,6 +4,7 @@
 mod barrier;
 mod context;
 mod descriptors;
+mod encoder;
 mod memory;
 pub(crate) mod shaders;
 mod timing;
@@ -11,5 +12,6 @@ mod timing;
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::StorageSet;
+pub use encoder::Encoder;
 pub use memory::{address_words, Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
 pub use timing::Timestamps;

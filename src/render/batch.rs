@@ -10,14 +10,14 @@
 //! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
 //! device-local buffer, zeroed first, copied to host memory at the end.
 
-use super::draw::{record_view, Draw, DrawConstants, ViewPass};
+use super::draw::Draw;
 use super::gpu_mesh::GpuMesh;
-use super::score_pass::{ScoreBindings, ScoreConstants};
-use super::shadow_pass::{MaskBindings, MaskConstants};
-use super::targets::{ViewKind, ViewTargets};
+use super::passes::{draw_table, Job, Passes, Sink, SinkKind, Slot, SlotShape};
+use super::score_pass::ScoreConstants;
+use super::targets::ViewKind;
 use super::{plan_views, Renderer, Views};
 use crate::error::Result;
-use crate::gpu::{address_words, barrier, Access, Buffer, BufferDesc, BufferTransition, ImageTransition};
+use crate::gpu::{address_words, Access, Buffer, BufferDesc, Encoder};
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
 use ash::vk;
@@ -65,14 +65,6 @@ impl BatchItem<'_> {
     }
 }
 
-struct Slot {
-    range: ViewTargets,
-    shadow: Option<ViewTargets>,
-    masked: Option<Buffer>,
-    mask_bindings: Option<MaskBindings>,
-    score_bindings: ScoreBindings,
-}
-
 impl Renderer {
     /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
     /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
@@ -107,10 +99,10 @@ impl Renderer {
         counts_words: usize,
     ) -> Result<Vec<u32>> {
         let ctx = &self.ctx;
-        let d = &ctx.device;
         let p = &self.pipelines;
         let sensor = settings.sensor;
         let max_side = ctx.limits.max_image_dimension2_d;
+        let to_shadow = sensor.to_shadow_frame();
         let views: Vec<Views> = items
             .iter()
             .map(|item| {
@@ -118,45 +110,46 @@ impl Renderer {
                 plan_views(sensor, settings.mode, &[(item.pose.transform_point3(centre), radius)], max_side)
             })
             .collect::<Result<_>>()?;
+        let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
+        // Each hypothesis' footprint in both views; one that misses the image records nothing.
+        let jobs: Vec<Option<Job>> = (0..)
+            .zip(items.iter().zip(&views).zip(&draws))
+            .map(|(index, ((item, views), draws))| {
+                let (centre, radius) = item.sphere;
+                let centre = item.pose.transform_point3(centre);
+                let area = views.range.footprint(centre, radius, FOOTPRINT_MARGIN)?;
+                let shadow_area = views.shadow.map(|g| {
+                    let columns =
+                        g.footprint(to_shadow.transform_point3(centre), radius, FOOTPRINT_MARGIN).unwrap_or(g.full());
+                    // Rows are the range view's (a rotation about y keeps y).
+                    PixelRect { row: area.row, height: area.height, ..columns }
+                });
+                Some(Job { draws: draws.as_slice(), first_draw_index: index, views, area, shadow_area })
+            })
+            .collect();
+        // Hypothesis i is draw i of the table, seen or not.
+        let table_jobs: Vec<Job> = items
+            .iter()
+            .zip(&views)
+            .zip(&draws)
+            .zip(0..)
+            .map(|(((_, views), draws), index)| Job {
+                draws: draws.as_slice(),
+                first_draw_index: index,
+                views,
+                area: views.range.full(),
+                shadow_area: None,
+            })
+            .collect();
+        let draw_table = draw_table(ctx, sensor, &table_jobs)?;
         let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
-        let (w, h) = (sensor.width, sensor.height);
-        let to_shadow = sensor.to_shadow_frame();
-        // Hypothesis i is draw i of the shadow view.
-        let draw_table = match shadow_width {
-            Some(_) => {
-                let entries: Vec<_> = (0..)
-                    .zip(items.iter().zip(&views))
-                    .filter_map(|(i, (item, views))| {
-                        let grid = views.shadow.as_ref()?;
-                        Some(DrawConstants::new(grid, to_shadow, views.origin, &item.draw(), i))
-                    })
-                    .collect();
-                Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
-            }
-            None => None,
+        let shape = SlotShape {
+            size: (sensor.width, sensor.height),
+            shadow: shadow_width.zip(draw_table.as_ref()),
+            sink: SinkKind::Counts,
         };
         let slots: Vec<Slot> = (0..SLOTS.min(items.len()))
-            .map(|i| {
-                let range = ViewTargets::new(ctx, ViewKind::Range, w, h, &format!("slot {i} range view"))?;
-                let shadow = match shadow_width {
-                    Some(sw) => Some(ViewTargets::new(ctx, ViewKind::Shadow, sw, h, &format!("slot {i} shadow view"))?),
-                    None => None,
-                };
-                let masked = match &shadow {
-                    Some(_) => Some(Buffer::new(
-                        ctx,
-                        BufferDesc::gpu_storage(u64::from(w) * u64::from(h) * 4),
-                        &format!("slot {i} shadowed labels"),
-                    )?),
-                    None => None,
-                };
-                let mask_bindings = match (&shadow, &masked, &draw_table) {
-                    (Some(s), Some(m), Some(t)) => Some(MaskBindings::new(ctx, p, &range, s, m, t)?),
-                    _ => None,
-                };
-                let score_bindings = ScoreBindings::new(ctx, p, &range)?;
-                Ok(Slot { range, shadow, masked, mask_bindings, score_bindings })
-            })
+            .map(|i| Slot::new(ctx, p, &shape, &format!("slot {i}")))
             .collect::<Result<_>>()?;
         let bytes = (counts_words as u64 * 4).max(4);
         let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
@@ -164,104 +157,25 @@ impl Renderer {
         let counts_address = counts.device_address();
 
         ctx.submit_and_wait("verification batch", |cmd| {
+            let mut enc = Encoder::new(ctx, cmd);
+            let passes = Passes { pipelines: p, sensor, mode: settings.mode };
+            enc.access(&[], &[(&counts, Access::TransferWrite)]);
             // SAFETY: cmd is recording; the buffer is not in use.
-            unsafe { d.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
-            barrier(
-                ctx,
-                cmd,
-                &[],
-                &[BufferTransition { buffer: &counts, from: Access::TransferWrite, to: Access::ComputeWrite }],
-            );
-            let mut recorded = 0;
-            for (index, (item, views)) in (0..).zip(items.iter().zip(&views)) {
-                let (centre, radius) = item.sphere;
-                let centre = item.pose.transform_point3(centre);
-                let Some(area) = views.range.footprint(centre, radius, FOOTPRINT_MARGIN) else { continue };
-                let shadow_area = views.shadow.map(|g| {
-                    let c = to_shadow.transform_point3(centre);
-                    let columns = g.footprint(c, radius, FOOTPRINT_MARGIN).unwrap_or(g.full());
-                    // Rows are the range view's (a rotation about y keeps y).
-                    PixelRect { row: area.row, height: area.height, ..columns }
-                });
-                let slot = &slots[recorded % slots.len()];
-                let first_use = recorded < slots.len();
-                recorded += 1;
-                let (colour_before, depth_before) = if first_use {
-                    (Access::Nothing, Access::Nothing)
-                } else {
-                    (Access::ComputeRead, Access::DepthAttachmentWrite)
-                };
-                let mut prepare = Vec::new();
-                for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
-                    prepare.extend(targets.colour_transitions(colour_before, Access::ColorAttachmentWrite));
-                    prepare.push(ImageTransition {
-                        image: &targets.depth,
-                        from: depth_before,
-                        to: Access::DepthAttachmentWrite,
-                    });
-                }
-                barrier(ctx, cmd, &prepare, &[]);
-                let draw = [item.draw()];
-                let range_pass = ViewPass {
-                    pipelines: &p.range,
-                    layout: p.raster_layout,
-                    targets: &slot.range,
-                    grid: &views.range,
-                    view_from_range: DMat4::IDENTITY,
-                    origin: views.origin,
-                    area,
-                };
-                record_view(ctx, cmd, &range_pass, &draw, index);
-                let mut reads = slot.range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
-                let shadowed_labels =
-                    match (&slot.shadow, &views.shadow, shadow_area, &slot.masked, &slot.mask_bindings) {
-                        (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) => {
-                            let shadow_pass = ViewPass {
-                                pipelines: &p.shadow,
-                                layout: p.raster_layout,
-                                targets,
-                                grid,
-                                view_from_range: to_shadow,
-                                origin: views.origin,
-                                area: shadow_area,
-                            };
-                            record_view(ctx, cmd, &shadow_pass, &draw, index);
-                            reads.extend(targets.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
-                            let masked_before = if first_use { Access::Nothing } else { Access::ComputeRead };
-                            barrier(
-                                ctx,
-                                cmd,
-                                &reads,
-                                &[BufferTransition { buffer: masked, from: masked_before, to: Access::ComputeWrite }],
-                            );
-                            bindings.record(cmd, p, &MaskConstants::new(sensor, settings.mode, views, grid, area));
-                            barrier(
-                                ctx,
-                                cmd,
-                                &[],
-                                &[BufferTransition {
-                                    buffer: masked,
-                                    from: Access::ComputeWrite,
-                                    to: Access::ComputeRead,
-                                }],
-                            );
-                            masked.address_words()
-                        }
-                        _ => {
-                            barrier(ctx, cmd, &reads, &[]);
-                            [0, 0]
-                        }
-                    };
-                let score = |labels: [u32; 2], offset: usize| ScoreConstants {
-                    shadowed_labels: labels,
+            unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
+            enc.access(&[], &[(&counts, Access::ComputeWrite)]);
+            for (recorded, (item, job)) in
+                items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate()
+            {
+                let score = |offset: usize| ScoreConstants {
+                    shadowed_labels: [0, 0],
                     sensed_segments: settings.sensed.segments.address_words(),
                     sensed_z: settings.sensed.z.address_words(),
                     counts: address_words(counts_address + offset as u64 * 4),
-                    width: w,
-                    height: h,
-                    z_origin: views.origin.z as f32,
+                    width: sensor.width,
+                    height: sensor.height,
+                    z_origin: job.views.origin.z as f32,
                     _pad: 0,
-                    region: [area.col, area.row, area.width, area.height],
+                    region: [job.area.col, job.area.row, job.area.width, job.area.height],
                     surfaces: item.surfaces,
                     segments: settings.sensed.segment_count,
                     tolerance: settings.tolerance,
@@ -269,26 +183,15 @@ impl Renderer {
                     dx: sensor.pitch[0] as f32,
                     dy: sensor.pitch[1] as f32,
                 };
-                slot.score_bindings.record(cmd, p, &score(shadowed_labels, item.counts_offset));
-                if let (Some(offset), true) = (item.unshadowed_offset, shadowed_labels != [0, 0]) {
-                    slot.score_bindings.record(cmd, p, &score([0, 0], offset));
-                }
+                let sink =
+                    Sink::Counts { shadowed: score(item.counts_offset), unshadowed: item.unshadowed_offset.map(score) };
+                passes.record(&mut enc, &slots[recorded % slots.len()], job, &sink, None);
             }
-            barrier(
-                ctx,
-                cmd,
-                &[],
-                &[BufferTransition { buffer: &counts, from: Access::ComputeWrite, to: Access::TransferRead }],
-            );
+            enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
             let region = [vk::BufferCopy::default().size(bytes)];
             // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
-            unsafe { d.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
-            barrier(
-                ctx,
-                cmd,
-                &[],
-                &[BufferTransition { buffer: &readback, from: Access::TransferWrite, to: Access::HostRead }],
-            );
+            unsafe { ctx.device.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
+            enc.access(&[], &[(&readback, Access::HostRead)]);
             Ok(())
         })?;
         let mut words: Vec<u32> = readback.read()?;

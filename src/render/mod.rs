@@ -10,6 +10,7 @@ mod batch;
 mod draw;
 mod gpu_mesh;
 mod output;
+mod passes;
 mod pipelines;
 mod score_pass;
 mod shadow_pass;
@@ -17,25 +18,21 @@ mod targets;
 
 pub(crate) use batch::{BatchItem, BatchSettings, SensedBuffers};
 pub use draw::Draw;
-use draw::{DrawConstants, ViewPass};
 pub use gpu_mesh::GpuMesh;
 pub use output::{PassTimings, RenderOutput};
 
 use crate::error::{Error, Result};
-use crate::gpu::{
-    barrier, Access, Buffer, BufferDesc, BufferTransition, ContextOptions, GpuContext, ImageTransition, Timestamps,
-};
+use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::MemoryBudget;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
-use ash::vk;
-use glam::{DMat4, DVec3};
+use glam::DVec3;
+use passes::{draw_table, Job, Passes, Sink, SinkKind, Slot, SlotShape, PASS_TIMESTAMPS};
 use pipelines::Pipelines;
-use shadow_pass::{MaskBindings, MaskConstants};
 use std::collections::hash_map::{Entry, HashMap};
 use std::sync::Arc;
-use targets::{ViewKind, ViewTargets};
+use targets::ViewKind;
 
 pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
@@ -166,121 +163,36 @@ impl Renderer {
 
     fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw]) -> Result<RenderOutput> {
         let ctx = &self.ctx;
-        let d = &ctx.device;
-        let p = &self.pipelines;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
-        let range = ViewTargets::new(ctx, ViewKind::Range, w, h, "range view")?;
-        let shadow = match &views.shadow {
-            Some(g) => Some(ViewTargets::new(ctx, ViewKind::Shadow, g.width, g.height, "shadow view")?),
-            None => None,
+        let job = Job {
+            draws,
+            first_draw_index: 0,
+            views,
+            area: views.range.full(),
+            shadow_area: views.shadow.map(|g| g.full()),
         };
-        let to_shadow = scene.sensor.to_shadow_frame();
+        let draw_table = draw_table(ctx, &scene.sensor, std::slice::from_ref(&job))?;
+        let shape = SlotShape {
+            size: (w, h),
+            shadow: views.shadow.as_ref().zip(draw_table.as_ref()).map(|(g, t)| (g.width, t)),
+            sink: SinkKind::Readback,
+        };
+        let slot = Slot::new(ctx, &self.pipelines, &shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
-        let masked = match &shadow {
-            Some(_) => Some(Buffer::new(ctx, BufferDesc::readback(pixels * 4), "shadowed labels")?),
-            None => None,
-        };
-        let draw_table = match &views.shadow {
-            Some(grid) => {
-                let entries: Vec<_> = (0..)
-                    .zip(draws)
-                    .map(|(i, draw)| DrawConstants::new(grid, to_shadow, views.origin, draw, i))
-                    .collect();
-                Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)
-            }
-            None => None,
-        };
-        let bindings = match (&shadow, &masked, &draw_table) {
-            (Some(s), Some(m), Some(t)) => Some(MaskBindings::new(ctx, p, &range, s, m, t)?),
-            _ => None,
-        };
-        let timestamps = Timestamps::new(ctx, 4, "pass timestamps")?;
-
+        let timestamps = Timestamps::new(ctx, PASS_TIMESTAMPS, "pass timestamps")?;
         ctx.submit_and_wait("render", |cmd| {
             timestamps.reset(cmd);
-            let mut prepare = range.prepare_for_rendering();
-            if let Some(s) = &shadow {
-                prepare.extend(s.prepare_for_rendering());
-            }
-            barrier(ctx, cmd, &prepare, &[]);
-            timestamps.write(cmd, 0);
-            let range_pass = ViewPass {
-                pipelines: &p.range,
-                layout: p.raster_layout,
-                targets: &range,
-                grid: &views.range,
-                view_from_range: DMat4::IDENTITY,
-                origin: views.origin,
-                area: views.range.full(),
-            };
-            draw::record_view(ctx, cmd, &range_pass, draws, 0);
-            timestamps.write(cmd, 1);
-            let mut to_copy = range.colour_transitions(Access::ColorAttachmentWrite, Access::TransferRead);
-            if let (Some(s), Some(grid), Some(b), Some(m)) = (&shadow, &views.shadow, &bindings, &masked) {
-                let shadow_pass = ViewPass {
-                    pipelines: &p.shadow,
-                    layout: p.raster_layout,
-                    targets: s,
-                    grid,
-                    view_from_range: to_shadow,
-                    origin: views.origin,
-                    area: grid.full(),
-                };
-                draw::record_view(ctx, cmd, &shadow_pass, draws, 0);
-                timestamps.write(cmd, 2);
-                let mut reads = range.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead);
-                reads.extend(s.colour_transitions(Access::ColorAttachmentWrite, Access::ComputeRead));
-                barrier(ctx, cmd, &reads, &[]);
-                b.record(
-                    cmd,
-                    p,
-                    &MaskConstants::new(&scene.sensor, scene.shadow.mode, views, grid, views.range.full()),
-                );
-                timestamps.write(cmd, 3);
-                to_copy = range.colour_transitions(Access::ComputeRead, Access::TransferRead);
-                barrier(
-                    ctx,
-                    cmd,
-                    &to_copy,
-                    &[BufferTransition { buffer: m, from: Access::ComputeWrite, to: Access::HostRead }],
-                );
-            } else {
-                barrier(ctx, cmd, &to_copy, &[]);
-            }
-            let region = [vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
-            // SAFETY: images are in TRANSFER_SRC layout; buffers are large enough (w·h·4 bytes).
-            unsafe {
-                d.cmd_copy_image_to_buffer(
-                    cmd,
-                    range.label().raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    label_readback.raw,
-                    &region,
-                );
-                d.cmd_copy_image_to_buffer(
-                    cmd,
-                    range.z().raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    z_readback.raw,
-                    &region,
-                );
-            }
-            let host: Vec<_> = [&label_readback, &z_readback]
-                .into_iter()
-                .map(|buffer| BufferTransition { buffer, from: Access::TransferWrite, to: Access::HostRead })
-                .collect();
-            barrier(ctx, cmd, &[] as &[ImageTransition], &host);
+            let mut enc = Encoder::new(ctx, cmd);
+            let sink = Sink::Readback { label: &label_readback, z: &z_readback };
+            let passes = Passes { pipelines: &self.pipelines, sensor: &scene.sensor, mode: scene.shadow.mode };
+            passes.record(&mut enc, &slot, &job, &sink, Some(&timestamps));
             Ok(())
         })?;
 
         let label_unshadowed: Vec<u32> = label_readback.read()?;
-        let label = match &masked {
+        let label = match slot.masked() {
             Some(m) => m.read()?,
             None => label_unshadowed.clone(),
         };
@@ -294,8 +206,8 @@ impl Renderer {
         }
         let timings = PassTimings {
             range_ms: timestamps.millis_between(0, 1)?,
-            shadow_ms: if shadow.is_some() { timestamps.millis_between(1, 2)? } else { None },
-            mask_ms: if shadow.is_some() { timestamps.millis_between(2, 3)? } else { None },
+            shadow_ms: if views.shadow.is_some() { timestamps.millis_between(1, 2)? } else { None },
+            mask_ms: if views.shadow.is_some() { timestamps.millis_between(2, 3)? } else { None },
         };
         Ok(RenderOutput {
             sensor: scene.sensor,

@@ -8,7 +8,7 @@
 
 use super::pipelines::{LABEL_FORMAT, VALUE_FORMAT};
 use crate::error::Result;
-use crate::gpu::{Access, GpuContext, Image, ImageDesc, ImageTransition};
+use crate::gpu::{GpuContext, Image, ImageDesc};
 use ash::vk;
 use std::sync::Arc;
 
@@ -64,17 +64,5 @@ impl ViewTargets {
     /// The range view's z.
     pub fn z(&self) -> &Image {
         &self.colour[1]
-    }
-
-    /// Transitions of the colour attachments from one use to another.
-    pub fn colour_transitions(&self, from: Access, to: Access) -> Vec<ImageTransition<'_>> {
-        self.colour.iter().map(|image| ImageTransition { image, from, to }).collect()
-    }
-
-    /// Transitions that make every attachment ready to be rendered into.
-    pub fn prepare_for_rendering(&self) -> Vec<ImageTransition<'_>> {
-        let mut t = self.colour_transitions(Access::Nothing, Access::ColorAttachmentWrite);
-        t.push(ImageTransition { image: &self.depth, from: Access::Nothing, to: Access::DepthAttachmentWrite });
-        t
     }
 }

@@ -1,0 +1,236 @@
+//! The pass list of one job, recorded by one function for `render` and for `verify`:
+//!
+//! range raster → [shadow raster → shadow mask] → sink
+//!
+//! where the sink is a readback of the images (`render`, a batch of one job) or the
+//! verification counts (`verify`, one job a hypothesis). The shadow passes are recorded only
+//! when the mode and θ ask for them. Each pass states the use it makes of each resource and the
+//! [`Encoder`] derives the barriers.
+
+use super::draw::{record_view, Draw, DrawConstants, ViewPass};
+use super::pipelines::Pipelines;
+use super::score_pass::{ScoreBindings, ScoreConstants};
+use super::shadow_pass::{MaskBindings, MaskConstants};
+use super::targets::{ViewKind, ViewTargets};
+use super::Views;
+use crate::error::Result;
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Timestamps};
+use crate::sensor::{PixelRect, Sensor};
+use crate::shadow::ShadowMode;
+use ash::vk;
+use glam::DMat4;
+use std::sync::Arc;
+
+/// The render targets and bindings one job renders into; a batch reuses a few in turn.
+pub(crate) struct Slot {
+    range: ViewTargets,
+    shadow: Option<ViewTargets>,
+    /// The shadow mask's output labels.
+    masked: Option<Buffer>,
+    mask_bindings: Option<MaskBindings>,
+    score_bindings: Option<ScoreBindings>,
+}
+
+/// What a slot must hold.
+pub(crate) struct SlotShape<'a> {
+    /// Range view width and height (the shadow view has the same rows).
+    pub size: (u32, u32),
+    /// Shadow view width, when a shadow pass runs; its draw table.
+    pub shadow: Option<(u32, &'a Buffer)>,
+    /// `render` reads the masked labels on the host; `verify` scores them on the GPU.
+    pub sink: SinkKind,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SinkKind {
+    Readback,
+    Counts,
+}
+
+impl Slot {
+    pub fn new(ctx: &Arc<GpuContext>, p: &Pipelines, shape: &SlotShape, name: &str) -> Result<Self> {
+        let (w, h) = shape.size;
+        let range = ViewTargets::new(ctx, ViewKind::Range, w, h, &format!("{name} range view"))?;
+        let (shadow, masked, mask_bindings) = match shape.shadow {
+            None => (None, None, None),
+            Some((shadow_width, draw_table)) => {
+                let shadow = ViewTargets::new(ctx, ViewKind::Shadow, shadow_width, h, &format!("{name} shadow view"))?;
+                let bytes = u64::from(w) * u64::from(h) * 4;
+                let desc = match shape.sink {
+                    SinkKind::Readback => BufferDesc::readback(bytes),
+                    SinkKind::Counts => BufferDesc::gpu_storage(bytes),
+                };
+                let masked = Buffer::new(ctx, desc, &format!("{name} shadowed labels"))?;
+                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table)?;
+                (Some(shadow), Some(masked), Some(bindings))
+            }
+        };
+        let score_bindings = match shape.sink {
+            SinkKind::Counts => Some(ScoreBindings::new(ctx, p, &range)?),
+            SinkKind::Readback => None,
+        };
+        Ok(Self { range, shadow, masked, mask_bindings, score_bindings })
+    }
+
+    /// The shadowed labels, where a shadow pass ran (host-visible for a readback slot).
+    pub fn masked(&self) -> Option<&Buffer> {
+        self.masked.as_ref()
+    }
+}
+
+/// One job: posed meshes rendered on planned views over a region of pixels.
+pub(crate) struct Job<'a> {
+    pub draws: &'a [Draw<'a>],
+    /// The first draw's entry in the draw table (the shadow view stores it per pixel).
+    pub first_draw_index: u32,
+    pub views: &'a Views,
+    /// The range pixels to render, mask and score.
+    pub area: PixelRect,
+    /// The shadow pixels to render (the rows of `area`).
+    pub shadow_area: Option<PixelRect>,
+}
+
+/// Where a job's images go.
+pub(crate) enum Sink<'a> {
+    /// Copies of the range view's labels and z (the masked labels stay in the slot).
+    Readback { label: &'a Buffer, z: &'a Buffer },
+    /// Verification counts of the shadowed labels, and of the unshadowed ones if asked. The
+    /// counts buffer is made ready once per batch: score passes only add to it atomically,
+    /// each into its own words.
+    Counts { shadowed: ScoreConstants, unshadowed: Option<ScoreConstants> },
+}
+
+/// Timestamp queries written between the passes: 0 before the range pass, 1 after it, 2 after
+/// the shadow pass, 3 after the mask.
+pub(crate) const PASS_TIMESTAMPS: u32 = 4;
+
+/// What is constant over the jobs of one submission.
+pub(crate) struct Passes<'a> {
+    pub pipelines: &'a Pipelines,
+    pub sensor: &'a Sensor,
+    pub mode: ShadowMode,
+}
+
+impl Passes<'_> {
+    /// Records one job's passes into the encoder's command buffer.
+    pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, timestamps: Option<&Timestamps>) {
+        record_job(enc, self, slot, job, sink, timestamps)
+    }
+}
+
+fn record_job(
+    enc: &mut Encoder,
+    passes: &Passes,
+    slot: &Slot,
+    job: &Job,
+    sink: &Sink,
+    timestamps: Option<&Timestamps>,
+) {
+    let (p, sensor, mode) = (passes.pipelines, passes.sensor, passes.mode);
+    let cmd = enc.cmd;
+    let stamp = |index| {
+        if let Some(t) = timestamps {
+            t.write(cmd, index);
+        }
+    };
+    let views = job.views;
+    let mut prepare = Vec::new();
+    for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
+        prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
+        prepare.push((&targets.depth, Access::DepthAttachmentWrite));
+    }
+    enc.access(&prepare, &[]);
+    stamp(0);
+    let range_pass = ViewPass {
+        pipelines: &p.range,
+        layout: p.raster_layout,
+        targets: &slot.range,
+        grid: &views.range,
+        view_from_range: DMat4::IDENTITY,
+        origin: views.origin,
+        area: job.area,
+    };
+    record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
+    stamp(1);
+    let range_reads: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
+    let mut shadowed_labels = None;
+    if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
+        (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
+    {
+        let shadow_pass = ViewPass {
+            pipelines: &p.shadow,
+            layout: p.raster_layout,
+            targets,
+            grid,
+            view_from_range: sensor.to_shadow_frame(),
+            origin: views.origin,
+            area: shadow_area,
+        };
+        record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
+        stamp(2);
+        let mut reads = range_reads.clone();
+        reads.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
+        enc.access(&reads, &[(masked, Access::ComputeWrite)]);
+        bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
+        stamp(3);
+        shadowed_labels = Some(masked);
+    }
+    match sink {
+        Sink::Readback { label, z } => {
+            let sources = [(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
+            enc.access(&sources, &[(label, Access::TransferWrite), (z, Access::TransferWrite)]);
+            let (w, h) = (views.range.width, views.range.height);
+            let region = [vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                )
+                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+            let d = &enc.ctx().device;
+            // SAFETY: the images are in TRANSFER_SRC layout; the buffers hold w·h·4 bytes.
+            unsafe {
+                for (image, buffer) in [(slot.range.label(), label), (slot.range.z(), z)] {
+                    d.cmd_copy_image_to_buffer(
+                        cmd,
+                        image.raw,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        buffer.raw,
+                        &region,
+                    );
+                }
+            }
+            let mut host = vec![(*label, Access::HostRead), (*z, Access::HostRead)];
+            host.extend(shadowed_labels.map(|m| (m, Access::HostRead)));
+            enc.access(&[], &host);
+        }
+        Sink::Counts { shadowed, unshadowed } => {
+            let score_bindings = slot.score_bindings.as_ref().expect("a counting slot has score bindings");
+            let masked_read: Vec<_> = shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
+            enc.access(&range_reads, &masked_read);
+            let labels = shadowed_labels.map_or([0, 0], |m| m.address_words());
+            score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: labels, ..*shadowed });
+            if let (Some(unshadowed), Some(_)) = (unshadowed, shadowed_labels) {
+                score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: [0, 0], ..*unshadowed });
+            }
+        }
+    }
+}
+
+/// The shadow view's draw table for these jobs, whose draws are numbered consecutively from
+/// the first job's `first_draw_index` = 0: each draw's constants in the shadow view, read by
+/// the mask to reach the triangles the shadow view stored (shaders/shadow_mask.comp). `None`
+/// when no job has a shadow view.
+pub(crate) fn draw_table(ctx: &Arc<GpuContext>, sensor: &Sensor, jobs: &[Job]) -> Result<Option<Buffer>> {
+    let to_shadow = sensor.to_shadow_frame();
+    let mut entries = Vec::new();
+    for job in jobs {
+        let Some(grid) = &job.views.shadow else { continue };
+        for (index, draw) in (job.first_draw_index..).zip(job.draws) {
+            debug_assert_eq!(index as usize, entries.len(), "draws are numbered consecutively");
+            entries.push(DrawConstants::new(grid, to_shadow, job.views.origin, draw, index));
+        }
+    }
+    match entries.is_empty() {
+        true => Ok(None),
+        false => Ok(Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)),
+    }
+}
