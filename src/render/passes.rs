@@ -114,102 +114,91 @@ pub(crate) struct Passes<'a> {
 impl Passes<'_> {
     /// Records one job's passes into the encoder's command buffer.
     pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, timestamps: Option<&Timestamps>) {
-        record_job(enc, self, slot, job, sink, timestamps)
-    }
-}
-
-fn record_job(
-    enc: &mut Encoder,
-    passes: &Passes,
-    slot: &Slot,
-    job: &Job,
-    sink: &Sink,
-    timestamps: Option<&Timestamps>,
-) {
-    let (p, sensor, mode) = (passes.pipelines, passes.sensor, passes.mode);
-    let cmd = enc.cmd;
-    let stamp = |index| {
-        if let Some(t) = timestamps {
-            t.write(cmd, index);
-        }
-    };
-    let views = job.views;
-    let mut prepare = Vec::new();
-    for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
-        prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
-        prepare.push((&targets.depth, Access::DepthAttachmentWrite));
-    }
-    enc.access(&prepare, &[]);
-    stamp(0);
-    let range_pass = ViewPass {
-        pipelines: &p.range,
-        layout: p.raster_layout,
-        targets: &slot.range,
-        grid: &views.range,
-        view_from_range: DMat4::IDENTITY,
-        origin: views.origin,
-        area: job.area,
-    };
-    record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
-    stamp(1);
-    let range_reads: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
-    let mut shadowed_labels = None;
-    if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
-        (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
-    {
-        let shadow_pass = ViewPass {
-            pipelines: &p.shadow,
-            layout: p.raster_layout,
-            targets,
-            grid,
-            view_from_range: sensor.to_shadow_frame(),
-            origin: views.origin,
-            area: shadow_area,
-        };
-        record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
-        stamp(2);
-        let mut reads = range_reads.clone();
-        reads.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
-        enc.access(&reads, &[(masked, Access::ComputeWrite)]);
-        bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
-        stamp(3);
-        shadowed_labels = Some(masked);
-    }
-    match sink {
-        Sink::Readback { label, z } => {
-            let sources = [(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
-            enc.access(&sources, &[(label, Access::TransferWrite), (z, Access::TransferWrite)]);
-            let (w, h) = (views.range.width, views.range.height);
-            let region = [vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
-            let d = &enc.ctx().device;
-            // SAFETY: the images are in TRANSFER_SRC layout; the buffers hold w·h·4 bytes.
-            unsafe {
-                for (image, buffer) in [(slot.range.label(), label), (slot.range.z(), z)] {
-                    d.cmd_copy_image_to_buffer(
-                        cmd,
-                        image.raw,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        buffer.raw,
-                        &region,
-                    );
-                }
+        let (p, sensor, mode) = (self.pipelines, self.sensor, self.mode);
+        let cmd = enc.cmd;
+        let stamp = |index| {
+            if let Some(t) = timestamps {
+                t.write(cmd, index);
             }
-            let mut host = vec![(*label, Access::HostRead), (*z, Access::HostRead)];
-            host.extend(shadowed_labels.map(|m| (m, Access::HostRead)));
-            enc.access(&[], &host);
+        };
+        let views = job.views;
+        let mut prepare = Vec::new();
+        for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
+            prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
+            prepare.push((&targets.depth, Access::DepthAttachmentWrite));
         }
-        Sink::Counts { shadowed, unshadowed } => {
-            let score_bindings = slot.score_bindings.as_ref().expect("a counting slot has score bindings");
-            let masked_read: Vec<_> = shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
-            enc.access(&range_reads, &masked_read);
-            let labels = shadowed_labels.map_or([0, 0], |m| m.address_words());
-            score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: labels, ..*shadowed });
-            if let (Some(unshadowed), Some(_)) = (unshadowed, shadowed_labels) {
-                score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: [0, 0], ..*unshadowed });
+        enc.access(&prepare, &[]);
+        stamp(0);
+        let range_pass = ViewPass {
+            pipelines: &p.range,
+            layout: p.raster_layout,
+            targets: &slot.range,
+            grid: &views.range,
+            view_from_range: DMat4::IDENTITY,
+            origin: views.origin,
+            area: job.area,
+        };
+        record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
+        stamp(1);
+        let range_reads: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
+        let mut shadowed_labels = None;
+        if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
+            (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
+        {
+            let shadow_pass = ViewPass {
+                pipelines: &p.shadow,
+                layout: p.raster_layout,
+                targets,
+                grid,
+                view_from_range: sensor.to_shadow_frame(),
+                origin: views.origin,
+                area: shadow_area,
+            };
+            record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
+            stamp(2);
+            let mut reads = range_reads.clone();
+            reads.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
+            enc.access(&reads, &[(masked, Access::ComputeWrite)]);
+            bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
+            stamp(3);
+            shadowed_labels = Some(masked);
+        }
+        match sink {
+            Sink::Readback { label, z } => {
+                let sources = [(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
+                enc.access(&sources, &[(label, Access::TransferWrite), (z, Access::TransferWrite)]);
+                let (w, h) = (views.range.width, views.range.height);
+                let region = [vk::BufferImageCopy::default()
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+                let d = &enc.ctx().device;
+                // SAFETY: the images are in TRANSFER_SRC layout; the buffers hold w·h·4 bytes.
+                unsafe {
+                    for (image, buffer) in [(slot.range.label(), label), (slot.range.z(), z)] {
+                        d.cmd_copy_image_to_buffer(
+                            cmd,
+                            image.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            buffer.raw,
+                            &region,
+                        );
+                    }
+                }
+                let mut host = vec![(*label, Access::HostRead), (*z, Access::HostRead)];
+                host.extend(shadowed_labels.map(|m| (m, Access::HostRead)));
+                enc.access(&[], &host);
+            }
+            Sink::Counts { shadowed, unshadowed } => {
+                let score_bindings = slot.score_bindings.as_ref().expect("a counting slot has score bindings");
+                let masked_read: Vec<_> = shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
+                enc.access(&range_reads, &masked_read);
+                let labels = shadowed_labels.map_or([0, 0], |m| m.address_words());
+                score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: labels, ..*shadowed });
+                if let (Some(unshadowed), Some(_)) = (unshadowed, shadowed_labels) {
+                    score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: [0, 0], ..*unshadowed });
+                }
             }
         }
     }
