@@ -9,6 +9,7 @@
 mod batch;
 mod draw;
 mod gpu_mesh;
+mod mesh_cache;
 mod output;
 mod passes;
 mod pipelines;
@@ -28,9 +29,9 @@ use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
+use mesh_cache::MeshCache;
 use passes::{draw_table, Job, Passes, Sink, SinkKind, Slot, SlotShape, PASS_TIMESTAMPS};
 use pipelines::Pipelines;
-use std::collections::hash_map::{Entry, HashMap};
 use std::sync::Arc;
 use targets::ViewKind;
 
@@ -39,6 +40,7 @@ pub struct Renderer {
     pipelines: Pipelines,
     ctx: Arc<GpuContext>,
     budget: MemoryBudget,
+    meshes: MeshCache,
 }
 
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
@@ -107,7 +109,12 @@ impl Renderer {
 
     /// A renderer on `ctx` with the default memory budget.
     pub fn with_context(ctx: Arc<GpuContext>) -> Result<Self> {
-        Ok(Self { pipelines: Pipelines::new(&ctx)?, ctx, budget: MemoryBudget::default() })
+        Ok(Self {
+            pipelines: Pipelines::new(&ctx)?,
+            ctx,
+            budget: MemoryBudget::default(),
+            meshes: MeshCache::default(),
+        })
     }
 
     /// The same renderer, refusing calls that would need more than `budget`.
@@ -128,22 +135,14 @@ impl Renderer {
         let sensor = &scene.sensor;
         sensor.validate()?;
         let label_bases = scene.label_bases()?;
-        // Each mesh once, however many objects share it (a map: scenes may hold many objects).
-        let mut uploaded: HashMap<*const crate::mesh::Mesh, GpuMesh> = HashMap::new();
-        for object in &scene.objects {
-            if let Entry::Vacant(slot) = uploaded.entry(Arc::as_ptr(&object.mesh)) {
-                slot.insert(GpuMesh::upload(&self.ctx, &object.mesh)?);
-            }
-        }
-        let draws: Vec<Draw> = scene
-            .objects
+        // Each model once, however many objects share it, and kept for the next render.
+        let uploaded: Vec<Arc<GpuMesh>> =
+            scene.objects.iter().map(|object| self.meshes.get(&self.ctx, &object.mesh)).collect::<Result<_>>()?;
+        let draws: Vec<Draw> = uploaded
             .iter()
+            .zip(&scene.objects)
             .zip(&label_bases)
-            .map(|(object, &label_base)| Draw {
-                mesh: &uploaded[&Arc::as_ptr(&object.mesh)],
-                pose: object.pose,
-                label_base,
-            })
+            .map(|((mesh, object), &label_base)| Draw { mesh, pose: object.pose, label_base })
             .collect();
         let spheres: Vec<_> = scene
             .objects

@@ -30,6 +30,11 @@ pub struct ScoreConstants {
     pub dy: f32,
 }
 
+// std430 offsets of `Score` in shaders/score.comp: a uvec4 aligns to 16.
+const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 40);
+const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 48);
+const _: () = assert!(size_of::<ScoreConstants>() == 88);
+
 /// The descriptor set binding a range view's label and z attachments for the score pass.
 pub struct ScoreBindings {
     set: StorageSet,

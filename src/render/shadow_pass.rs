@@ -28,6 +28,10 @@ pub struct MaskConstants {
     _pad: [u32; 3],
 }
 
+// std430 offsets of `Mask` in shaders/shadow_mask.comp.
+const _: () = assert!(std::mem::offset_of!(MaskConstants, cos_theta) == 64);
+const _: () = assert!(std::mem::offset_of!(MaskConstants, mode) == 80);
+
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
     /// views' local origin, as the views were rendered (draw.rs).

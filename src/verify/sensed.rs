@@ -1,11 +1,15 @@
-//! The sensed image as verification needs it, computed once per batch: its segments (the
-//! labels it holds) numbered densely, each pixel's segment index, the depths, and what the
-//! scores take from the sensed image alone: N_i, N_S and A_S.
+//! The sensed image as verification needs it, computed once: its segments (the labels it
+//! holds) numbered densely, each pixel's segment index, the depths, and what the scores take
+//! from the sensed image alone: N_i, N_S and A_S. The per-pixel data goes to the GPU once, on
+//! the first verification that needs it there, and is kept for the next.
 
 use super::area::{block_area_units, unit_scale};
 use crate::error::{Error, Result};
+use crate::gpu::{Buffer, GpuContext};
 use crate::io::RangeImage;
 use crate::sensor::Sensor;
+use ash::vk;
+use std::sync::{Arc, OnceLock};
 
 #[derive(Debug, Clone)]
 pub struct SensedImage {
@@ -23,6 +27,38 @@ pub struct SensedImage {
     pub segment_population: Vec<u64>,
     /// A_S per dense segment index, in area units.
     pub segment_area_units: Vec<u64>,
+    /// The device copy, once a verification made it (shared by clones: the data is the same).
+    on_gpu: Arc<OnceLock<SensedGpu>>,
+}
+
+/// The sensed image's per-pixel segment indices and z in device-local memory.
+pub(crate) struct SensedGpu {
+    /// The context the buffers belong to.
+    context: Arc<GpuContext>,
+    pub segments: Buffer,
+    pub z: Buffer,
+}
+
+impl std::fmt::Debug for SensedGpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SensedGpu")
+    }
+}
+
+/// The device copy a verification reads: the kept one, or one made for another device.
+pub(crate) enum SensedOnGpu<'a> {
+    Kept(&'a SensedGpu),
+    Fresh(Box<SensedGpu>),
+}
+
+impl std::ops::Deref for SensedOnGpu<'_> {
+    type Target = SensedGpu;
+    fn deref(&self) -> &SensedGpu {
+        match self {
+            SensedOnGpu::Kept(kept) => kept,
+            SensedOnGpu::Fresh(fresh) => fresh,
+        }
+    }
 }
 
 impl SensedImage {
@@ -91,7 +127,31 @@ impl SensedImage {
             z: image.z.clone(),
             segment_population,
             segment_area_units,
+            on_gpu: Arc::default(),
         })
+    }
+
+    /// The per-pixel data on `ctx`'s device: uploaded by the first call and kept, so a batch
+    /// of `verify` calls against one image uploads it once. A call on another device gets a
+    /// copy of its own.
+    pub(crate) fn on_gpu(&self, ctx: &Arc<GpuContext>) -> Result<SensedOnGpu<'_>> {
+        let upload = || -> Result<SensedGpu> {
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            Ok(SensedGpu {
+                context: ctx.clone(),
+                segments: Buffer::device_local_with_data(ctx, usage, &self.segment_index, "sensed segments")?,
+                z: Buffer::device_local_with_data(ctx, usage, &self.z, "sensed z")?,
+            })
+        };
+        if self.on_gpu.get().is_none() {
+            let fresh = upload()?;
+            // A concurrent call may have set it first; either copy serves.
+            let _ = self.on_gpu.set(fresh);
+        }
+        match self.on_gpu.get() {
+            Some(kept) if Arc::ptr_eq(&kept.context, ctx) => Ok(SensedOnGpu::Kept(kept)),
+            _ => Ok(SensedOnGpu::Fresh(Box::new(upload()?))),
+        }
     }
 
     /// Dense index of a segment label, if the image holds it.

@@ -13,13 +13,11 @@ use super::counts::{Counts, CountsLayout};
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
 use crate::error::{Error, Result};
-use crate::gpu::Buffer;
 use crate::mesh::Mesh;
 use crate::render::{BatchItem, BatchSettings, GpuMesh, Renderer, SensedBuffers};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
 use crate::shadow::ShadowMode;
-use ash::vk;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -198,19 +196,17 @@ impl Verifier {
         let (copies, counts_budget) = (plan.copies, plan.counts_budget);
         let layout = |h: &Hypothesis| plan.layout(h);
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
-        let segments = Buffer::device_local_with_data(
-            ctx,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            &sensed.segment_index,
-            "sensed segments",
-        )?;
-        let z = Buffer::device_local_with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &sensed.z, "sensed z")?;
+        let on_gpu = sensed.on_gpu(ctx)?;
         let batch = BatchSettings {
             sensor,
             mode: settings.shadow,
             tolerance: settings.tolerance as f32,
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
-            sensed: SensedBuffers { segments: &segments, z: &z, segment_count: sensed.segments.len() as u32 },
+            sensed: SensedBuffers {
+                segments: &on_gpu.segments,
+                z: &on_gpu.z,
+                segment_count: sensed.segments.len() as u32,
+            },
         };
         let mut results = Vec::with_capacity(hypotheses.len());
         let mut start = 0;
