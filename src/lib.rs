@@ -9,6 +9,7 @@ pub mod limits;
 pub mod mesh;
 pub mod pose;
 pub mod render;
+pub mod render_output;
 pub mod scene;
 pub mod sensor;
 pub mod shadow;

@@ -2,7 +2,7 @@
 //! shadow settings it was made with, when known. `render` writes one; `verify` reads one as
 //! the sensed image.
 
-use crate::render::RenderOutput;
+use crate::render_output::RenderOutput;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
 

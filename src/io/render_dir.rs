@@ -5,7 +5,7 @@ use super::{
     StagedSet,
 };
 use crate::error::Result;
-use crate::render::RenderOutput;
+use crate::render_output::RenderOutput;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 

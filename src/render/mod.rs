@@ -10,17 +10,16 @@ mod batch;
 mod draw;
 mod gpu_mesh;
 mod mesh_cache;
-mod output;
 mod passes;
 mod pipelines;
 mod score_pass;
 mod shadow_pass;
 mod targets;
 
+pub use crate::render_output::{PassTimings, RenderOutput};
 pub(crate) use batch::{BatchItem, BatchSettings, SensedBuffers};
 pub use draw::Draw;
 pub use gpu_mesh::GpuMesh;
-pub use output::{PassTimings, RenderOutput};
 
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};

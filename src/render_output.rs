@@ -1,5 +1,6 @@
 //! What a render returns: the range image (a 3D point per valid pixel), the labels before
-//! and after shadowing, and the time each pass took on the GPU.
+//! and after shadowing, and the time each pass took on the GPU. Plain data, apart from the
+//! renderer, so that writing it (io/) does not depend on rendering.
 
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
