@@ -14,7 +14,7 @@ use std::path::Path;
 
 #[test]
 fn the_vulkan_1_2_path_matches_the_core_path() {
-    let extension_path = Verifier::new(test_renderer(Some(vk::API_VERSION_1_2)));
+    let extension_path = Verifier::new(test_renderer(Some(vk::API_VERSION_1_2))).expect("verifier");
     let ctx = extension_path.renderer().context();
     assert!(!ctx.core_vulkan_1_3(), "capped at 1.2, the extensions must be used");
     assert!(renderer().context().core_vulkan_1_3(), "lavapipe is a 1.3 device");

@@ -21,7 +21,7 @@ const SENSED: &str = include_str!("../docs/example/sensed.toml");
 
 fn main() -> anyhow::Result<()> {
     let quick = std::env::args().any(|a| a == "--quick");
-    let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?);
+    let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?)?;
     let scene = Scene::from_toml(SENSED, Path::new("."), MemoryBudget::default())?;
     let image = RangeImage::from(&verifier.renderer().render(&scene)?);
     let sensed = SensedImage::new(&image, &scene.sensor)?;

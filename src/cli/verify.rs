@@ -74,7 +74,8 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
     )?;
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     drop(image);
-    let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget));
+    let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget))
+        .context("starting Vulkan")?;
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
     let mut inputs = vec![args.hypotheses.clone(), args.scene.clone()];

@@ -2,7 +2,7 @@
 //! bound in that order from binding 0, with its own pool so dropping it frees everything;
 //! and the one way compute passes are recorded with it.
 
-use super::{Buffer, GpuContext, Image};
+use super::{Buffer, ComputePipeline, GpuContext, Image};
 use crate::error::{Result, VkResultExt};
 use ash::vk;
 use std::sync::Arc;
@@ -74,14 +74,8 @@ impl StorageSet {
 impl StorageSet {
     /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
     /// `constants` pushed at offset 0. The set's resources must already be in GENERAL layout.
-    pub fn dispatch(
-        &self,
-        cmd: vk::CommandBuffer,
-        pipeline: vk::Pipeline,
-        layout: vk::PipelineLayout,
-        constants: &[u8],
-        groups: [u32; 2],
-    ) {
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
+        let (layout, pipeline) = (pipeline.layout, pipeline.pipeline);
         let d = &self.ctx.device;
         // SAFETY: cmd is recording; pipeline and layout match the set's layout; the set's
         // resources outlive the submission.

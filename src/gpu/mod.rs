@@ -2,6 +2,7 @@
 //! timestamps). Nothing here knows about range images.
 
 mod barrier;
+mod compute;
 mod context;
 mod descriptors;
 mod encoder;
@@ -10,6 +11,7 @@ pub(crate) mod shaders;
 mod timing;
 
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
+pub use compute::ComputePipeline;
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::StorageSet;
 pub use encoder::Encoder;

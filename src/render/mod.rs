@@ -6,20 +6,19 @@
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
-mod batch;
 mod draw;
 mod gpu_mesh;
 mod mesh_cache;
 mod passes;
 mod pipelines;
-mod score_pass;
 mod shadow_pass;
 mod targets;
 
 pub use crate::render_output::{PassTimings, RenderOutput};
-pub(crate) use batch::{BatchItem, BatchSettings, SensedBuffers};
 pub use draw::Draw;
 pub use gpu_mesh::GpuMesh;
+pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
+pub(crate) use targets::ViewKind;
 
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
@@ -29,10 +28,9 @@ use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
 use mesh_cache::MeshCache;
-use passes::{draw_table, Job, Passes, Sink, SinkKind, Slot, SlotShape, PASS_TIMESTAMPS};
+use passes::PASS_TIMESTAMPS;
 use pipelines::Pipelines;
 use std::sync::Arc;
-use targets::ViewKind;
 
 pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
@@ -129,6 +127,16 @@ impl Renderer {
         &self.ctx
     }
 
+    /// Render targets for jobs of this shape (passes.rs).
+    pub(crate) fn slot(&self, shape: &SlotShape, name: &str) -> Result<Slot> {
+        Slot::new(&self.ctx, &self.pipelines, shape, name)
+    }
+
+    /// The pass list for jobs seen by this sensor in this shadow mode.
+    pub(crate) fn passes<'a>(&'a self, sensor: &'a Sensor, mode: ShadowMode) -> Passes<'a> {
+        Passes { pipelines: &self.pipelines, sensor, mode }
+    }
+
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
     pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
         let sensor = &scene.sensor;
@@ -176,7 +184,7 @@ impl Renderer {
             shadow: views.shadow.as_ref().zip(draw_table.as_ref()).map(|(g, t)| (g.width, t)),
             sink: SinkKind::Readback,
         };
-        let slot = Slot::new(ctx, &self.pipelines, &shape, "render")?;
+        let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PASS_TIMESTAMPS, "pass timestamps")?;
@@ -184,8 +192,7 @@ impl Renderer {
             timestamps.reset(cmd);
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
-            let passes = Passes { pipelines: &self.pipelines, sensor: &scene.sensor, mode: scene.shadow.mode };
-            passes.record(&mut enc, &slot, &job, &sink, Some(&timestamps));
+            self.passes(&scene.sensor, scene.shadow.mode).record(&mut enc, &slot, &job, &sink, Some(&timestamps));
             Ok(())
         })?;
 

@@ -2,19 +2,19 @@
 //!
 //! range raster → [shadow raster → shadow mask] → sink
 //!
-//! where the sink is a readback of the images (`render`, a batch of one job) or the
-//! verification counts (`verify`, one job a hypothesis). The shadow passes are recorded only
+//! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
+//! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
+//! The shadow passes are recorded only
 //! when the mode and θ ask for them. Each pass states the use it makes of each resource and the
 //! [`Encoder`] derives the barriers.
 
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::pipelines::Pipelines;
-use super::score_pass::{ScoreBindings, ScoreConstants};
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::targets::{ViewKind, ViewTargets};
 use super::Views;
 use crate::error::Result;
-use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Timestamps};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
 use ash::vk;
@@ -28,7 +28,6 @@ pub(crate) struct Slot {
     /// The shadow mask's output labels.
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
-    score_bindings: Option<ScoreBindings>,
 }
 
 /// What a slot must hold.
@@ -44,7 +43,7 @@ pub(crate) struct SlotShape<'a> {
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub(crate) enum SinkKind {
     Readback,
-    Counts,
+    Compute,
 }
 
 impl Slot {
@@ -58,18 +57,19 @@ impl Slot {
                 let bytes = u64::from(w) * u64::from(h) * 4;
                 let desc = match shape.sink {
                     SinkKind::Readback => BufferDesc::readback(bytes),
-                    SinkKind::Counts => BufferDesc::gpu_storage(bytes),
+                    SinkKind::Compute => BufferDesc::gpu_storage(bytes),
                 };
                 let masked = Buffer::new(ctx, desc, &format!("{name} shadowed labels"))?;
                 let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table)?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
         };
-        let score_bindings = match shape.sink {
-            SinkKind::Counts => Some(ScoreBindings::new(ctx, p, &range)?),
-            SinkKind::Readback => None,
-        };
-        Ok(Self { range, shadow, masked, mask_bindings, score_bindings })
+        Ok(Self { range, shadow, masked, mask_bindings })
+    }
+
+    /// The range view's label and z attachments, which a compute sink reads.
+    pub fn range_label_and_z(&self) -> (&Image, &Image) {
+        (self.range.label(), self.range.z())
     }
 
     /// The shadowed labels, where a shadow pass ran (host-visible for a readback slot).
@@ -94,10 +94,17 @@ pub(crate) struct Job<'a> {
 pub(crate) enum Sink<'a> {
     /// Copies of the range view's labels and z (the masked labels stay in the slot).
     Readback { label: &'a Buffer, z: &'a Buffer },
-    /// Verification counts of the shadowed labels, and of the unshadowed ones if asked. The
-    /// counts buffer is made ready once per batch: score passes only add to it atomically,
-    /// each into its own words.
-    Counts { shadowed: ScoreConstants, unshadowed: Option<ScoreConstants> },
+    /// A caller's compute pass over the job's images, recorded after the passes: it states
+    /// its own accesses to the encoder.
+    Compute(&'a dyn Fn(&mut Encoder, &JobImages)),
+}
+
+/// A job's images, as a compute sink finds them.
+pub(crate) struct JobImages<'a> {
+    pub label: &'a Image,
+    pub z: &'a Image,
+    /// The shadow mask's output, where a shadow pass ran.
+    pub shadowed_labels: Option<&'a Buffer>,
 }
 
 /// Timestamp queries written between the passes: 0 before the range pass, 1 after it, 2 after
@@ -140,7 +147,6 @@ impl Passes<'_> {
         };
         record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
         stamp(1);
-        let range_reads: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
         let mut shadowed_labels = None;
         if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
             (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
@@ -156,8 +162,8 @@ impl Passes<'_> {
             };
             record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
             stamp(2);
-            let mut reads = range_reads.clone();
-            reads.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
+            let reads: Vec<_> =
+                slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
             bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
             stamp(3);
@@ -190,15 +196,9 @@ impl Passes<'_> {
                 host.extend(shadowed_labels.map(|m| (m, Access::HostRead)));
                 enc.access(&[], &host);
             }
-            Sink::Counts { shadowed, unshadowed } => {
-                let score_bindings = slot.score_bindings.as_ref().expect("a counting slot has score bindings");
-                let masked_read: Vec<_> = shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
-                enc.access(&range_reads, &masked_read);
-                let labels = shadowed_labels.map_or([0, 0], |m| m.address_words());
-                score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: labels, ..*shadowed });
-                if let (Some(unshadowed), Some(_)) = (unshadowed, shadowed_labels) {
-                    score_bindings.record(cmd, p, &ScoreConstants { shadowed_labels: [0, 0], ..*unshadowed });
-                }
+            Sink::Compute(record) => {
+                let images = JobImages { label: slot.range.label(), z: slot.range.z(), shadowed_labels };
+                record(enc, &images);
             }
         }
     }

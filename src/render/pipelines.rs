@@ -1,14 +1,13 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
-//! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs), the
-//! shadow-mask compute pipeline and the verification-count compute pipeline.
+//! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs) and
+//! the shadow-mask compute pipeline.
 
 use super::draw::DrawConstants;
-use super::score_pass::ScoreConstants;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
-use crate::gpu::{GpuContext, DEPTH_FORMAT};
+use crate::gpu::{ComputePipeline, GpuContext, DEPTH_FORMAT};
 use ash::vk;
 use std::sync::Arc;
 
@@ -30,29 +29,29 @@ pub struct Pipelines {
     pub raster_layout: vk::PipelineLayout,
     pub range: ViewPipelines,
     pub shadow: ViewPipelines,
-    pub mask_set_layout: vk::DescriptorSetLayout,
-    pub mask_layout: vk::PipelineLayout,
-    pub mask: vk::Pipeline,
-    pub score_set_layout: vk::DescriptorSetLayout,
-    pub score_layout: vk::PipelineLayout,
-    pub score: vk::Pipeline,
+    pub mask: ComputePipeline,
 }
 
 impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
+        let mask_bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, MaskBindings::IMAGES)
+            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, MaskBindings::BUFFERS))
+            .collect();
+        let mask = ComputePipeline::new(
+            ctx,
+            &mask_bindings,
+            size_of::<MaskConstants>(),
+            shaders::SHADOW_MASK_COMP,
+            "shadow mask",
+        )?;
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),
             range: ViewPipelines::default(),
             shadow: ViewPipelines::default(),
-            mask_set_layout: vk::DescriptorSetLayout::null(),
-            mask_layout: vk::PipelineLayout::null(),
-            mask: vk::Pipeline::null(),
-            score_set_layout: vk::DescriptorSetLayout::null(),
-            score_layout: vk::PipelineLayout::null(),
-            score: vk::Pipeline::null(),
+            mask,
         };
         let raster_push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
@@ -82,24 +81,6 @@ impl Pipelines {
             view.depth_only = pipeline(None, Depth::Nearest, " (depth)")?;
             view.ties = pipeline(Some(&ties_frag), Depth::Tie, " (ties)")?;
         }
-
-        let mask_bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, MaskBindings::IMAGES)
-            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, MaskBindings::BUFFERS))
-            .collect();
-        (p.mask_set_layout, p.mask_layout, p.mask) = compute_pipeline(
-            ctx,
-            &mask_bindings,
-            size_of::<MaskConstants>(),
-            shaders::SHADOW_MASK_COMP,
-            "shadow mask",
-        )?;
-        (p.score_set_layout, p.score_layout, p.score) = compute_pipeline(
-            ctx,
-            &[vk::DescriptorType::STORAGE_IMAGE; 2],
-            size_of::<ScoreConstants>(),
-            shaders::SCORE_COMP,
-            "verification counts",
-        )?;
         Ok(p)
     }
 }
@@ -110,89 +91,12 @@ impl Drop for Pipelines {
         // SAFETY: owned handles (null ones are ignored by Vulkan); no submission uses them
         // once the renderer is dropped.
         unsafe {
-            d.destroy_pipeline(self.score, None);
-            d.destroy_pipeline_layout(self.score_layout, None);
-            d.destroy_descriptor_set_layout(self.score_set_layout, None);
-            d.destroy_pipeline(self.mask, None);
-            d.destroy_pipeline_layout(self.mask_layout, None);
-            d.destroy_descriptor_set_layout(self.mask_set_layout, None);
             for view in [&self.range, &self.shadow] {
                 for pipeline in [view.nearest, view.depth_only, view.ties] {
                     d.destroy_pipeline(pipeline, None);
                 }
             }
             d.destroy_pipeline_layout(self.raster_layout, None);
-        }
-    }
-}
-
-/// A compute pipeline whose set 0 has one binding of each given type (compute stage) and
-/// whose push constants are `push_size` bytes. Whatever was created before a failure is
-/// destroyed by the caller's `Pipelines::drop` once assigned, so each step is assigned as made.
-fn compute_pipeline(
-    ctx: &GpuContext,
-    binding_types: &[vk::DescriptorType],
-    push_size: usize,
-    spirv: &[u8],
-    name: &str,
-) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout, vk::Pipeline)> {
-    let d = &ctx.device;
-    let bindings: Vec<_> = binding_types
-        .iter()
-        .enumerate()
-        .map(|(b, &ty)| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(b as u32)
-                .descriptor_type(ty)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-        })
-        .collect();
-    // SAFETY: valid device.
-    let set_layout = unsafe {
-        d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
-    }
-    .vk(&format!("creating the {name} descriptor layout"))?;
-    let push = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32)];
-    let set_layouts = [set_layout];
-    // SAFETY: valid device and set layout.
-    let layout = unsafe {
-        d.create_pipeline_layout(
-            &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
-            None,
-        )
-    };
-    let layout = match layout {
-        Ok(l) => l,
-        Err(e) => {
-            // SAFETY: unused layout.
-            unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
-            return Err(Error::vulkan(&format!("creating the {name} pipeline layout"), e));
-        }
-    };
-    let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module.raw)
-            .name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
-        // SAFETY: valid layout and module.
-        unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
-            .map(|p| p[0])
-            .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
-    });
-    match made {
-        Ok(pipeline) => {
-            ctx.name_object(pipeline, name);
-            Ok((set_layout, layout, pipeline))
-        }
-        Err(e) => {
-            // SAFETY: unused layouts.
-            unsafe {
-                d.destroy_pipeline_layout(layout, None);
-                d.destroy_descriptor_set_layout(set_layout, None);
-            }
-            Err(e)
         }
     }
 }

@@ -80,12 +80,12 @@ impl MaskBindings {
         let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
         debug_assert_eq!(images.len(), Self::IMAGES);
         let buffers = [masked, draw_table];
-        Ok(Self { set: StorageSet::new(ctx, pipelines.mask_set_layout, &images, &buffers, "shadow mask bindings")? })
+        Ok(Self { set: StorageSet::new(ctx, pipelines.mask.set_layout, &images, &buffers, "shadow mask bindings")? })
     }
 
     /// Records the pass over the constants' region (8×8 workgroups).
     pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &MaskConstants) {
         let groups = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, pipelines.mask, pipelines.mask_layout, bytemuck::bytes_of(constants), groups);
+        self.set.dispatch(cmd, &pipelines.mask, bytemuck::bytes_of(constants), groups);
     }
 }

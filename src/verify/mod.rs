@@ -3,9 +3,11 @@
 //! six scores on the host in f64.
 
 pub mod area;
+mod batch;
 mod counts;
 mod hypothesis;
 mod report;
+mod score_pass;
 mod scores;
 mod sensed;
 mod verifier;

@@ -9,12 +9,14 @@
 //! image.
 
 use super::area::unit_scale;
+use super::batch::{batch_slot_memory, count_batch, BatchItem, BatchSettings, SensedBuffers};
 use super::counts::{Counts, CountsLayout};
+use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::render::{BatchItem, BatchSettings, GpuMesh, Renderer, SensedBuffers};
+use crate::render::{GpuMesh, Renderer};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
 use crate::shadow::ShadowMode;
@@ -86,13 +88,17 @@ impl BatchPlan {
 }
 
 pub struct Verifier {
+    // Dropped before the renderer, whose context it was made on (it holds the context too).
+    score_pass: ScorePass,
     renderer: Renderer,
     models: Mutex<HashMap<String, Arc<Model>>>,
 }
 
 impl Verifier {
-    pub fn new(renderer: Renderer) -> Self {
-        Self { renderer, models: Mutex::new(HashMap::new()) }
+    /// Fails only if the score pass's pipeline cannot be built on the renderer's device.
+    pub fn new(renderer: Renderer) -> Result<Self> {
+        let score_pass = ScorePass::new(renderer.context())?;
+        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()) })
     }
 
     pub fn renderer(&self) -> &Renderer {
@@ -168,7 +174,7 @@ impl Verifier {
             )));
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
-        let slots = self.renderer.batch_slot_memory(sensor, settings.shadow, posed, hypotheses.len())?;
+        let slots = batch_slot_memory(&self.renderer, sensor, settings.shadow, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // The sensed image on the host and the GPU, the slots, and the counts with their
         // readback.
@@ -239,7 +245,7 @@ impl Verifier {
                     item
                 })
                 .collect();
-            let words = self.renderer.count_batch(&batch, &items, offset)?;
+            let words = count_batch(&self.renderer, &self.score_pass, &batch, &items, offset)?;
             let shadow_pass = settings.shadow.needs_shadow_pass(sensor.theta_deg);
             for (h, item) in chunk.iter().zip(&items) {
                 let l = layout(h);

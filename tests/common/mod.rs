@@ -19,7 +19,7 @@ use rangesynth::{RenderOutput, Renderer, Scene};
 use std::sync::{Arc, LazyLock};
 
 /// The test binary's one verifier; its renderer is the one every GPU test uses.
-pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_renderer(None)));
+pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_renderer(None)).expect("verifier"));
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan
 /// version. Panics (fails the test) without a device.

@@ -1,10 +1,8 @@
 //! The compute pass that accumulates one hypothesis' verification counts
 //! (shaders/score.comp, src/verify/counts.rs).
 
-use super::pipelines::Pipelines;
-use super::targets::ViewTargets;
 use crate::error::Result;
-use crate::gpu::{GpuContext, StorageSet};
+use crate::gpu::{shaders, ComputePipeline, GpuContext, Image, StorageSet};
 use ash::vk;
 use std::sync::Arc;
 
@@ -35,21 +33,38 @@ const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 40);
 const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 48);
 const _: () = assert!(size_of::<ScoreConstants>() == 88);
 
-/// The descriptor set binding a range view's label and z attachments for the score pass.
-pub struct ScoreBindings {
+/// The score pass's pipeline, built once per verifier.
+pub(crate) struct ScorePass {
+    pipeline: ComputePipeline,
+}
+
+impl ScorePass {
+    pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 2];
+        let pipeline = ComputePipeline::new(
+            ctx,
+            &bindings,
+            size_of::<ScoreConstants>(),
+            shaders::SCORE_COMP,
+            "verification counts",
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The descriptor set binding a range view's label and z attachments.
+    pub fn bindings(&self, ctx: &Arc<GpuContext>, label: &Image, z: &Image) -> Result<ScoreBindings> {
+        Ok(ScoreBindings { set: StorageSet::new(ctx, self.pipeline.set_layout, &[label, z], &[], "score bindings")? })
+    }
+}
+
+pub(crate) struct ScoreBindings {
     set: StorageSet,
 }
 
 impl ScoreBindings {
-    pub fn new(ctx: &Arc<GpuContext>, pipelines: &Pipelines, range: &ViewTargets) -> Result<Self> {
-        Ok(Self {
-            set: StorageSet::new(ctx, pipelines.score_set_layout, &[range.label(), range.z()], &[], "score bindings")?,
-        })
-    }
-
     /// Records the pass over the constants' region (8×8 workgroups).
-    pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, constants: &ScoreConstants) {
+    pub fn record(&self, cmd: vk::CommandBuffer, pass: &ScorePass, constants: &ScoreConstants) {
         let groups = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, pipelines.score, pipelines.score_layout, bytemuck::bytes_of(constants), groups);
+        self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), groups);
     }
 }

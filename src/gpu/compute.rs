@@ -1,0 +1,99 @@
+//! A compute pipeline with its descriptor-set layout (one binding per resource, compute stage)
+//! and push constants, owning all three: what each compute pass of the product is built on.
+
+use super::shaders::ShaderModule;
+use super::GpuContext;
+use crate::error::{Error, Result, VkResultExt};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct ComputePipeline {
+    ctx: Arc<GpuContext>,
+    pub set_layout: vk::DescriptorSetLayout,
+    pub layout: vk::PipelineLayout,
+    pub pipeline: vk::Pipeline,
+}
+
+impl ComputePipeline {
+    /// A compute pipeline whose set 0 has one binding of each given type (compute stage) and
+    /// whose push constants are `push_size` bytes.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        binding_types: &[vk::DescriptorType],
+        push_size: usize,
+        spirv: &[u8],
+        name: &str,
+    ) -> Result<Self> {
+        let d = &ctx.device;
+        let bindings: Vec<_> = binding_types
+            .iter()
+            .enumerate()
+            .map(|(b, &ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b as u32)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        // SAFETY: valid device.
+        let set_layout = unsafe {
+            d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+        }
+        .vk(&format!("creating the {name} descriptor layout"))?;
+        let push = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32)];
+        let set_layouts = [set_layout];
+        // SAFETY: valid device and set layout.
+        let layout = unsafe {
+            d.create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
+                None,
+            )
+        };
+        let layout = match layout {
+            Ok(l) => l,
+            Err(e) => {
+                // SAFETY: unused layout.
+                unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(Error::vulkan(&format!("creating the {name} pipeline layout"), e));
+            }
+        };
+        let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module.raw)
+                .name(c"main");
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+            // SAFETY: valid layout and module.
+            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+                .map(|p| p[0])
+                .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
+        });
+        match made {
+            Ok(pipeline) => {
+                ctx.name_object(pipeline, name);
+                Ok(Self { ctx: ctx.clone(), set_layout, layout, pipeline })
+            }
+            Err(e) => {
+                // SAFETY: unused layouts.
+                unsafe {
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                }
+                Err(e)
+            }
+        }
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let d = &self.ctx.device;
+        // SAFETY: owned handles; no submission uses them once their owner is dropped.
+        unsafe {
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

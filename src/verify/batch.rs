@@ -1,0 +1,213 @@
+//! Many hypotheses per submission: for each, the range pass, the shadow pass, the shadow mask
+//! and the verification counts, all recorded into one command buffer with barriers between
+//! passes and no waits between hypotheses.
+//!
+//! Render targets live in a few slots reused round-robin; a slot's next hypothesis waits (by
+//! barrier) only for that slot's previous score pass. Slot images are sized for the largest
+//! view of the batch, and each hypothesis renders its own grid into them, so a hypothesis
+//! renders the same alone or in any batch. Each pass touches only the hypothesis' footprint
+//! (its bounding sphere's pixels, with a margin), so a small model in a large image costs
+//! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
+//! device-local buffer, zeroed first, copied to host memory at the end.
+
+use super::score_pass::{ScoreConstants, ScorePass};
+use crate::error::Result;
+use crate::gpu::{address_words, Access, Buffer, BufferDesc, Encoder};
+use crate::render::{
+    draw_table, plan_views, Draw, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views,
+};
+use crate::sensor::{PixelRect, Sensor};
+use crate::shadow::ShadowMode;
+use ash::vk;
+use glam::DMat4;
+
+/// Render-target slots in flight within one submission.
+pub const SLOTS: usize = 4;
+/// Pixels added around a footprint: one for rounding, one more in the shadow view for the
+/// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
+const FOOTPRINT_MARGIN: u32 = 2;
+
+/// The sensed image as the score pass reads it, uploaded once per batch.
+pub struct SensedBuffers<'a> {
+    /// Per pixel: dense segment index + 1, or 0.
+    pub segments: &'a Buffer,
+    pub z: &'a Buffer,
+    pub segment_count: u32,
+}
+
+/// What is constant over a batch.
+pub struct BatchSettings<'a> {
+    pub sensor: &'a Sensor,
+    pub mode: ShadowMode,
+    pub tolerance: f32,
+    pub area_scale: f32,
+    pub sensed: SensedBuffers<'a>,
+}
+
+/// One hypothesis: a posed mesh and where its counts go (word offsets into the batch's counts).
+pub struct BatchItem<'a> {
+    pub mesh: &'a GpuMesh,
+    /// Bounding sphere of the mesh in model coordinates.
+    pub sphere: (glam::DVec3, f64),
+    pub pose: DMat4,
+    pub surfaces: u32,
+    /// Counts of the shadowed image (or the only image when there is no shadow pass).
+    pub counts_offset: usize,
+    /// Also count the unshadowed image here, when asked and a shadow pass runs.
+    pub unshadowed_offset: Option<usize>,
+}
+
+impl BatchItem<'_> {
+    fn draw(&self) -> Draw<'_> {
+        Draw { mesh: self.mesh, pose: self.pose, label_base: 0 }
+    }
+}
+
+/// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
+/// counts: its slots, each a range view (its attachments and the shadowed labels: 24
+/// bytes a pixel) and a shadow view as wide as the widest hypothesis needs (16 bytes a
+/// pixel).
+/// Fails as a batch would on a hypothesis whose views cannot be planned.
+pub(crate) fn batch_slot_memory(
+    renderer: &Renderer,
+    sensor: &Sensor,
+    mode: ShadowMode,
+    posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
+    hypotheses: usize,
+) -> Result<u64> {
+    let max_side = renderer.context().limits.max_image_dimension2_d;
+    let mut shadow_width = 0;
+    for sphere in posed_spheres {
+        let views = plan_views(sensor, mode, &[sphere], max_side)?;
+        shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
+    }
+    let rows = u64::from(sensor.height);
+    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4;
+    let per_slot =
+        rows * (range_pixel * u64::from(sensor.width) + ViewKind::Shadow.bytes_per_pixel() * u64::from(shadow_width));
+    Ok(per_slot * SLOTS.min(hypotheses) as u64)
+}
+
+/// Records and runs one batch; returns the counts buffer (`counts_words` u32 words).
+pub(crate) fn count_batch(
+    renderer: &Renderer,
+    score_pass: &ScorePass,
+    settings: &BatchSettings,
+    items: &[BatchItem],
+    counts_words: usize,
+) -> Result<Vec<u32>> {
+    let ctx = renderer.context();
+    let sensor = settings.sensor;
+    let max_side = ctx.limits.max_image_dimension2_d;
+    let to_shadow = sensor.to_shadow_frame();
+    let views: Vec<Views> = items
+        .iter()
+        .map(|item| {
+            let (centre, radius) = item.sphere;
+            plan_views(sensor, settings.mode, &[(item.pose.transform_point3(centre), radius)], max_side)
+        })
+        .collect::<Result<_>>()?;
+    let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
+    // Each hypothesis' footprint in both views; one that misses the image records nothing.
+    let jobs: Vec<Option<Job>> = (0..)
+        .zip(items.iter().zip(&views).zip(&draws))
+        .map(|(index, ((item, views), draws))| {
+            let (centre, radius) = item.sphere;
+            let centre = item.pose.transform_point3(centre);
+            let area = views.range.footprint(centre, radius, FOOTPRINT_MARGIN)?;
+            let shadow_area = views.shadow.map(|g| {
+                let columns =
+                    g.footprint(to_shadow.transform_point3(centre), radius, FOOTPRINT_MARGIN).unwrap_or(g.full());
+                // Rows are the range view's (a rotation about y keeps y).
+                PixelRect { row: area.row, height: area.height, ..columns }
+            });
+            Some(Job { draws: draws.as_slice(), first_draw_index: index, views, area, shadow_area })
+        })
+        .collect();
+    // Hypothesis i is draw i of the table, seen or not.
+    let table_jobs: Vec<Job> = items
+        .iter()
+        .zip(&views)
+        .zip(&draws)
+        .zip(0..)
+        .map(|(((_, views), draws), index)| Job {
+            draws: draws.as_slice(),
+            first_draw_index: index,
+            views,
+            area: views.range.full(),
+            shadow_area: None,
+        })
+        .collect();
+    let draw_table = draw_table(ctx, sensor, &table_jobs)?;
+    let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
+    let shape = SlotShape {
+        size: (sensor.width, sensor.height),
+        shadow: shadow_width.zip(draw_table.as_ref()),
+        sink: SinkKind::Compute,
+    };
+    let slots: Vec<Slot> =
+        (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
+    let score_bindings: Vec<_> = slots
+        .iter()
+        .map(|slot| {
+            let (label, z) = slot.range_label_and_z();
+            score_pass.bindings(ctx, label, z)
+        })
+        .collect::<Result<_>>()?;
+    let bytes = (counts_words as u64 * 4).max(4);
+    let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
+    let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
+    let counts_address = counts.device_address();
+
+    ctx.submit_and_wait("verification batch", |cmd| {
+        let mut enc = Encoder::new(ctx, cmd);
+        let passes = renderer.passes(sensor, settings.mode);
+        enc.access(&[], &[(&counts, Access::TransferWrite)]);
+        // SAFETY: cmd is recording; the buffer is not in use.
+        unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
+        enc.access(&[], &[(&counts, Access::ComputeWrite)]);
+        for (recorded, (item, job)) in items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate() {
+            let score = |offset: usize| ScoreConstants {
+                shadowed_labels: [0, 0],
+                sensed_segments: settings.sensed.segments.address_words(),
+                sensed_z: settings.sensed.z.address_words(),
+                counts: address_words(counts_address + offset as u64 * 4),
+                width: sensor.width,
+                height: sensor.height,
+                z_origin: job.views.origin.z as f32,
+                _pad: 0,
+                region: [job.area.col, job.area.row, job.area.width, job.area.height],
+                surfaces: item.surfaces,
+                segments: settings.sensed.segment_count,
+                tolerance: settings.tolerance,
+                area_scale: settings.area_scale,
+                dx: sensor.pitch[0] as f32,
+                dy: sensor.pitch[1] as f32,
+            };
+            let bindings = &score_bindings[recorded % slots.len()];
+            let record_scores = |enc: &mut Encoder, images: &JobImages| {
+                let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
+                let masked: Vec<_> = images.shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
+                enc.access(&range_reads, &masked);
+                let labels = images.shadowed_labels.map_or([0, 0], |m| m.address_words());
+                let shadowed = ScoreConstants { shadowed_labels: labels, ..score(item.counts_offset) };
+                bindings.record(enc.cmd, score_pass, &shadowed);
+                // Counted again unshadowed only where a shadow pass ran; else the verifier
+                // copies the counts.
+                if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                    bindings.record(enc.cmd, score_pass, &score(offset));
+                }
+            };
+            passes.record(&mut enc, &slots[recorded % slots.len()], job, &Sink::Compute(&record_scores), None);
+        }
+        enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
+        let region = [vk::BufferCopy::default().size(bytes)];
+        // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
+        unsafe { ctx.device.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
+        enc.access(&[], &[(&readback, Access::HostRead)]);
+        Ok(())
+    })?;
+    let mut words: Vec<u32> = readback.read()?;
+    words.truncate(counts_words);
+    Ok(words)
+}
