@@ -3,22 +3,21 @@
 // pixel of the hypothesis' footprint compares the hypothesis' synthetic labels and depths with the sensed image and adds
 // to exact integer counters. Integer atomics are order-independent, so the counts are the
 // same whatever the batch; areas are summed in fixed point for the same reason.
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
+// Every buffer is bound, so that synchronization validation sees each access.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
 layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
-
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words { uint word[]; };
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Floats { float value[]; };
-layout(buffer_reference, std430, buffer_reference_align = 4) buffer Counters { uint count[]; };
+layout(set = 0, binding = 2, std430) readonly buffer ShadowedLabels { uint shadowed_label[]; };
+// Per pixel: dense segment index + 1, 0 = no data.
+layout(set = 0, binding = 3, std430) readonly buffer SensedSegments { uint sensed_segment[]; };
+layout(set = 0, binding = 4, std430) readonly buffer SensedZ { float sensed_z[]; };
+// The batch's counters; this hypothesis' start at counts_offset.
+layout(set = 0, binding = 5, std430) buffer Counts { uint count[]; };
 
 layout(push_constant, std430) uniform Score {
-    uvec2 shadowed_labels;  // device address of the shadow-masked labels; 0: use range_label
-    uvec2 sensed_segments;  // per pixel: dense segment index + 1, 0 = no data
-    uvec2 sensed_z;
-    uvec2 counts;           // this hypothesis' counters
+    uint counts_offset;     // this hypothesis' first counter word
+    uint use_shadowed;      // 1: labels from the shadow mask's output; 0: range_label
     uint width;
     uint height;
     float z_origin;         // the range view's z is stored as an offset from this
@@ -45,18 +44,22 @@ uint synthetic(ivec2 p) {
     if (any(greaterThanEqual(uvec2(p) - s.region.xy, s.region.zw))) {
         return 0u;
     }
-    if (s.shadowed_labels == uvec2(0u)) {
+    if (s.use_shadowed == 0u) {
         return imageLoad(range_label, p).r;
     }
-    return Words(s.shadowed_labels).word[uint(p.y) * s.width + uint(p.x)];
+    return shadowed_label[uint(p.y) * s.width + uint(p.x)];
 }
 
 // An exact 64-bit sum in two words: the low word's wrap-around is the carry.
-void add_units(Counters c, uint index, uint units) {
-    uint before = atomicAdd(c.count[index], units);
+void add_units(uint index, uint units) {
+    uint before = atomicAdd(count[s.counts_offset + index], units);
     if (before + units < before) {
-        atomicAdd(c.count[index + 1u], 1u);
+        atomicAdd(count[s.counts_offset + index + 1u], 1u);
     }
+}
+
+void add_one(uint index) {
+    atomicAdd(count[s.counts_offset + index], 1u);
 }
 
 // area.rs block_area_units, operation for operation, without fused multiply-adds.
@@ -73,25 +76,24 @@ void main() {
     ivec2 p = ivec2(s.region.xy + gl_GlobalInvocationID.xy);
     uint index = uint(p.y) * s.width + uint(p.x);
     uint m = synthetic(p);
-    uint k = Words(s.sensed_segments).word[index];
-    Counters c = Counters(s.counts);
+    uint k = sensed_segment[index];
     // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
     // need not cover the whole image.
     if (m == 0u) {
         return;
     }
-    atomicAdd(c.count[POPULATIONS + m - 1u], 1u);
+    add_one(POPULATIONS + m - 1u);
     float z = synthetic_z(p);
     if (k == 0u) {
-        atomicAdd(c.count[N0], 1u);
+        add_one(N0);
     } else {
         uint overlaps = POPULATIONS + s.surfaces;
-        atomicAdd(c.count[overlaps + (k - 1u) * s.surfaces + (m - 1u)], 1u);
-        precise float d = z - Floats(s.sensed_z).value[index];
+        add_one(overlaps + (k - 1u) * s.surfaces + (m - 1u));
+        precise float d = z - sensed_z[index];
         if (abs(d) <= s.tolerance) {
-            atomicAdd(c.count[N1_PLUS], 1u);
+            add_one(N1_PLUS);
         } else if (d > s.tolerance) {
-            atomicAdd(c.count[N1_MINUS], 1u);
+            add_one(N1_MINUS);
         }
     }
     // The 2×2 block whose top-left pixel this is, if all four carry surface m.
@@ -109,7 +111,7 @@ void main() {
         precise float q1 = s.dx * (a - b);
         precise float p2 = s.dy * (b - e);
         uint areas = POPULATIONS + s.surfaces + s.segments * s.surfaces + 2u * (m - 1u);
-        add_units(c, areas, triangle_units(s.dy * a, q1, level));
-        add_units(c, areas, triangle_units(p2, s.dx * e, level));
+        add_units(areas, triangle_units(s.dy * a, q1, level));
+        add_units(areas, triangle_units(p2, s.dx * e, level));
     }
 }

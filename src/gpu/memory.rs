@@ -133,7 +133,8 @@ impl Buffer {
 
     /// The device address as the (low, high) words shaders take (GL_EXT_buffer_reference_uvec2).
     pub fn address_words(&self) -> [u32; 2] {
-        address_words(self.device_address())
+        let address = self.device_address();
+        [address as u32, (address >> 32) as u32]
     }
 
     fn mapped_mut(&mut self) -> Result<&mut [u8]> {
@@ -278,11 +279,6 @@ impl Drop for Image {
             let _ = self.ctx.allocator.lock().unwrap_or_else(|p| p.into_inner()).free(a);
         }
     }
-}
-
-/// A device address as the (low, high) words shaders take (GL_EXT_buffer_reference_uvec2).
-pub fn address_words(address: u64) -> [u32; 2] {
-    [address as u32, (address >> 32) as u32]
 }
 
 pub(crate) fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {

@@ -15,5 +15,5 @@ pub use compute::ComputePipeline;
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::StorageSet;
 pub use encoder::Encoder;
-pub use memory::{address_words, Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
+pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
 pub use timing::Timestamps;

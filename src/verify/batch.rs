@@ -10,9 +10,9 @@
 //! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
 //! device-local buffer, zeroed first, copied to host memory at the end.
 
-use super::score_pass::{ScoreConstants, ScorePass};
+use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass};
 use crate::error::Result;
-use crate::gpu::{address_words, Access, Buffer, BufferDesc, Encoder};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::render::{
     draw_table, plan_views, Draw, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views,
 };
@@ -147,17 +147,26 @@ pub(crate) fn count_batch(
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
+    let bytes = (counts_words as u64 * 4).max(4);
+    let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
+    let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
+    // Bound where a slot has no shadowed labels; never read then.
+    let no_shadowed_labels = Buffer::new(ctx, BufferDesc::gpu_storage(4), "no shadowed labels")?;
     let score_bindings: Vec<_> = slots
         .iter()
         .map(|slot| {
             let (label, z) = slot.range_label_and_z();
-            score_pass.bindings(ctx, label, z)
+            let inputs = ScoreInputs {
+                label,
+                z,
+                shadowed_labels: slot.masked().unwrap_or(&no_shadowed_labels),
+                sensed_segments: settings.sensed.segments,
+                sensed_z: settings.sensed.z,
+                counts: &counts,
+            };
+            score_pass.bindings(ctx, &inputs)
         })
         .collect::<Result<_>>()?;
-    let bytes = (counts_words as u64 * 4).max(4);
-    let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
-    let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
-    let counts_address = counts.device_address();
 
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
@@ -168,14 +177,12 @@ pub(crate) fn count_batch(
         enc.access(&[], &[(&counts, Access::ComputeWrite)]);
         for (recorded, (item, job)) in items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate() {
             let score = |offset: usize| ScoreConstants {
-                shadowed_labels: [0, 0],
-                sensed_segments: settings.sensed.segments.address_words(),
-                sensed_z: settings.sensed.z.address_words(),
-                counts: address_words(counts_address + offset as u64 * 4),
+                counts_offset: offset as u32,
+                use_shadowed: 0,
                 width: sensor.width,
                 height: sensor.height,
                 z_origin: job.views.origin.z as f32,
-                _pad: 0,
+                _pad: [0; 3],
                 region: [job.area.col, job.area.row, job.area.width, job.area.height],
                 surfaces: item.surfaces,
                 segments: settings.sensed.segment_count,
@@ -187,14 +194,19 @@ pub(crate) fn count_batch(
             let bindings = &score_bindings[recorded % slots.len()];
             let record_scores = |enc: &mut Encoder, images: &JobImages| {
                 let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-                let masked: Vec<_> = images.shadowed_labels.iter().map(|&m| (m, Access::ComputeRead)).collect();
-                enc.access(&range_reads, &masked);
-                let labels = images.shadowed_labels.map_or([0, 0], |m| m.address_words());
-                let shadowed = ScoreConstants { shadowed_labels: labels, ..score(item.counts_offset) };
-                bindings.record(enc.cmd, score_pass, &shadowed);
+                let mut buffers = vec![
+                    (settings.sensed.segments, Access::ComputeRead),
+                    (settings.sensed.z, Access::ComputeRead),
+                    (&counts, Access::ComputeWrite),
+                ];
+                buffers.extend(images.shadowed_labels.map(|m| (m, Access::ComputeRead)));
+                enc.access(&range_reads, &buffers);
+                let use_shadowed = u32::from(images.shadowed_labels.is_some());
+                bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..score(item.counts_offset) });
                 // Counted again unshadowed only where a shadow pass ran; else the verifier
-                // copies the counts.
+                // copies the counts. The counts are written again: ordered after the first.
                 if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                    enc.access(&[], &[(&counts, Access::ComputeWrite)]);
                     bindings.record(enc.cmd, score_pass, &score(offset));
                 }
             };

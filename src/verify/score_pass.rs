@@ -2,7 +2,7 @@
 //! (shaders/score.comp, src/verify/counts.rs).
 
 use crate::error::Result;
-use crate::gpu::{shaders, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
 use ash::vk;
 use std::sync::Arc;
 
@@ -10,15 +10,15 @@ use std::sync::Arc;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ScoreConstants {
-    pub shadowed_labels: [u32; 2],
-    pub sensed_segments: [u32; 2],
-    pub sensed_z: [u32; 2],
-    pub counts: [u32; 2],
+    /// This hypothesis' first word in the batch's counts.
+    pub counts_offset: u32,
+    /// 1: count the shadow mask's labels; 0: the range view's.
+    pub use_shadowed: u32,
     pub width: u32,
     pub height: u32,
     /// The range view's local origin's z: z = stored offset + z_origin (`ViewGrid::local_origin`).
     pub z_origin: f32,
-    pub _pad: u32,
+    pub _pad: [u32; 3],
     pub region: [u32; 4],
     pub surfaces: u32,
     pub segments: u32,
@@ -29,9 +29,9 @@ pub struct ScoreConstants {
 }
 
 // std430 offsets of `Score` in shaders/score.comp: a uvec4 aligns to 16.
-const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 40);
-const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 48);
-const _: () = assert!(size_of::<ScoreConstants>() == 88);
+const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 16);
+const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 32);
+const _: () = assert!(size_of::<ScoreConstants>() == 72);
 
 /// The score pass's pipeline, built once per verifier.
 pub(crate) struct ScorePass {
@@ -40,7 +40,8 @@ pub(crate) struct ScorePass {
 
 impl ScorePass {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 2];
+        let bindings =
+            [[vk::DescriptorType::STORAGE_IMAGE; 2].as_slice(), &[vk::DescriptorType::STORAGE_BUFFER; 4]].concat();
         let pipeline = ComputePipeline::new(
             ctx,
             &bindings,
@@ -51,10 +52,24 @@ impl ScorePass {
         Ok(Self { pipeline })
     }
 
-    /// The descriptor set binding a range view's label and z attachments.
-    pub fn bindings(&self, ctx: &Arc<GpuContext>, label: &Image, z: &Image) -> Result<ScoreBindings> {
-        Ok(ScoreBindings { set: StorageSet::new(ctx, self.pipeline.set_layout, &[label, z], &[], "score bindings")? })
+    /// The descriptor set binding what one slot's score passes read and write: the range
+    /// view's label and z attachments, the shadowed labels (any buffer when there are none:
+    /// then they are not read), the sensed image and the batch's counts.
+    pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
+        let buffers = [reads.shadowed_labels, reads.sensed_segments, reads.sensed_z, reads.counts];
+        let set = StorageSet::new(ctx, self.pipeline.set_layout, &[reads.label, reads.z], &buffers, "score bindings")?;
+        Ok(ScoreBindings { set })
     }
+}
+
+/// What a score pass binds (shaders/score.comp, bindings 0 to 5).
+pub(crate) struct ScoreInputs<'a> {
+    pub label: &'a Image,
+    pub z: &'a Image,
+    pub shadowed_labels: &'a Buffer,
+    pub sensed_segments: &'a Buffer,
+    pub sensed_z: &'a Buffer,
+    pub counts: &'a Buffer,
 }
 
 pub(crate) struct ScoreBindings {
