@@ -72,6 +72,15 @@ pub struct GpuContext {
     /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
     pub(crate) timestamp_period: Option<f64>,
     device_name: String,
+    /// Command pools, buffers and fences of finished submissions, reused by the next.
+    recorders: Mutex<Vec<Recorder>>,
+}
+
+/// What one submission records into and waits on; one per submission in flight.
+struct Recorder {
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
 }
 
 /// Where the Vulkan 1.3 commands rangesynth uses come from.
@@ -196,6 +205,7 @@ impl GpuContext {
             limits: properties.limits,
             timestamp_period,
             device_name,
+            recorders: Mutex::new(Vec::new()),
         }))
     }
 
@@ -327,54 +337,101 @@ impl GpuContext {
         }
     }
 
-    /// Records commands into a fresh command buffer, submits it and waits for it to finish.
-    /// Each call has its own pool, so several threads may submit at once.
+    /// Records commands into a command buffer, submits it and waits for it to finish. Each
+    /// call takes its own recorder (command pool, buffer and fence) from the free list, or
+    /// makes one, so several threads may submit at once; a recorder goes back to the list
+    /// after a submission that finished, and is destroyed after one that failed.
     pub(crate) fn submit_and_wait(
         &self,
         name: &str,
         record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
     ) -> Result<()> {
         let d = &self.device;
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(self.queue_family)
-            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        // SAFETY: valid device and family.
-        let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("creating a command pool")?;
+        let free = self.recorders.lock().unwrap_or_else(|p| p.into_inner()).pop();
+        let recorder = match free {
+            Some(r) => r,
+            None => self.new_recorder()?,
+        };
         let result = (|| {
-            let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1);
-            // SAFETY: the pool is valid.
-            let cmd = unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
+            let cmd = recorder.cmd;
             self.name_object(cmd, name);
+            // SAFETY: the pool's only buffer is not in use (its last submission was waited on).
+            unsafe { d.reset_command_pool(recorder.pool, vk::CommandPoolResetFlags::empty()) }
+                .vk("resetting a command pool")?;
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            // SAFETY: a fresh command buffer.
+            // SAFETY: a reset command buffer.
             unsafe { d.begin_command_buffer(cmd, &begin) }.vk("beginning a command buffer")?;
             record(cmd)?;
             // SAFETY: recording started above.
             unsafe { d.end_command_buffer(cmd) }.vk("ending a command buffer")?;
-            // SAFETY: valid device.
-            let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("creating a fence")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-            let waited = {
+            {
                 let queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
                 // SAFETY: the command buffer is complete; the queue is externally synchronized by the Mutex.
-                unsafe { self.queue_submit2(*queue, &submit, fence) }.vk(name)
+                unsafe { self.queue_submit2(*queue, &submit, recorder.fence) }.vk(name)?;
             }
             // SAFETY: the fence was just submitted.
-            .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, SUBMIT_TIMEOUT_NS) }.vk(name));
-            // SAFETY: the fence is signalled (or the device is lost); nothing waits on it now.
-            unsafe { d.destroy_fence(fence, None) };
+            let waited = unsafe { d.wait_for_fences(&[recorder.fence], true, SUBMIT_TIMEOUT_NS) }.vk(name);
             match waited {
                 Err(Error::Vulkan { result: vk::Result::TIMEOUT, .. }) => Err(Error::DeviceLost(format!(
                     "{name}: the GPU did not finish within {} s",
                     SUBMIT_TIMEOUT_NS / 1_000_000_000
                 ))),
+                // SAFETY: the fence is signalled; nothing waits on it now.
+                Ok(()) => unsafe { d.reset_fences(&[recorder.fence]) }.vk("resetting a fence"),
                 other => other,
             }
         })();
-        // SAFETY: the submission finished (or failed to start); the pool is idle.
-        unsafe { d.destroy_command_pool(pool, None) };
+        match result {
+            Ok(()) => self.recorders.lock().unwrap_or_else(|p| p.into_inner()).push(recorder),
+            Err(_) => {
+                // SAFETY: the submission failed or never started; after a wait for the device,
+                // nothing uses the recorder.
+                unsafe {
+                    let _ = d.device_wait_idle();
+                    self.destroy_recorder(recorder);
+                }
+            }
+        }
         result
+    }
+
+    fn new_recorder(&self) -> Result<Recorder> {
+        let d = &self.device;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(self.queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: valid device and family.
+        let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("creating a command pool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1);
+        // SAFETY: the pool is valid.
+        let cmd = unsafe { d.allocate_command_buffers(&alloc) }.map(|c| c[0]);
+        // SAFETY: valid device.
+        let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) };
+        match (cmd, fence) {
+            (Ok(cmd), Ok(fence)) => Ok(Recorder { pool, cmd, fence }),
+            (cmd, fence) => {
+                // SAFETY: unused objects of this device.
+                unsafe {
+                    if let Ok(fence) = fence {
+                        d.destroy_fence(fence, None);
+                    }
+                    d.destroy_command_pool(pool, None);
+                }
+                Err(Error::vulkan("making a command buffer and fence", cmd.err().or(fence.err()).unwrap_or_default()))
+            }
+        }
+    }
+
+    /// # Safety
+    /// Nothing may use the recorder any more.
+    unsafe fn destroy_recorder(&self, recorder: Recorder) {
+        // SAFETY: the caller's promise; the pool frees its buffer.
+        unsafe {
+            self.device.destroy_fence(recorder.fence, None);
+            self.device.destroy_command_pool(recorder.pool, None);
+        }
     }
 }
 
@@ -387,6 +444,9 @@ impl Drop for GpuContext {
         // allocator goes before the device, the device before the instance.
         unsafe {
             let _ = self.device.device_wait_idle();
+            for recorder in std::mem::take(self.recorders.get_mut().unwrap_or_else(|p| p.into_inner())) {
+                self.destroy_recorder(recorder);
+            }
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             drop(self.debug.take());

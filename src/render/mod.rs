@@ -12,6 +12,7 @@ mod mesh_cache;
 mod passes;
 mod pipelines;
 mod shadow_pass;
+mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTimings, RenderOutput};
@@ -31,6 +32,7 @@ use mesh_cache::MeshCache;
 use passes::PASS_TIMESTAMPS;
 use pipelines::Pipelines;
 use std::sync::Arc;
+use target_pool::TargetPool;
 
 pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
@@ -38,6 +40,7 @@ pub struct Renderer {
     ctx: Arc<GpuContext>,
     budget: MemoryBudget,
     meshes: MeshCache,
+    targets: TargetPool,
 }
 
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
@@ -111,6 +114,7 @@ impl Renderer {
             ctx,
             budget: MemoryBudget::default(),
             meshes: MeshCache::default(),
+            targets: TargetPool::default(),
         })
     }
 
@@ -128,8 +132,8 @@ impl Renderer {
     }
 
     /// Render targets for jobs of this shape (passes.rs).
-    pub(crate) fn slot(&self, shape: &SlotShape, name: &str) -> Result<Slot> {
-        Slot::new(&self.ctx, &self.pipelines, shape, name)
+    pub(crate) fn slot(&self, shape: &SlotShape, name: &str) -> Result<Slot<'_>> {
+        Slot::new(&self.ctx, &self.pipelines, &self.targets, shape, name)
     }
 
     /// The pass list for jobs seen by this sensor in this shadow mode.

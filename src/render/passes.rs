@@ -11,7 +11,8 @@
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::pipelines::Pipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
-use super::targets::{ViewKind, ViewTargets};
+use super::target_pool::{PooledTargets, TargetPool};
+use super::targets::ViewKind;
 use super::Views;
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
@@ -22,9 +23,9 @@ use glam::DMat4;
 use std::sync::Arc;
 
 /// The render targets and bindings one job renders into; a batch reuses a few in turn.
-pub(crate) struct Slot {
-    range: ViewTargets,
-    shadow: Option<ViewTargets>,
+pub(crate) struct Slot<'a> {
+    range: PooledTargets<'a>,
+    shadow: Option<PooledTargets<'a>>,
     /// The shadow mask's output labels.
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
@@ -46,14 +47,21 @@ pub(crate) enum SinkKind {
     Compute,
 }
 
-impl Slot {
-    pub fn new(ctx: &Arc<GpuContext>, p: &Pipelines, shape: &SlotShape, name: &str) -> Result<Self> {
+impl<'a> Slot<'a> {
+    /// A slot whose targets come from `pool` (and go back to it when the slot is dropped).
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        p: &Pipelines,
+        pool: &'a TargetPool,
+        shape: &SlotShape,
+        name: &str,
+    ) -> Result<Self> {
         let (w, h) = shape.size;
-        let range = ViewTargets::new(ctx, ViewKind::Range, w, h, &format!("{name} range view"))?;
+        let range = pool.take(ctx, ViewKind::Range, (w, h), &format!("{name} range view"))?;
         let (shadow, masked, mask_bindings) = match shape.shadow {
             None => (None, None, None),
             Some((shadow_width, draw_table)) => {
-                let shadow = ViewTargets::new(ctx, ViewKind::Shadow, shadow_width, h, &format!("{name} shadow view"))?;
+                let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
                 let bytes = u64::from(w) * u64::from(h) * 4;
                 let desc = match shape.sink {
                     SinkKind::Readback => BufferDesc::readback(bytes),

@@ -1,0 +1,72 @@
+//! Render targets kept between calls: a view's attachments cost an allocation and several
+//! Vulkan objects each, which a `verify` of one hypothesis, or a daemon rendering image after
+//! image, would otherwise pay on every call. Targets are keyed by view kind and size; the pool
+//! keeps those of the latest calls, at most [`KEPT`], so the memory it holds stays bounded
+//! by what recent calls used.
+
+use super::targets::{ViewKind, ViewTargets};
+use crate::error::Result;
+use crate::gpu::GpuContext;
+use std::sync::{Arc, Mutex};
+
+/// Views' targets the pool keeps when no call uses them: the four slots of a batch, each
+/// with a range and a shadow view.
+pub const KEPT: usize = 8;
+
+/// Free targets with their kind and size.
+type Kept = (ViewKind, (u32, u32), ViewTargets);
+
+#[derive(Default)]
+pub(crate) struct TargetPool {
+    /// Free targets, the most recently returned last.
+    free: Mutex<Vec<Kept>>,
+}
+
+impl TargetPool {
+    /// Targets of this kind and size: kept ones, or new.
+    pub fn take(
+        &self,
+        ctx: &Arc<GpuContext>,
+        kind: ViewKind,
+        size: (u32, u32),
+        name: &str,
+    ) -> Result<PooledTargets<'_>> {
+        let kept = {
+            let mut free = self.free.lock().unwrap_or_else(|p| p.into_inner());
+            let found = free.iter().rposition(|(k, s, _)| (*k, *s) == (kind, size));
+            found.map(|i| free.remove(i).2)
+        };
+        let targets = match kept {
+            Some(targets) => targets,
+            None => ViewTargets::new(ctx, kind, size.0, size.1, name)?,
+        };
+        Ok(PooledTargets { pool: self, kind, size, targets: Some(targets) })
+    }
+}
+
+/// Targets on loan from the pool; they go back when dropped.
+pub(crate) struct PooledTargets<'a> {
+    pool: &'a TargetPool,
+    kind: ViewKind,
+    size: (u32, u32),
+    targets: Option<ViewTargets>,
+}
+
+impl std::ops::Deref for PooledTargets<'_> {
+    type Target = ViewTargets;
+    fn deref(&self) -> &ViewTargets {
+        self.targets.as_ref().expect("held until dropped")
+    }
+}
+
+impl Drop for PooledTargets<'_> {
+    fn drop(&mut self) {
+        if let Some(targets) = self.targets.take() {
+            let mut free = self.pool.free.lock().unwrap_or_else(|p| p.into_inner());
+            free.push((self.kind, self.size, targets));
+            if free.len() > KEPT {
+                free.remove(0);
+            }
+        }
+    }
+}
