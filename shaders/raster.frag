@@ -15,11 +15,10 @@ layout(push_constant, std430) uniform Draw {
     DrawData draw;
 };
 
-layout(location = 0) out uint label;
 #ifdef SHADOW_VIEW
-layout(location = 1) out uint draw_index;
-layout(location = 2) out uint triangle;
+layout(location = 0) out uvec4 visibility; // label, draw index, triangle, 0
 #else
+layout(location = 0) out uint label;
 layout(location = 1) out float z;
 layout(location = 2) out float dz_dx;
 layout(location = 3) out float dz_dy;
@@ -32,11 +31,10 @@ layout(depth_less) out float gl_FragDepth;
 
 void main() {
     uint t = uint(gl_PrimitiveID);
-    label = triangle_label(draw, t);
 #ifdef SHADOW_VIEW
-    draw_index = draw.draw_index;
-    triangle = t;
+    visibility = uvec4(triangle_label(draw, t), draw.draw_index, t, 0u);
 #else
+    label = triangle_label(draw, t);
     vec3 a = triangle_corner(draw, t, 0u);
     vec3 n = triangle_normal(draw, t);
     vec2 centre = vec2(draw.grid.x + (gl_FragCoord.x - 0.5) * draw.grid.z,

@@ -10,12 +10,11 @@ layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
 layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
 layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
 layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
-layout(set = 0, binding = 4, r32ui) uniform readonly uimage2D shadow_label;
-layout(set = 0, binding = 5, r32ui) uniform readonly uimage2D shadow_draw;
-layout(set = 0, binding = 6, r32ui) uniform readonly uimage2D shadow_triangle;
-layout(set = 0, binding = 7, std430) writeonly buffer Masked { uint masked_label[]; };
+// Per shadow pixel: label, draw index, triangle (src/render/targets.rs).
+layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D shadow_visibility;
+layout(set = 0, binding = 5, std430) writeonly buffer Masked { uint masked_label[]; };
 // The shadow view's draws, indexed by the draw index the shadow view stored per pixel.
-layout(set = 0, binding = 8, std430) readonly buffer DrawTable { DrawData draws[]; };
+layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[]; };
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -26,10 +25,11 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
-    uint mode;          // 1 = label, 2 = depth
+    uint mode;          // ShadowMode::shader_code
 } m;
 
-const uint MODE_LABEL = 1u;
+// ShadowMode::Label.shader_code(), given by the host (src/render/pipelines.rs).
+layout(constant_id = 0) const uint MODE_LABEL = 0xffffffffu;
 
 // Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
 float edge_function(vec2 a, vec2 b, vec2 q) {
@@ -58,35 +58,35 @@ const uint WALK_TOO_LONG = 0xfffffffeu;
 // this layer of the surface ends before p — a border, or a fold, where the surface turns away
 // from the camera (its silhouette) — or WALK_TOO_LONG.
 uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
+    // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
     for (int step = 0; step < MAX_WALK_STEPS; step++) {
-        vec2 v[3] = vec2[3](triangle_corner(d, t, 0u).xy, triangle_corner(d, t, 1u).xy, triangle_corner(d, t, 2u).xy);
-        float winding = edge_function(v[0], v[1], v[2]) >= 0.0 ? 1.0 : -1.0;
-        uint exit = 3u;
-        float farthest = tolerance;
-        for (uint k = 0u; k < 3u; k++) {
-            vec2 from = v[k], to = v[(k + 1u) % 3u];
-            float outside = -winding * edge_function(from, to, p) / max(length(to - from), 1e-30);
-            if (outside > farthest) {
-                farthest = outside;
-                exit = k;
-            }
-        }
-        if (exit == 3u) {
+        vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
+        float winding = edge_function(a, b, c) >= 0.0 ? -1.0 : 1.0;
+        // How far p lies outside each edge's line (a–b, b–c, c–a).
+        vec3 outside = winding * vec3(edge_function(a, b, p), edge_function(b, c, p), edge_function(c, a, p))
+                     / max(vec3(length(b - a), length(c - b), length(a - c)), vec3(1e-30));
+        float farthest = max(outside.x, max(outside.y, outside.z));
+        if (farthest <= tolerance) {
             return t;
         }
+        uint exit = outside.x == farthest ? 0u : (outside.y == farthest ? 1u : 2u);
         uint next = triangle_neighbour(d, t, exit);
         if (next == NO_NEIGHBOUR) {
             return NO_NEIGHBOUR;
         }
         // Across the edge the surface goes on only if the neighbour lies on the other side of
         // the edge's line; on the same side, it folds back.
-        vec2 from = v[exit], to = v[(exit + 1u) % 3u];
-        float here = edge_function(from, to, v[(exit + 2u) % 3u]);
-        float there = 0.0;
-        for (uint k = 0u; k < 3u; k++) {
-            float f = edge_function(from, to, triangle_corner(d, next, k).xy);
-            there = abs(f) > abs(there) ? f : there;
-        }
+        vec2 from = exit == 0u ? a : (exit == 1u ? b : c);
+        vec2 to = exit == 0u ? b : (exit == 1u ? c : a);
+        vec2 opposite = exit == 0u ? c : (exit == 1u ? a : b);
+        float here = edge_function(from, to, opposite);
+        vec3 beyond = vec3(edge_function(from, to, triangle_corner(d, next, 0u).xy),
+                           edge_function(from, to, triangle_corner(d, next, 1u).xy),
+                           edge_function(from, to, triangle_corner(d, next, 2u).xy));
+        // The neighbour's corner off the shared edge is the one farthest from its line.
+        vec3 distance = abs(beyond);
+        float there = distance.x >= max(distance.y, distance.z) ? beyond.x
+                    : (distance.y >= distance.z ? beyond.y : beyond.z);
         if (here * there >= 0.0) {
             return NO_NEIGHBOUR;
         }
@@ -117,9 +117,9 @@ vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 g
 // then the plane of the pixel's triangle, extrapolated to p', must rise above it by more than
 // a crease between them could explain (each edge bends a polyhedral surface's gradient by at
 // most their difference, over at most p''s distance from the triangle).
-bool hides(ivec2 q, vec3 ps, vec2 own, float scale, float bias) {
-    DrawData d = draws[imageLoad(shadow_draw, q).r];
-    uint seen = imageLoad(shadow_triangle, q).r;
+bool hides(uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias) {
+    DrawData d = draws[seen_at.x];
+    uint seen = seen_at.y;
     uint t = walk_to(d, seen, ps.xy, m.bias_relative * scale);
     if (t == NO_NEIGHBOUR) {
         return false;
@@ -148,7 +148,7 @@ bool shadowed(ivec2 pixel, uint label) {
     // outside it can only come from rounding at its border and is treated as lit.
     bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
     if (m.mode == MODE_LABEL) {
-        return in_grid && imageLoad(shadow_label, s).r != label;
+        return in_grid && imageLoad(shadow_visibility, s).r != label;
     }
     // Depth mode. The camera sees the side of a surface the projector lights only when that
     // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).
@@ -170,27 +170,27 @@ bool shadowed(ivec2 pixel, uint label) {
     // Then whatever lies between the point and the camera: the surfaces seen at the shadow
     // pixels around p', each once. Exact wherever the occluder over p' is seen at one of those
     // nine pixel centres, or is joined by its edges to a triangle that is.
-    uvec2 tried[9];
-    int count = 0;
-    for (int dy = -1; dy <= 1; dy++) {
-        for (int dx = -1; dx <= 1; dx++) {
-            ivec2 q = s + ivec2(dx, dy);
-            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))
-                || imageLoad(shadow_label, q).r == 0u) {
-                continue;
-            }
-            uvec2 seen = uvec2(imageLoad(shadow_draw, q).r, imageLoad(shadow_triangle, q).r);
-            bool again = false;
-            for (int i = 0; i < count; i++) {
-                again = again || tried[i] == seen;
-            }
-            if (again) {
-                continue;
-            }
-            tried[count++] = seen;
-            if (hides(q, ps, own, scale, bias)) {
-                return true;
-            }
+    // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
+    // are not walked again (a large triangle fills the whole neighbourhood).
+    uvec4 at_centre = imageLoad(shadow_visibility, s);
+    uvec2 centre = at_centre.yz;
+    if (at_centre.x != 0u && hides(centre, ps, own, scale, bias)) {
+        return true;
+    }
+    uvec2 previous = centre;
+    for (int i = 0; i < 9; i++) {
+        ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
+        if (i == 4 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
+            continue;
+        }
+        uvec4 at = imageLoad(shadow_visibility, q);
+        uvec2 seen = at.yz;
+        if (at.x == 0u || seen == centre || seen == previous) {
+            continue;
+        }
+        previous = seen;
+        if (hides(seen, ps, own, scale, bias)) {
+            return true;
         }
     }
     return false;

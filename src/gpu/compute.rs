@@ -15,13 +15,16 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// A compute pipeline whose set 0 has one binding of each given type (compute stage) and
-    /// whose push constants are `push_size` bytes.
+    /// A compute pipeline whose set 0 has one binding of each given type (compute stage),
+    /// whose push constants are `push_size` bytes, and whose u32 specialization constants
+    /// `constant_id = 0, 1, …` take the values of `constants`: codes the host defines once
+    /// (such as the shadow modes) reach the shader from that one definition.
     pub fn new(
         ctx: &Arc<GpuContext>,
         binding_types: &[vk::DescriptorType],
         push_size: usize,
         spirv: &[u8],
+        constants: &[u32],
         name: &str,
     ) -> Result<Self> {
         let d = &ctx.device;
@@ -59,10 +62,16 @@ impl ComputePipeline {
             }
         };
         let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
+            let entries: Vec<_> = (0..constants.len() as u32)
+                .map(|id| vk::SpecializationMapEntry { constant_id: id, offset: 4 * id, size: 4 })
+                .collect();
+            let specialization =
+                vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(constants));
             let stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module.raw)
-                .name(c"main");
+                .name(c"main")
+                .specialization_info(&specialization);
             let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
             // SAFETY: valid layout and module.
             unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }

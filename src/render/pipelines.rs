@@ -8,11 +8,14 @@ use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{ComputePipeline, GpuContext, DEPTH_FORMAT};
+use crate::shadow::ShadowMode;
 use ash::vk;
 use std::sync::Arc;
 
 pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+/// The shadow view's visibility buffer: label, draw index, triangle (and a spare word).
+pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
 /// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
 /// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
@@ -44,6 +47,7 @@ impl Pipelines {
             &mask_bindings,
             size_of::<MaskConstants>(),
             shaders::SHADOW_MASK_COMP,
+            &[ShadowMode::Label.shader_code()],
             "shadow mask",
         )?;
         let mut p = Self {
@@ -155,7 +159,7 @@ fn raster_pipeline(
         .depth_test_enable(true)
         .depth_write_enable(write)
         .depth_compare_op(compare);
-    let write_mask = if frag.is_some() { vk::ColorComponentFlags::R } else { vk::ColorComponentFlags::empty() };
+    let write_mask = if frag.is_some() { vk::ColorComponentFlags::RGBA } else { vk::ColorComponentFlags::empty() };
     let blend_attachments: Vec<_> = color_formats
         .iter()
         .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask))
@@ -193,6 +197,11 @@ fn check_formats(ctx: &GpuContext) -> Result<()> {
     let needs = [
         (LABEL_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_UINT colour attachment and storage image"),
         (VALUE_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_SFLOAT colour attachment and storage image"),
+        (
+            VISIBILITY_FORMAT,
+            F::COLOR_ATTACHMENT | F::STORAGE_IMAGE,
+            "R32G32B32A32_UINT colour attachment and storage image",
+        ),
         (DEPTH_FORMAT, F::DEPTH_STENCIL_ATTACHMENT, "D32_SFLOAT depth attachment"),
     ];
     for (format, features, what) in needs {

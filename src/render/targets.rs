@@ -3,10 +3,12 @@
 //!
 //! - Range view: label, z, ∂z/∂x, ∂z/∂y — the surface, its point and its plane's gradient,
 //!   which the depth-mode shadow test needs to know which way the surface faces.
-//! - Shadow view: label, draw index, triangle — a visibility buffer: which triangle of which
-//!   draw is nearest, so the depth-mode test can intersect the camera ray with it exactly.
+//! - Shadow view: one RGBA32UI attachment holding label, draw index and triangle — a
+//!   visibility buffer: which triangle of which draw is nearest, so the depth-mode test can
+//!   intersect the camera ray with it exactly. One attachment, so the mask reads a pixel's
+//!   three words with one image load (it reads nine pixels per point).
 
-use super::pipelines::{LABEL_FORMAT, VALUE_FORMAT};
+use super::pipelines::{LABEL_FORMAT, VALUE_FORMAT, VISIBILITY_FORMAT};
 use crate::error::Result;
 use crate::gpu::{GpuContext, Image, ImageDesc};
 use ash::vk;
@@ -20,28 +22,32 @@ pub enum ViewKind {
 }
 
 impl ViewKind {
-    /// (format, name) of each colour attachment, at fragment output locations 0, 1, …
-    pub const fn colour_attachments(self) -> &'static [(vk::Format, &'static str)] {
+    /// (format, name, bytes a pixel) of each colour attachment, at fragment output locations
+    /// 0, 1, …
+    pub const fn colour_attachments(self) -> &'static [(vk::Format, &'static str, u64)] {
         match self {
-            ViewKind::Range => {
-                &[(LABEL_FORMAT, "label"), (VALUE_FORMAT, "z"), (VALUE_FORMAT, "dz/dx"), (VALUE_FORMAT, "dz/dy")]
-            }
-            ViewKind::Shadow => &[(LABEL_FORMAT, "label"), (LABEL_FORMAT, "draw index"), (LABEL_FORMAT, "triangle")],
+            ViewKind::Range => &[
+                (LABEL_FORMAT, "label", 4),
+                (VALUE_FORMAT, "z", 4),
+                (VALUE_FORMAT, "dz/dx", 4),
+                (VALUE_FORMAT, "dz/dy", 4),
+            ],
+            ViewKind::Shadow => &[(VISIBILITY_FORMAT, "visibility (label, draw index, triangle)", 16)],
         }
     }
 
     pub fn colour_formats(self) -> Vec<vk::Format> {
-        self.colour_attachments().iter().map(|&(format, _)| format).collect()
+        self.colour_attachments().iter().map(|&(format, _, _)| format).collect()
     }
 
-    /// Bytes a pixel of this view's attachments takes (colour and depth).
+    /// Bytes a pixel of this view's attachments takes (colour and a 4-byte depth).
     pub fn bytes_per_pixel(self) -> u64 {
-        4 * (self.colour_attachments().len() as u64 + 1)
+        self.colour_attachments().iter().map(|&(_, _, bytes)| bytes).sum::<u64>() + 4
     }
 }
 
 pub struct ViewTargets {
-    /// In [`ViewKind::colour_attachments`] order; the label is first in both views.
+    /// In [`ViewKind::colour_attachments`] order.
     pub colour: Vec<Image>,
     pub depth: Image,
 }
@@ -52,11 +58,12 @@ impl ViewTargets {
         let colour = kind
             .colour_attachments()
             .iter()
-            .map(|&(format, what)| Image::new(ctx, ImageDesc::attachment(format, extent), &format!("{name} {what}")))
+            .map(|&(format, what, _)| Image::new(ctx, ImageDesc::attachment(format, extent), &format!("{name} {what}")))
             .collect::<Result<_>>()?;
         Ok(Self { colour, depth: Image::new(ctx, ImageDesc::depth(extent), &format!("{name} depth"))? })
     }
 
+    /// The range view's label.
     pub fn label(&self) -> &Image {
         &self.colour[0]
     }

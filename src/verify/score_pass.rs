@@ -47,6 +47,7 @@ impl ScorePass {
             &bindings,
             size_of::<ScoreConstants>(),
             shaders::SCORE_COMP,
+            &[],
             "verification counts",
         )?;
         Ok(Self { pipeline })
