@@ -30,7 +30,12 @@ layout(push_constant, std430) uniform Score {
     float dy;
 } s;
 
-const uint N1_PLUS = 0u, N1_MINUS = 1u, N0 = 2u, POPULATIONS = 3u;
+// The counts layout's scalar words and where N_M starts, given by the host from
+// src/verify/counts.rs.
+layout(constant_id = 0) const uint N1_PLUS = 0xffffffffu;
+layout(constant_id = 1) const uint N1_MINUS = 0xffffffffu;
+layout(constant_id = 2) const uint N0 = 0xffffffffu;
+layout(constant_id = 3) const uint POPULATIONS = 0xffffffffu;
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).

@@ -18,6 +18,11 @@ pub struct CountsLayout {
     pub segments: u32,
 }
 
+/// Words of the scalars N1+, N1− and N0, then how many there are (where N_M starts). The
+/// score pass gets these as specialization constants (src/verify/score_pass.rs).
+pub const N1_PLUS_WORD: u32 = 0;
+pub const N1_MINUS_WORD: u32 = 1;
+pub const N0_WORD: u32 = 2;
 pub const SCALARS: u32 = 3;
 
 impl CountsLayout {
@@ -43,9 +48,9 @@ impl CountsLayout {
         let overlaps = &words[self.overlaps()..self.areas()];
         let both_valid: u64 = overlaps.iter().map(|&t| u64::from(t)).sum();
         Counts {
-            n1_plus: u64::from(words[0]),
-            n1_minus: u64::from(words[1]),
-            n0: u64::from(words[2]),
+            n1_plus: u64::from(words[N1_PLUS_WORD as usize]),
+            n1_minus: u64::from(words[N1_MINUS_WORD as usize]),
+            n0: u64::from(words[N0_WORD as usize]),
             n1: sensed_valid - both_valid,
             surface_population: words[self.populations()..self.overlaps()].iter().map(|&w| u64::from(w)).collect(),
             overlap: (0..self.segments as usize)

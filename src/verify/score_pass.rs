@@ -1,6 +1,7 @@
 //! The compute pass that accumulates one hypothesis' verification counts
 //! (shaders/score.comp, src/verify/counts.rs).
 
+use super::counts::{N0_WORD, N1_MINUS_WORD, N1_PLUS_WORD, SCALARS};
 use crate::error::Result;
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
 use ash::vk;
@@ -47,7 +48,7 @@ impl ScorePass {
             &bindings,
             size_of::<ScoreConstants>(),
             shaders::SCORE_COMP,
-            &[],
+            &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS],
             "verification counts",
         )?;
         Ok(Self { pipeline })
