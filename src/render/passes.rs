@@ -4,9 +4,8 @@
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
-//! The shadow passes are recorded only
-//! when the mode and θ ask for them. Each pass states the use it makes of each resource and the
-//! [`Encoder`] derives the barriers.
+//! The shadow passes are recorded only when the mode and θ ask for them. Each pass states the
+//! use it makes of each resource and the [`Encoder`] derives the barriers.
 
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::pipelines::Pipelines;

@@ -2,8 +2,11 @@
 //! and the verification counts, all recorded into one command buffer with barriers between
 //! passes and no waits between hypotheses.
 //!
-//! Render targets live in a few slots reused round-robin; a slot's next hypothesis waits (by
-//! barrier) only for that slot's previous score pass. Slot images are sized for the largest
+//! The passes are render's (src/render/passes.rs); this file adds the score pass as their
+//! sink. Render targets live in a few slots reused round-robin; a slot's next hypothesis
+//! waits (by barrier) for that slot's previous score pass, and each score pass for the one
+//! before it, since both add to the one counts buffer (synchronization validation sees the
+//! buffer bound, and atomics are writes to it). Slot images are sized for the largest
 //! view of the batch, and each hypothesis renders its own grid into them, so a hypothesis
 //! renders the same alone or in any batch. Each pass touches only the hypothesis' footprint
 //! (its bounding sphere's pixels, with a margin), so a small model in a large image costs
@@ -27,7 +30,7 @@ pub const SLOTS: usize = 4;
 /// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
 const FOOTPRINT_MARGIN: u32 = 2;
 
-/// The sensed image as the score pass reads it, uploaded once per batch.
+/// The sensed image as the score pass reads it (uploaded once per `SensedImage`).
 pub struct SensedBuffers<'a> {
     /// Per pixel: dense segment index + 1, or 0.
     pub segments: &'a Buffer,
