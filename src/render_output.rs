@@ -17,16 +17,16 @@ pub struct RenderOutput {
     pub label_unshadowed: Vec<u32>,
     /// Row-major view z of the nearest surface (meaningful where `label_unshadowed` ≠ 0).
     pub z: Vec<f32>,
-    pub timings: PassTimings,
+    /// The passes recorded, in order, with their GPU times.
+    pub timings: Vec<PassTime>,
 }
 
-/// GPU time per pass, in milliseconds; `None` for a pass not recorded or a device without
-/// timestamps.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PassTimings {
-    pub range_ms: Option<f64>,
-    pub shadow_ms: Option<f64>,
-    pub mask_ms: Option<f64>,
+/// One recorded pass and its GPU time in milliseconds (`None` on a device without
+/// timestamps). Names: `range`, `shadow`, `shadow mask`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassTime {
+    pub name: &'static str,
+    pub ms: Option<f64>,
 }
 
 impl RenderOutput {

@@ -136,12 +136,11 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
             println!("{:>6}  {:<28} {:<12} {:>8} {:>9}", entry.label, model, entry.surface_name, valid, before - valid);
         }
     }
-    let ms = |t: Option<f64>| t.map_or("-".to_string(), |t| format!("{t:.2} ms"));
-    println!(
-        "GPU time per pass: range {}, shadow {}, shadow mask {}",
-        ms(out.timings.range_ms),
-        ms(out.timings.shadow_ms),
-        ms(out.timings.mask_ms)
-    );
+    let passes: Vec<String> = out
+        .timings
+        .iter()
+        .map(|t| format!("{} {}", t.name, t.ms.map_or("-".to_string(), |ms| format!("{ms:.2} ms"))))
+        .collect();
+    println!("GPU time per pass: {}", passes.join(", "));
     Ok(())
 }

@@ -15,7 +15,7 @@ mod shadow_pass;
 mod target_pool;
 mod targets;
 
-pub use crate::render_output::{PassTimings, RenderOutput};
+pub use crate::render_output::{PassTime, RenderOutput};
 pub use draw::Draw;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
@@ -29,7 +29,7 @@ use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
 use mesh_cache::MeshCache;
-use passes::PASS_TIMESTAMPS;
+use passes::PassClock;
 use pipelines::Pipelines;
 use std::sync::Arc;
 use target_pool::TargetPool;
@@ -191,12 +191,12 @@ impl Renderer {
         let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
-        let timestamps = Timestamps::new(ctx, PASS_TIMESTAMPS, "pass timestamps")?;
+        let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
+        let mut clock = PassClock::new(&timestamps);
         ctx.submit_and_wait("render", |cmd| {
-            timestamps.reset(cmd);
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
-            self.passes(&scene.sensor, scene.shadow.mode).record(&mut enc, &slot, &job, &sink, Some(&timestamps));
+            self.passes(&scene.sensor, scene.shadow.mode).record(&mut enc, &slot, &job, &sink, Some(&mut clock));
             Ok(())
         })?;
 
@@ -213,11 +213,7 @@ impl Renderer {
                 *z += z_origin;
             }
         }
-        let timings = PassTimings {
-            range_ms: timestamps.millis_between(0, 1)?,
-            shadow_ms: if views.shadow.is_some() { timestamps.millis_between(1, 2)? } else { None },
-            mask_ms: if views.shadow.is_some() { timestamps.millis_between(2, 3)? } else { None },
-        };
+        let timings = clock.times()?;
         Ok(RenderOutput {
             sensor: scene.sensor,
             shadow: scene.shadow,

@@ -15,6 +15,7 @@ use super::targets::ViewKind;
 use super::Views;
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
+use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
 use ash::vk;
@@ -114,9 +115,39 @@ pub(crate) struct JobImages<'a> {
     pub shadowed_labels: Option<&'a Buffer>,
 }
 
-/// Timestamp queries written between the passes: 0 before the range pass, 1 after it, 2 after
-/// the shadow pass, 3 after the mask.
-pub(crate) const PASS_TIMESTAMPS: u32 = 4;
+/// Timestamps around the passes a job records, and their names: the render summary's
+/// "GPU time per pass" lists exactly the passes that ran.
+pub(crate) struct PassClock<'t> {
+    timestamps: &'t Timestamps,
+    names: Vec<&'static str>,
+}
+
+impl<'t> PassClock<'t> {
+    /// Room for every pass of a job, and the timestamp before the first.
+    pub const QUERIES: u32 = 4;
+
+    pub fn new(timestamps: &'t Timestamps) -> Self {
+        Self { timestamps, names: Vec::new() }
+    }
+
+    fn start(&mut self, cmd: vk::CommandBuffer) {
+        self.timestamps.reset(cmd);
+        self.timestamps.write(cmd, 0);
+    }
+
+    fn lap(&mut self, cmd: vk::CommandBuffer, name: &'static str) {
+        self.names.push(name);
+        self.timestamps.write(cmd, self.names.len() as u32);
+    }
+
+    /// The recorded passes with their times, once the submission finished.
+    pub fn times(&self) -> Result<Vec<PassTime>> {
+        (0..)
+            .zip(&self.names)
+            .map(|(i, &name)| Ok(PassTime { name, ms: self.timestamps.millis_between(i, i + 1)? }))
+            .collect()
+    }
+}
 
 /// What is constant over the jobs of one submission.
 pub(crate) struct Passes<'a> {
@@ -127,14 +158,9 @@ pub(crate) struct Passes<'a> {
 
 impl Passes<'_> {
     /// Records one job's passes into the encoder's command buffer.
-    pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, timestamps: Option<&Timestamps>) {
+    pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, mut clock: Option<&mut PassClock>) {
         let (p, sensor, mode) = (self.pipelines, self.sensor, self.mode);
         let cmd = enc.cmd;
-        let stamp = |index| {
-            if let Some(t) = timestamps {
-                t.write(cmd, index);
-            }
-        };
         let views = job.views;
         let mut prepare = Vec::new();
         for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
@@ -142,7 +168,9 @@ impl Passes<'_> {
             prepare.push((&targets.depth, Access::DepthAttachmentWrite));
         }
         enc.access(&prepare, &[]);
-        stamp(0);
+        if let Some(c) = clock.as_deref_mut() {
+            c.start(cmd);
+        }
         let range_pass = ViewPass {
             pipelines: &p.range,
             layout: p.raster_layout,
@@ -153,7 +181,9 @@ impl Passes<'_> {
             area: job.area,
         };
         record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
-        stamp(1);
+        if let Some(c) = clock.as_deref_mut() {
+            c.lap(cmd, "range");
+        }
         let mut shadowed_labels = None;
         if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
             (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
@@ -168,12 +198,16 @@ impl Passes<'_> {
                 area: shadow_area,
             };
             record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
-            stamp(2);
+            if let Some(c) = clock.as_deref_mut() {
+                c.lap(cmd, "shadow");
+            }
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
             bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
-            stamp(3);
+            if let Some(c) = clock.as_deref_mut() {
+                c.lap(cmd, "shadow mask");
+            }
             shadowed_labels = Some(masked);
         }
         match sink {
