@@ -168,7 +168,7 @@ impl Passes<'_> {
             prepare.push((&targets.depth, Access::DepthAttachmentWrite));
         }
         enc.access(&prepare, &[]);
-        if let Some(c) = clock.as_deref_mut() {
+        if let Some(c) = &mut clock {
             c.start(cmd);
         }
         let range_pass = ViewPass {
@@ -181,7 +181,7 @@ impl Passes<'_> {
             area: job.area,
         };
         record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
-        if let Some(c) = clock.as_deref_mut() {
+        if let Some(c) = &mut clock {
             c.lap(cmd, "range");
         }
         let mut shadowed_labels = None;
@@ -198,14 +198,14 @@ impl Passes<'_> {
                 area: shadow_area,
             };
             record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
-            if let Some(c) = clock.as_deref_mut() {
+            if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow");
             }
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
             bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
-            if let Some(c) = clock.as_deref_mut() {
+            if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
             }
             shadowed_labels = Some(masked);
