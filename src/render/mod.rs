@@ -83,7 +83,7 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
 /// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
 /// readback buffers (12) and the returned label, unshadowed label and z (12); per shadow pixel
-/// its four attachments (16). Writing: the returned image (12), the range image's X, Y, Z and
+/// its visibility and depth attachments (20). Writing: the returned image (12), the range image's X, Y, Z and
 /// label (16) and the EXR encoder's copy of them (16), and the previews (4). Measured before
 /// the range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
 fn render_memory(views: &Views) -> u64 {

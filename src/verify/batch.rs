@@ -68,7 +68,7 @@ impl BatchItem<'_> {
 
 /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
 /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
-/// bytes a pixel) and a shadow view as wide as the widest hypothesis needs (16 bytes a
+/// bytes a pixel) and a shadow view as wide as the widest hypothesis needs (20 bytes a
 /// pixel).
 /// Fails as a batch would on a hypothesis whose views cannot be planned.
 pub(crate) fn batch_slot_memory(
