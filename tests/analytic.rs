@@ -153,3 +153,31 @@ fn step_on_a_table_shadows_the_table_on_its_minus_x_side() {
         );
     }
 }
+
+/// A renderer keeps meshes, render targets and command buffers between calls: reused across
+/// scenes of other sizes, models and modes, and again on the first, it renders each exactly as
+/// a fresh renderer does.
+#[test]
+fn a_reused_renderer_renders_each_scene_as_a_fresh_one_does() {
+    let scenes = [
+        scene(sensor(96, 64, PITCH, [-2.0, 1.2], 30.0), ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY)]),
+        scene(
+            sensor(48, 80, PITCH, [-1.0, 1.5], -20.0),
+            ShadowMode::Label,
+            &[("builtin:plane:4", DMat4::IDENTITY), ("builtin:sphere:24", DMat4::from_translation(DVec3::X * 0.2))],
+        ),
+        scene(sensor(96, 64, PITCH, [-2.0, 1.2], 0.0), ShadowMode::Depth, &[("builtin:box", DMat4::IDENTITY)]),
+    ];
+    let reused = test_renderer(None);
+    for round in 0..2 {
+        for (i, sc) in scenes.iter().enumerate() {
+            let again = reused.render(sc).unwrap();
+            let fresh = test_renderer(None).render(sc).unwrap();
+            assert_no_validation_messages();
+            assert_eq!(again.label, fresh.label, "scene {i}, round {round}");
+            assert_eq!(again.label_unshadowed, fresh.label_unshadowed, "scene {i}, round {round}");
+            let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&again.z), bits(&fresh.z), "scene {i}, round {round}");
+        }
+    }
+}

@@ -189,6 +189,12 @@ fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
     let reversed: Vec<Hypothesis> = hypotheses.iter().rev().cloned().collect();
     let batch = verify(&sensed, &base, &reversed);
     alone.iter().rev().zip(&batch).for_each(|(a, b)| same(a, b));
+    // The sensed image's GPU copy is made once and kept: a clone shares it, and verifying
+    // against another image in between changes nothing.
+    let (_, other) = self::sensed(test_sensor(30.0));
+    verify(&other, &settings(test_sensor(30.0), ShadowMode::Depth), &hypotheses[..3]);
+    let batch = verify(&sensed.clone(), &base, &hypotheses);
+    alone.iter().zip(&batch).for_each(|(a, b)| same(a, b));
 }
 
 #[test]
