@@ -173,7 +173,8 @@ bool shadowed(ivec2 pixel, uint label) {
     // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
     // are not walked again (a large triangle fills the whole neighbourhood).
     uvec4 at_centre = imageLoad(shadow_visibility, s);
-    uvec2 centre = at_centre.yz;
+    // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
+    uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
     if (at_centre.x != 0u && hides(centre, ps, own, scale, bias)) {
         return true;
     }

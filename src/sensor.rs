@@ -123,7 +123,8 @@ impl Sensor {
         let first = ((lo - anchor) / self.pitch[0] + 0.5).floor();
         let last = ((hi - anchor) / self.pitch[0] - 0.5).ceil();
         let columns = last - first + 1.0;
-        if columns > f64::from(MAX_IMAGE_SIDE) {
+        // NaN (a depth range that overflowed) is refused too.
+        if columns.is_nan() || columns > f64::from(MAX_IMAGE_SIDE) {
             return Err(Error::Scene(format!(
                 "the shadow view would need {columns} columns (more than {MAX_IMAGE_SIDE}): the scene's depth \
                  range ({:.4} to {:.4}) is too deep for θ = {}° at pitch {}",

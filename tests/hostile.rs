@@ -433,3 +433,16 @@ fn the_summary_counts_each_surface_of_a_many_group_model() {
         .collect();
     assert_eq!(listed, expected);
 }
+
+// 5. Poses so far away that the depth range overflows.
+#[test]
+fn an_object_posed_beyond_any_depth_range_is_refused_with_a_message() {
+    let d = dir("overflow");
+    let far = "[[1,0,0,0],[0,1,0,0],[0,0,1,1e308],[0,0,0,1]]";
+    let body = format!(
+        "{SENSOR}[[object]]\nmodel = \"builtin:box\"\npose = {far}\n[[object]]\nmodel = \"builtin:box\"\npose = [[1,0,0,0],[0,1,0,0],[0,0,1,-1e308],[0,0,0,1]]\n"
+    );
+    let scene = write_scene(&d, "far.toml", &body);
+    let out = run(&["render", scene.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]);
+    refused(&out, "a depth range that overflows", "not finite");
+}

@@ -340,7 +340,8 @@ impl GpuContext {
     /// Records commands into a command buffer, submits it and waits for it to finish. Each
     /// call takes its own recorder (command pool, buffer and fence) from the free list, or
     /// makes one, so several threads may submit at once; a recorder goes back to the list
-    /// after a submission that finished, and is destroyed after one that failed.
+    /// after a submission that finished, is destroyed when recording failed, and is given up
+    /// (never waited for) when the GPU did not finish.
     pub(crate) fn submit_and_wait(
         &self,
         name: &str,
@@ -352,6 +353,7 @@ impl GpuContext {
             Some(r) => r,
             None => self.new_recorder()?,
         };
+        let mut submitted = false;
         let result = (|| {
             let cmd = recorder.cmd;
             self.name_object(cmd, name);
@@ -370,6 +372,7 @@ impl GpuContext {
                 let queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
                 // SAFETY: the command buffer is complete; the queue is externally synchronized by the Mutex.
                 unsafe { self.queue_submit2(*queue, &submit, recorder.fence) }.vk(name)?;
+                submitted = true;
             }
             // SAFETY: the fence was just submitted.
             let waited = unsafe { d.wait_for_fences(&[recorder.fence], true, SUBMIT_TIMEOUT_NS) }.vk(name);
@@ -383,16 +386,13 @@ impl GpuContext {
                 other => other,
             }
         })();
-        match result {
-            Ok(()) => self.recorders.lock().unwrap_or_else(|p| p.into_inner()).push(recorder),
-            Err(_) => {
-                // SAFETY: the submission failed or never started; after a wait for the device,
-                // nothing uses the recorder.
-                unsafe {
-                    let _ = d.device_wait_idle();
-                    self.destroy_recorder(recorder);
-                }
-            }
+        match (&result, submitted) {
+            (Ok(()), _) => self.recorders.lock().unwrap_or_else(|p| p.into_inner()).push(recorder),
+            // SAFETY: nothing was submitted, so nothing uses the recorder.
+            (Err(_), false) => unsafe { self.destroy_recorder(recorder) },
+            // Submitted but not seen to finish (a hung or lost device): the GPU may still use
+            // it, and waiting could block for ever, so it is left to the device's end.
+            (Err(_), true) => {}
         }
         result
     }

@@ -4,9 +4,10 @@
 //! barrier, and none where a read follows a read in the same layout. No call site tracks a
 //! "from" state.
 //!
-//! Every resource starts a command buffer as [`Access::Nothing`]: render targets are fully
-//! rewritten each time, and buffers the host wrote, or an earlier submission left ready,
-//! are visible to a new submission without a barrier (the queue submission orders them).
+//! Every resource starts a command buffer as [`Access::Nothing`]: a render target's earlier
+//! contents are discarded (each job clears and draws the pixels it reads), and buffers the
+//! host wrote, or an earlier submission left ready, are visible to a new submission without a
+//! barrier (the queue submission orders them).
 
 use super::barrier::{barrier, Access, BufferTransition, ImageTransition};
 use super::memory::{Buffer, Image};
@@ -17,7 +18,8 @@ use std::collections::HashMap;
 pub struct Encoder<'a> {
     ctx: &'a GpuContext,
     pub cmd: vk::CommandBuffer,
-    current: HashMap<u64, Access>,
+    /// By object type and handle: handles of different types may coincide.
+    current: HashMap<(vk::ObjectType, u64), Access>,
 }
 
 impl<'a> Encoder<'a> {
@@ -33,13 +35,13 @@ impl<'a> Encoder<'a> {
     pub fn access(&mut self, images: &[(&Image, Access)], buffers: &[(&Buffer, Access)]) {
         let mut image_transitions = Vec::new();
         for &(image, to) in images {
-            if let Some(from) = self.transition(image.raw.as_raw(), to) {
+            if let Some(from) = self.transition((vk::ObjectType::IMAGE, image.raw.as_raw()), to) {
                 image_transitions.push(ImageTransition { image, from, to });
             }
         }
         let mut buffer_transitions = Vec::new();
         for &(buffer, to) in buffers {
-            if let Some(from) = self.transition(buffer.raw.as_raw(), to) {
+            if let Some(from) = self.transition((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to) {
                 buffer_transitions.push(BufferTransition { buffer, from, to });
             }
         }
@@ -50,7 +52,7 @@ impl<'a> Encoder<'a> {
 
     /// The use a resource moves from, or `None` when no barrier is needed: a read after the
     /// same read (same stages, same layout).
-    fn transition(&mut self, handle: u64, to: Access) -> Option<Access> {
+    fn transition(&mut self, handle: (vk::ObjectType, u64), to: Access) -> Option<Access> {
         let from = self.current.insert(handle, to).unwrap_or(Access::Nothing);
         (!(from == to && to.is_read_only())).then_some(from)
     }

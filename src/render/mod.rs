@@ -1,7 +1,7 @@
 //! Rendering a scene: the range pass, the shadow pass and the shadow-mask compute pass,
-//! recorded into one command buffer with barriers between them, then read back; and, for
-//! verification, the same passes plus the score pass for many hypotheses per submission
-//! (batch.rs).
+//! recorded into one command buffer (passes.rs), then read back. Verification records the
+//! same passes, with its score pass as their sink, for many hypotheses per submission
+//! (src/verify/batch.rs).
 //!
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
@@ -59,6 +59,12 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
     let z_range = depth_bounds(spheres.iter().copied().filter(|&s| seen(&full_range, s)));
     let range = sensor.range_grid(z_range);
     let origin = range.local_origin();
+    if !origin.is_finite() {
+        return Err(Error::Scene(format!(
+            "the scene's depth range ({} to {}) is not finite: an object is posed too far away",
+            z_range.0, z_range.1
+        )));
+    }
     let shadow = match mode.needs_shadow_pass(sensor.theta_deg) {
         false => None,
         true => {

@@ -33,12 +33,26 @@ impl TargetPool {
     ) -> Result<PooledTargets<'_>> {
         let kept = {
             let mut free = self.free.lock().unwrap_or_else(|p| p.into_inner());
-            let found = free.iter().rposition(|(k, s, _)| (*k, *s) == (kind, size));
-            found.map(|i| free.remove(i).2)
+            match free.iter().rposition(|(k, s, _)| (*k, *s) == (kind, size)) {
+                Some(i) => Some(free.remove(i).2),
+                None => {
+                    // Views of this kind at other sizes are what a new size replaces: freed
+                    // first, so a batch of a new shape does not hold both.
+                    free.retain(|(k, _, _)| *k != kind);
+                    None
+                }
+            }
         };
         let targets = match kept {
             Some(targets) => targets,
-            None => ViewTargets::new(ctx, kind, size.0, size.1, name)?,
+            None => match ViewTargets::new(ctx, kind, size.0, size.1, name) {
+                Ok(targets) => targets,
+                Err(_) => {
+                    // Out of memory, perhaps for what the pool holds: free it all and try once more.
+                    self.free.lock().unwrap_or_else(|p| p.into_inner()).clear();
+                    ViewTargets::new(ctx, kind, size.0, size.1, name)?
+                }
+            },
         };
         Ok(PooledTargets { pool: self, kind, size, targets: Some(targets) })
     }
