@@ -2,7 +2,7 @@
 //! long as the model (its `Arc<Mesh>`) lives, so rendering the same scene, or scenes sharing
 //! models, again uploads nothing. Entries are keyed by the model's address and checked
 //! against a weak reference, so a freed model's address reused by another is never mistaken
-//! for it; dead entries are dropped on the next lookup.
+//! for it; dead entries are dropped on the next upload.
 
 use super::gpu_mesh::GpuMesh;
 use crate::error::Result;
@@ -24,8 +24,7 @@ impl MeshCache {
     pub fn get(&self, ctx: &Arc<GpuContext>, mesh: &Arc<Mesh>) -> Result<Arc<GpuMesh>> {
         let key = Arc::as_ptr(mesh) as usize;
         {
-            let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-            entries.retain(|_, (model, _)| model.strong_count() > 0);
+            let entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
             if let Some((model, gpu)) = entries.get(&key) {
                 if model.upgrade().is_some_and(|m| Arc::ptr_eq(&m, mesh)) {
                     return Ok(gpu.clone());
@@ -34,6 +33,8 @@ impl MeshCache {
         }
         let gpu = Arc::new(GpuMesh::upload(ctx, mesh)?);
         let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
+        // Models dropped since the last upload free their copies here, not on every lookup.
+        entries.retain(|_, (model, _)| model.strong_count() > 0);
         entries.insert(key, (Arc::downgrade(mesh), gpu.clone()));
         Ok(gpu)
     }

@@ -88,10 +88,11 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
 /// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
-/// readback buffers (12) and the returned label, unshadowed label and z (12); per shadow pixel
-/// its visibility and depth attachments (20). Writing: the returned image (12), the range image's X, Y, Z and
-/// label (16) and the EXR encoder's copy of them (16), and the previews (4). Measured before
-/// the range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
+/// readback buffers (12) and the returned label, unshadowed label and z (12); per shadow
+/// pixel its visibility and depth attachments (20). Writing: the returned image (12), the
+/// range image's X, Y, Z and label (16) and the EXR encoder's copy of them (16), and the
+/// previews (4). Measured before the range view gained its gradient: a 16384² render peaked
+/// at 47 bytes per pixel.
 fn render_memory(views: &Views) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
@@ -188,7 +189,7 @@ impl Renderer {
             area: views.range.full(),
             shadow_area: views.shadow.map(|g| g.full()),
         };
-        let draw_table = draw_table(ctx, &scene.sensor, std::slice::from_ref(&job))?;
+        let draw_table = draw_table(ctx, &scene.sensor, [(views, draws)])?;
         let shape = SlotShape {
             size: (w, h),
             shadow: views.shadow.as_ref().zip(draw_table.as_ref()).map(|(g, t)| (g.width, t)),

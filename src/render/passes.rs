@@ -245,18 +245,23 @@ impl Passes<'_> {
     }
 }
 
-/// The shadow view's draw table for these jobs, whose draws are numbered consecutively from
-/// the first job's `first_draw_index` = 0: each draw's constants in the shadow view, read by
-/// the mask to reach the triangles the shadow view stored (shaders/shadow_mask.comp). `None`
-/// when no job has a shadow view.
-pub(crate) fn draw_table(ctx: &Arc<GpuContext>, sensor: &Sensor, jobs: &[Job]) -> Result<Option<Buffer>> {
+/// The shadow view's draw table: for each group of draws seen on planned views, in order,
+/// each draw's constants in the shadow view, numbered consecutively from 0 (a job's
+/// `first_draw_index` is the number of draws before it). The mask reads it to reach the
+/// triangles the shadow view stored (shaders/shadow_mask.comp). `None` without a shadow view
+/// (mode `none` or θ = 0, which every job of a submission shares).
+pub(crate) fn draw_table<'a>(
+    ctx: &Arc<GpuContext>,
+    sensor: &Sensor,
+    groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
+) -> Result<Option<Buffer>> {
     let to_shadow = sensor.to_shadow_frame();
     let mut entries = Vec::new();
-    for job in jobs {
-        let Some(grid) = &job.views.shadow else { continue };
-        for (index, draw) in (job.first_draw_index..).zip(job.draws) {
-            debug_assert_eq!(index as usize, entries.len(), "draws are numbered consecutively");
-            entries.push(DrawConstants::new(grid, to_shadow, job.views.origin, draw, index));
+    for (views, draws) in groups {
+        let Some(grid) = &views.shadow else { return Ok(None) };
+        for draw in draws {
+            let index = entries.len() as u32;
+            entries.push(DrawConstants::new(grid, to_shadow, views.origin, draw, index));
         }
     }
     match entries.is_empty() {

@@ -128,20 +128,7 @@ pub(crate) fn count_batch(
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
-    let table_jobs: Vec<Job> = items
-        .iter()
-        .zip(&views)
-        .zip(&draws)
-        .zip(0..)
-        .map(|(((_, views), draws), index)| Job {
-            draws: draws.as_slice(),
-            first_draw_index: index,
-            views,
-            area: views.range.full(),
-            shadow_area: None,
-        })
-        .collect();
-    let draw_table = draw_table(ctx, sensor, &table_jobs)?;
+    let draw_table = draw_table(ctx, sensor, views.iter().zip(draws.iter().map(|d| d.as_slice())))?;
     let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
     let shape = SlotShape {
         size: (sensor.width, sensor.height),
