@@ -12,6 +12,13 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
     ("shadow_mask.comp", "shadow_mask.comp.spv", &[]),
     ("score.comp", "score.comp.spv", &[]),
+    ("effect_grazing.comp", "effect_grazing.comp.spv", &[]),
+    ("effect_working_volume.comp", "effect_working_volume.comp.spv", &[]),
+    ("effect_reflectivity.comp", "effect_reflectivity.comp.spv", &[]),
+    ("effect_edges.comp", "effect_edges.comp.spv", &[]),
+    ("effect_dropout.comp", "effect_dropout.comp.spv", &[]),
+    ("effect_noise.comp", "effect_noise.comp.spv", &[]),
+    ("effect_quantize.comp", "effect_quantize.comp.spv", &[]),
 ];
 
 fn main() {

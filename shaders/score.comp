@@ -14,6 +14,10 @@ layout(set = 0, binding = 3, std430) readonly buffer SensedSegments { uint sense
 layout(set = 0, binding = 4, std430) readonly buffer SensedZ { float sensed_z[]; };
 // The batch's counters; this hypothesis' start at counts_offset.
 layout(set = 0, binding = 5, std430) buffer Counts { uint count[]; };
+// Where effects are named (src/effects.rs): per pixel, the reason an effect lost it (0 if none
+// did), and the measured z where an effect changes z.
+layout(set = 0, binding = 6, std430) readonly buffer Losses { uint loss[]; };
+layout(set = 0, binding = 7, std430) readonly buffer MeasuredZ { float measured_z[]; };
 
 layout(push_constant, std430) uniform Score {
     uint counts_offset;     // this hypothesis' first counter word
@@ -21,6 +25,8 @@ layout(push_constant, std430) uniform Score {
     uint width;
     uint height;
     float z_origin;         // the range view's z is stored as an offset from this
+    uint use_losses;        // 1: drop the pixels an effect lost
+    uint use_measured_z;    // 1: z from measured_z, not the range view
     uvec4 region;           // the pixels that may hold the model: first column, first row, width, height
     uint surfaces;          // M
     uint segments;          // K
@@ -40,6 +46,9 @@ layout(constant_id = 3) const uint POPULATIONS = 0xffffffffu;
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
 float synthetic_z(ivec2 p) {
+    if (s.use_measured_z != 0u) {
+        return measured_z[uint(p.y) * s.width + uint(p.x)];
+    }
     precise float z = imageLoad(range_z, p).r + s.z_origin;
     return z;
 }
@@ -47,6 +56,9 @@ float synthetic_z(ivec2 p) {
 // The synthetic label; 0 outside the region, where the attachments were not drawn.
 uint synthetic(ivec2 p) {
     if (any(greaterThanEqual(uvec2(p) - s.region.xy, s.region.zw))) {
+        return 0u;
+    }
+    if (s.use_losses != 0u && loss[uint(p.y) * s.width + uint(p.x)] != 0u) {
         return 0u;
     }
     if (s.use_shadowed == 0u) {

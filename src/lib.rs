@@ -1,6 +1,7 @@
 //! rangesynth: realistic range images (triangulation shadows included) for verifying 3D
 //! object hypotheses, rendered with explicit Vulkan. See README.md and DESIGN.md.
 
+pub mod effects;
 pub mod error;
 mod exact_array;
 pub mod gpu;

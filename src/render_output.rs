@@ -1,7 +1,9 @@
 //! What a render returns: the range image (a 3D point per valid pixel), the labels before
-//! and after shadowing, and the time each pass took on the GPU. Plain data, apart from the
+//! and after shadowing and the effects, why each pixel without a point has none, and the time
+//! each pass took on the GPU. Plain data, apart from the
 //! renderer, so that writing it (io/) does not depend on rendering.
 
+use crate::effects::{Effects, Reason};
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
 
@@ -9,20 +11,25 @@ use crate::shadow::ShadowSettings;
 pub struct RenderOutput {
     pub sensor: Sensor,
     pub shadow: ShadowSettings,
+    pub effects: Effects,
     /// Whether a shadow pass ran (not with mode `none` or θ = 0).
     pub shadow_pass: bool,
-    /// Row-major labels after shadowing; 0 = no data.
+    /// Row-major labels after shadowing and the effects; 0 = no data.
     pub label: Vec<u32>,
     /// Row-major labels of the range view alone.
     pub label_unshadowed: Vec<u32>,
-    /// Row-major view z of the nearest surface (meaningful where `label_unshadowed` ≠ 0).
+    /// Row-major range-frame z of the nearest surface as measured, noise and quantization
+    /// included (meaningful where `label_unshadowed` ≠ 0).
     pub z: Vec<f32>,
+    /// Row-major: why the pixel has no point ([`Reason::Valid`] where it has one).
+    pub reason: Vec<Reason>,
     /// The passes recorded, in order, with their GPU times.
     pub timings: Vec<PassTime>,
 }
 
 /// One recorded pass and its GPU time in milliseconds (`None` on a device without
-/// timestamps). Names: `range`, `shadow`, `shadow mask`.
+/// timestamps). Names: `range`, `shadow`, `shadow mask`, and each effect's
+/// [`Effect::pass_name`](crate::effects::Effect::pass_name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PassTime {
     pub name: &'static str,
@@ -51,6 +58,11 @@ impl RenderOutput {
 
     /// Pixels with data before shadowing but not after.
     pub fn shadowed_pixels(&self) -> usize {
-        self.label.iter().zip(&self.label_unshadowed).filter(|(l, u)| **l == 0 && **u != 0).count()
+        self.pixels_lost_to(Reason::Shadow)
+    }
+
+    /// Pixels without a point for this reason.
+    pub fn pixels_lost_to(&self, reason: Reason) -> usize {
+        self.reason.iter().filter(|&&r| r == reason).count()
     }
 }

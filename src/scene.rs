@@ -1,7 +1,8 @@
-//! Scenes: a sensor, a shadow setting and posed models, read from the TOML of DESIGN.md
-//! "Interfaces". Labels are numbered across objects in file order: object k's surface s has
+//! Scenes: a sensor, a shadow setting, the sensor effects (src/effects.rs) and posed models,
+//! read from the TOML of DESIGN.md "Interfaces". Labels are numbered across objects in file order: object k's surface s has
 //! label `label_base(k) + s`.
 
+use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::read_input_text;
 use crate::limits::MemoryBudget;
@@ -19,6 +20,7 @@ use std::sync::Arc;
 pub struct Scene {
     pub sensor: Sensor,
     pub shadow: ShadowSettings,
+    pub effects: Effects,
     pub objects: Vec<SceneObject>,
 }
 
@@ -29,6 +31,9 @@ pub struct SceneObject {
     pub mesh: Arc<Mesh>,
     /// Model → range frame, rigid.
     pub pose: DMat4,
+    /// The reflectivity of all its surfaces, in [0, 1], where the scene sets it
+    /// (`[effects.reflectivity]`); else each surface's own.
+    pub reflectivity: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -37,6 +42,8 @@ struct SceneFile {
     sensor: Sensor,
     #[serde(default)]
     shadow: ShadowSettings,
+    #[serde(default)]
+    effects: Effects,
     #[serde(default)]
     object: Vec<ObjectEntry>,
 }
@@ -47,6 +54,7 @@ struct ObjectEntry {
     model: String,
     #[serde(default = "identity_rows", deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
+    reflectivity: Option<f64>,
 }
 
 fn identity_rows() -> [[f64; 4]; 4] {
@@ -71,6 +79,7 @@ impl Scene {
     pub fn from_toml(text: &str, base_dir: &Path, budget: MemoryBudget) -> Result<Self> {
         let file: SceneFile = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
         file.sensor.validate()?;
+        file.effects.validate()?;
         let mut loaded: HashMap<String, Arc<Mesh>> = HashMap::new();
         let mut objects = Vec::with_capacity(file.object.len());
         for entry in file.object {
@@ -83,9 +92,17 @@ impl Scene {
                     mesh
                 }
             };
-            objects.push(SceneObject { model_ref: entry.model, mesh, pose: pose_from_rows(entry.pose)? });
+            if let Some(r) = entry.reflectivity.filter(|r| !(0.0..=1.0).contains(r)) {
+                return Err(Error::Scene(format!(
+                    "object {} ({}): reflectivity = {r} is out of range: it must be in [0, 1]",
+                    objects.len() + 1,
+                    entry.model
+                )));
+            }
+            let pose = pose_from_rows(entry.pose)?;
+            objects.push(SceneObject { model_ref: entry.model, mesh, pose, reflectivity: entry.reflectivity });
         }
-        let scene = Scene { sensor: file.sensor, shadow: file.shadow, objects };
+        let scene = Scene { sensor: file.sensor, shadow: file.shadow, effects: file.effects, objects };
         scene.label_bases()?;
         Ok(scene)
     }
@@ -104,6 +121,21 @@ impl Scene {
                     .map_err(|_| Error::Scene("the scene has more than 2^32 - 1 surfaces".into()))
             })
             .collect()
+    }
+}
+
+impl Scene {
+    /// The reflectivity of each label, label 0 (no surface) included: an object's own
+    /// `reflectivity`, else its surface's material, else `default`.
+    pub fn reflectivity_table(&self, default: f64) -> Vec<f32> {
+        let mut table = vec![0.0];
+        for object in &self.objects {
+            let own = object.reflectivity;
+            table.extend(object.mesh.surface_reflectivity.iter().map(|&material| {
+                own.or(material.map(f64::from)).unwrap_or(default) as f32
+            }));
+        }
+        table
     }
 }
 

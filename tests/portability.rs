@@ -35,7 +35,14 @@ fn the_vulkan_1_2_path_matches_the_core_path() {
         assert_eq!(names(&old), names(&core));
 
         let sensed = SensedImage::new(&RangeImage::from(&core), &s).unwrap();
-        let settings = VerifySettings { sensor: s, shadow: mode, tolerance: 0.1, compare_shadow: true, chunk_size: 3 };
+        let settings = VerifySettings {
+            sensor: s,
+            shadow: mode,
+            effects: Default::default(),
+            tolerance: 0.1,
+            compare_shadow: true,
+            chunk_size: 3,
+        };
         let hypotheses = |v: &Verifier| -> Vec<Hypothesis> {
             (0..5)
                 .map(|i| Hypothesis {

@@ -71,7 +71,8 @@ fn convex_shadow_errors(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, 
     let scene = Scene {
         sensor: s,
         shadow: ShadowSettings { mode: ShadowMode::Depth },
-        objects: vec![SceneObject { model_ref: name.into(), mesh: Arc::new(mesh), pose }],
+        effects: Default::default(),
+        objects: vec![SceneObject { model_ref: name.into(), mesh: Arc::new(mesh), pose, reflectivity: None }],
     };
     let out = render(&scene);
     let reference = reference_render(&scene);

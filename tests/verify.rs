@@ -48,7 +48,7 @@ fn correct() -> Hypothesis {
 }
 
 fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
-    VerifySettings { sensor, shadow, tolerance: TOLERANCE, compare_shadow: false, chunk_size: 1024 }
+    VerifySettings { sensor, shadow, effects: Effects::default(), tolerance: TOLERANCE, compare_shadow: false, chunk_size: 1024 }
 }
 
 fn verify(sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Vec<Verification> {
@@ -288,8 +288,10 @@ fn an_overlap_table_too_large_for_a_batch_is_refused() {
         y: vec![0.0; n],
         z: vec![1.0; n],
         label: (1..=n as u32).collect(),
+        reason: None,
         sensor: Some(sensor),
         shadow: None,
+        effects: None,
     };
     let sensed = SensedImage::new(&image, &sensor).unwrap();
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));

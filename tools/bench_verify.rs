@@ -38,6 +38,7 @@ fn main() -> anyhow::Result<()> {
             let settings = VerifySettings {
                 sensor: scene.sensor,
                 shadow,
+                effects: Default::default(),
                 tolerance: 0.1,
                 compare_shadow: false,
                 chunk_size: 1024,

@@ -6,6 +6,7 @@ mod verify;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use rangesynth::effects::Reason;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
@@ -118,23 +119,42 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         scene.shadow.mode.as_str(),
         if out.shadow_pass { "" } else { " (no shadow pass)" }
     );
-    println!("{:>6}  {:<28} {:<12} {:>8} {:>9}", "label", "model", "surface", "valid", "shadowed");
-    // One pass over the pixels and one over the labels: [valid, before shadowing] per label.
+    let with_effects = !scene.effects.is_empty();
+    if with_effects {
+        println!("effects: {}", scene.effects.passes().map(|e| e.pass_name()).collect::<Vec<_>>().join(", "));
+    }
+    let effects_column = if with_effects { format!(" {:>9}", "effects") } else { String::new() };
+    println!("{:>6}  {:<28} {:<12} {:>8} {:>9}{effects_column}", "label", "model", "surface", "valid", "shadowed");
+    // One pass over the pixels and one over the labels: [valid, shadowed, lost to an effect]
+    // per label.
     let labels = label_map(scene)?;
-    let mut populations = vec![[0u64; 2]; labels.len() + 1];
-    for (&after, &before) in out.label.iter().zip(&out.label_unshadowed) {
-        for (label, which) in [(after, 0), (before, 1)] {
-            if let Some(p) = populations.get_mut(label as usize) {
-                p[which] += 1;
-            }
+    let mut populations = vec![[0u64; 3]; labels.len() + 1];
+    for (&surface, &reason) in out.label_unshadowed.iter().zip(&out.reason) {
+        let which = match reason {
+            Reason::Valid => 0,
+            Reason::Shadow => 1,
+            _ => 2,
+        };
+        if let Some(p) = populations.get_mut(surface as usize) {
+            p[which] += 1;
         }
     }
     for entry in labels {
-        let [valid, before] = populations[entry.label as usize];
-        if before > 0 {
+        let [valid, shadowed, lost] = populations[entry.label as usize];
+        if valid + shadowed + lost > 0 {
             let model = format!("{} {}", entry.object, entry.model);
-            println!("{:>6}  {:<28} {:<12} {:>8} {:>9}", entry.label, model, entry.surface_name, valid, before - valid);
+            let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
+            println!("{:>6}  {:<28} {:<12} {valid:>8} {shadowed:>9}{lost}", entry.label, model, entry.surface_name);
         }
+    }
+    if with_effects {
+        let lost: Vec<String> = Reason::ALL[2..]
+            .iter()
+            .map(|&r| (r, out.pixels_lost_to(r)))
+            .filter(|&(_, n)| n > 0)
+            .map(|(r, n)| format!("{} {n}", r.name()))
+            .collect();
+        println!("pixels lost: {}", if lost.is_empty() { "none".to_string() } else { lost.join(", ") });
     }
     let passes: Vec<String> = out
         .timings

@@ -1,6 +1,7 @@
 //! `rangesynth verify HYPS.json --scene SENSED.exr --out SCORES.jsonl`: scores every
-//! hypothesis, writes one JSON line each, and prints a ranked summary. Sensor and shadow
-//! settings come from the hypothesis file, else from the sensed EXR's header.
+//! hypothesis, writes one JSON line each, and prints a ranked summary. Sensor, shadow and
+//! effects settings come from the hypothesis file, else from the sensed EXR's header; effects
+//! named in both must agree.
 //!
 //! Every hypothesis is checked (models loaded, bindings, views, memory) before anything is
 //! written. Hypotheses are then verified a slice at a time and their lines written as each
@@ -10,6 +11,7 @@
 use super::{check_validation, warn_degenerate};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
@@ -66,6 +68,17 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
         })?,
     };
     let shadow = file.shadow.or(image.shadow).unwrap_or_default();
+    let effects = match (file.effects, image.effects) {
+        (Some(given), Some(header)) if given != header => anyhow::bail!(
+            "{} names the effects {} but {} was made with {}; the synthetic images must have the sensed \
+             image's effects: make them agree, or leave \"effects\" out of the hypothesis file",
+            args.hypotheses.display(),
+            effects_text(&given),
+            args.scene.display(),
+            effects_text(&header)
+        ),
+        (given, header) => given.or(header).unwrap_or_default(),
+    };
     // The range image as read (X, Y, Z, label) is held while the sensed image is built from it.
     let pixels = u64::from(image.width) * u64::from(image.height);
     budget.check(
@@ -95,6 +108,7 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
     let settings = VerifySettings {
         sensor,
         shadow: shadow.mode,
+        effects,
         tolerance,
         compare_shadow: args.compare_shadow,
         chunk_size: args.chunk_size,
@@ -152,6 +166,11 @@ fn sensor_differences(given: &Sensor, header: &Sensor) -> String {
         .join(", ")
 }
 
+/// The effects as one line of JSON, for messages.
+fn effects_text(effects: &Effects) -> String {
+    serde_json::to_string(effects).unwrap_or_else(|e| format!("(unprintable: {e})"))
+}
+
 /// Hypotheses verified per call, and so held in memory with their full results at once.
 const SLICE: usize = 4 * MAX_CHUNK;
 
@@ -178,6 +197,9 @@ impl From<&Verification> for SummaryRow {
 fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
     let s = &settings.sensor;
     println!("device: {}", renderer.context().device_name());
+    if !settings.effects.is_empty() {
+        println!("effects: {}", effects_text(&settings.effects));
+    }
     println!(
         "{} hypotheses against a {}×{} image, θ = {}°, shadow mode {}, τ = {}: {:.2} s ({:.1} per second)",
         results.len(),

@@ -12,6 +12,14 @@ pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/
 pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
 pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
+pub const EFFECT_GRAZING_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_grazing.comp.spv"));
+pub const EFFECT_WORKING_VOLUME_COMP: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/effect_working_volume.comp.spv"));
+pub const EFFECT_REFLECTIVITY_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_reflectivity.comp.spv"));
+pub const EFFECT_EDGES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_edges.comp.spv"));
+pub const EFFECT_DROPOUT_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_dropout.comp.spv"));
+pub const EFFECT_NOISE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_noise.comp.spv"));
+pub const EFFECT_QUANTIZE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_quantize.comp.spv"));
 
 /// A shader module that lives only as long as pipeline creation needs it.
 pub struct ShaderModule<'a> {

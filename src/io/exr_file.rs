@@ -1,7 +1,8 @@
 //! OpenEXR files (DESIGN.md "Interfaces"): `range.exr` has one layer with channels X, Y, Z
-//! (f32, NaN where there is no data) and `label` (u32, exact for every value); the sensor and
-//! shadow settings go into the layer header as TOML text attributes, so `verify` can take
-//! them from the sensed image. Compression is ZIP, which is lossless, so files read back
+//! (f32, NaN where there is no data), `label` (u32, exact for every value) and `reason` (u32,
+//! why a pixel has no data: src/effects.rs `Reason`); the sensor, shadow and effects settings
+//! go into the layer header as TOML text attributes, so `verify` can take them from the
+//! sensed image. Compression is ZIP, which is lossless, so files read back
 //! bit-identical.
 //!
 //! Reading trusts nothing in the file. The exr crate allocates an image as large as the
@@ -13,6 +14,7 @@
 //! file's own size can hold at its compression's best ratio — before the pixels are decoded.
 
 use super::{read_input_file, write_atomically, RangeImage};
+use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
 use crate::limits::{Bytes, MemoryBudget};
 use crate::sensor::{Sensor, MAX_IMAGE_SIDE};
@@ -23,14 +25,18 @@ use std::path::Path;
 
 const SENSOR_ATTRIBUTE: &str = "rangesynth_sensor";
 const SHADOW_ATTRIBUTE: &str = "rangesynth_shadow";
+const EFFECTS_ATTRIBUTE: &str = "rangesynth_effects";
 
 pub fn write_range_image(path: &Path, image: &RangeImage) -> Result<()> {
-    let channels = smallvec::smallvec![
+    let mut channels: smallvec::SmallVec<[AnyChannel<FlatSamples>; 4]> = smallvec::smallvec![
         AnyChannel::new("X", FlatSamples::F32(image.x.clone())),
         AnyChannel::new("Y", FlatSamples::F32(image.y.clone())),
         AnyChannel::new("Z", FlatSamples::F32(image.z.clone())),
         AnyChannel::new("label", FlatSamples::U32(image.label.clone())),
     ];
+    if let Some(reason) = &image.reason {
+        channels.push(AnyChannel::new("reason", FlatSamples::U32(reason.clone())));
+    }
     let mut attributes = LayerAttributes::named("range");
     let mut put = |name: &str, value: Option<String>| -> Result<()> {
         if let Some(text) = value {
@@ -41,6 +47,7 @@ pub fn write_range_image(path: &Path, image: &RangeImage) -> Result<()> {
     };
     put(SENSOR_ATTRIBUTE, image.sensor.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
     put(SHADOW_ATTRIBUTE, image.shadow.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
+    put(EFFECTS_ATTRIBUTE, image.effects.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
     write_layer(path, image.width, image.height, attributes, channels)
 }
 
@@ -82,6 +89,16 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Res
     };
     let (x, y, z) = (take_f32("X")?, take_f32("Y")?, take_f32("Z")?);
     let label = take_labels(path, &mut channels)?;
+    let reason = match channels.iter().position(|c| c.name.eq("reason")) {
+        None => None,
+        Some(i) => match channels.swap_remove(i).sample_data {
+            FlatSamples::U32(codes) => match codes.iter().find(|&&c| Reason::from_code(c).is_none()) {
+                Some(bad) => return Err(Error::file(path, format!("its reason channel holds an unknown code {bad}"))),
+                None => Some(codes),
+            },
+            _ => return Err(Error::file(path, "channel reason must hold 32-bit unsigned integers")),
+        },
+    };
     let setting = |name: &str| match attributes.other.get(&Text::from(name)) {
         Some(AttributeValue::Text(text)) => Some(text.to_string()),
         _ => None,
@@ -94,6 +111,13 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Res
         .map(|t| toml::from_str(&t))
         .transpose()
         .map_err(|e| Error::file(path, format!("its shadow attribute is unreadable: {e}")))?;
+    let effects: Option<Effects> = setting(EFFECTS_ATTRIBUTE)
+        .map(|t| toml::from_str(&t))
+        .transpose()
+        .map_err(|e| Error::file(path, format!("its effects attribute is unreadable: {e}")))?;
+    if let Some(e) = &effects {
+        e.validate().map_err(|e| Error::file(path, format!("its effects attribute: {e}")))?;
+    }
     if let Some(s) = &sensor {
         if (s.width, s.height) != (width, height) {
             return Err(Error::file(
@@ -102,7 +126,7 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Res
             ));
         }
     }
-    Ok(RangeImage { width, height, x, y, z, label, sensor, shadow })
+    Ok(RangeImage { width, height, x, y, z, label, reason, sensor, shadow, effects })
 }
 
 /// Reads a label-only image (`label_unshadowed.exr`) within `budget`: width, height, labels.

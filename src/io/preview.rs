@@ -1,15 +1,28 @@
 //! PNG previews for people: the range image as shaded grey (brighter is closer to the sensor,
 //! times Lambert shading from normals estimated by finite differences of z), labels in
-//! distinct colours, and shadowed pixels (data before shadowing, none after) in one marked
-//! colour. Pixels without data are black.
+//! distinct colours, and each lost pixel in its reason's colour ([`reason_colour`], fully
+//! saturated, outside the label palette). Pixels without a surface are black.
 
 use super::write_atomically;
+use crate::effects::Reason;
 use crate::error::{Error, Result};
 use std::path::Path;
 
-/// Colour of shadowed pixels in label previews: full magenta, outside the label palette's
-/// saturation.
+/// Colour of shadowed pixels in label previews: full magenta.
 pub const SHADOW_COLOUR: [u8; 3] = [255, 0, 255];
+
+/// The colour of a pixel lost for `reason` in label previews (the README's legend).
+pub fn reason_colour(reason: Reason) -> [u8; 3] {
+    match reason {
+        Reason::Valid | Reason::NoSurface => [0, 0, 0],
+        Reason::Shadow => SHADOW_COLOUR,
+        Reason::Grazing => [255, 128, 0],
+        Reason::OutOfRange => [0, 0, 255],
+        Reason::Dark => [96, 48, 0],
+        Reason::Edge => [255, 255, 0],
+        Reason::Dropout => [0, 255, 255],
+    }
+}
 
 /// Range preview. `valid[i]` says whether pixel i has data; `pitch` is dx, dy.
 pub fn write_range_preview(
@@ -58,16 +71,19 @@ pub fn write_range_preview(
     write_rgb(path, width, height, &pixels)
 }
 
-/// Label preview; where `unshadowed` has a label and `label` has none, the pixel is marked
-/// with [`SHADOW_COLOUR`].
-pub fn write_label_preview(path: &Path, width: u32, height: u32, label: &[u32], unshadowed: &[u32]) -> Result<()> {
-    let pixels: Vec<u8> = label
-        .iter()
-        .zip(unshadowed)
-        .flat_map(|(&l, &u)| match (l, u) {
-            (0, 0) => [0, 0, 0],
-            (0, _) => SHADOW_COLOUR,
-            (l, _) => label_colour(l),
+/// Label preview; a pixel without a label has its reason's colour ([`reason_colour`]), or
+/// black where no reasons are given.
+pub fn write_label_preview(
+    path: &Path,
+    width: u32,
+    height: u32,
+    label: &[u32],
+    reason: Option<&[Reason]>,
+) -> Result<()> {
+    let pixels: Vec<u8> = (0..label.len())
+        .flat_map(|i| match label[i] {
+            0 => reason_colour(reason.map_or(Reason::NoSurface, |r| r[i])),
+            l => label_colour(l),
         })
         .collect();
     write_rgb(path, width, height, &pixels)

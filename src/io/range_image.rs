@@ -1,7 +1,8 @@
-//! A range image as files hold it: a 3D point and a label per pixel, plus the sensor and
-//! shadow settings it was made with, when known. `render` writes one; `verify` reads one as
+//! A range image as files hold it: a 3D point and a label per pixel, why a pixel holds none,
+//! plus the sensor, shadow and effects settings it was made with, when known. `render` writes one; `verify` reads one as
 //! the sensed image.
 
+use crate::effects::Effects;
 use crate::render_output::RenderOutput;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -16,8 +17,11 @@ pub struct RangeImage {
     pub z: Vec<f32>,
     /// Row-major labels (segments), 0 = no data.
     pub label: Vec<u32>,
+    /// Row-major [`Reason`](crate::effects::Reason) codes, where the file has them (older files have none).
+    pub reason: Option<Vec<u32>>,
     pub sensor: Option<Sensor>,
     pub shadow: Option<ShadowSettings>,
+    pub effects: Option<Effects>,
 }
 
 impl From<&RenderOutput> for RangeImage {
@@ -36,8 +40,10 @@ impl From<&RenderOutput> for RangeImage {
             y,
             z,
             label: out.label.clone(),
+            reason: Some(out.reason.iter().map(|r| r.code()).collect()),
             sensor: Some(out.sensor),
             shadow: Some(out.shadow),
+            effects: Some(out.effects),
         }
     }
 }

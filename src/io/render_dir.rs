@@ -25,7 +25,7 @@ pub fn write_render_directory(dir: &Path, scene: &Scene, out: &RenderOutput) -> 
     write_label_map(&labels, scene)?;
     let valid: Vec<bool> = out.label.iter().map(|&l| l != 0).collect();
     write_range_preview(&range_png, w, h, &out.z, &valid, out.sensor.pitch)?;
-    write_label_preview(&label_png, w, h, &out.label, &out.label_unshadowed)?;
-    write_label_preview(&unshadowed_png, w, h, &out.label_unshadowed, &out.label_unshadowed)?;
+    write_label_preview(&label_png, w, h, &out.label, Some(&out.reason))?;
+    write_label_preview(&unshadowed_png, w, h, &out.label_unshadowed, None)?;
     set.commit(&RENDER_FILES)
 }

@@ -32,6 +32,9 @@ pub struct Mesh {
     pub triangle_surfaces: Vec<u32>,
     /// Name of surface `i + 1`.
     pub surface_names: Vec<String>,
+    /// Reflectivity of surface `i + 1` where its material gives one (the mean of an OBJ
+    /// material's `Kd`), for `[effects.reflectivity]`.
+    pub surface_reflectivity: Vec<Option<f32>>,
     /// Zero-area triangles removed by [`Mesh::new`].
     pub dropped_degenerate: usize,
 }
@@ -77,7 +80,8 @@ impl Mesh {
         if triangles.is_empty() {
             return Err(invalid("it has no (non-degenerate) triangles".into()));
         }
-        Ok(Self { name, positions, triangles, triangle_surfaces, surface_names, dropped_degenerate })
+        let surface_reflectivity = vec![None; surface_names.len()];
+        Ok(Self { name, positions, triangles, triangle_surfaces, surface_names, surface_reflectivity, dropped_degenerate })
     }
 
     pub fn surface_count(&self) -> u32 {

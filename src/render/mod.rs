@@ -7,6 +7,7 @@
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
 mod draw;
+mod effect_pass;
 mod gpu_mesh;
 mod mesh_cache;
 mod passes;
@@ -17,10 +18,12 @@ mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
 pub use draw::Draw;
+pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
 pub(crate) use targets::ViewKind;
 
+use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::MemoryBudget;
@@ -139,19 +142,27 @@ impl Renderer {
     }
 
     /// Render targets for jobs of this shape (passes.rs).
-    pub(crate) fn slot(&self, shape: &SlotShape, name: &str) -> Result<Slot<'_>> {
-        Slot::new(&self.ctx, &self.pipelines, &self.targets, shape, name)
+    pub(crate) fn slot<'a>(&'a self, shape: &SlotShape<'a>, name: &str) -> Result<Slot<'a>> {
+        let effect_pipelines = shape.effects.as_ref().map(|_| self.pipelines.effects()).transpose()?;
+        Slot::new(&self.ctx, &self.pipelines, effect_pipelines, &self.targets, shape, name)
     }
 
-    /// The pass list for jobs seen by this sensor in this shadow mode.
-    pub(crate) fn passes<'a>(&'a self, sensor: &'a Sensor, mode: ShadowMode) -> Passes<'a> {
-        Passes { pipelines: &self.pipelines, sensor, mode }
+    /// The pass list for jobs seen by this sensor in this shadow mode, with these effects.
+    pub(crate) fn passes<'a>(
+        &'a self,
+        sensor: &'a Sensor,
+        mode: ShadowMode,
+        effects: &'a Effects,
+    ) -> Result<Passes<'a>> {
+        let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
+        Ok(Passes { pipelines: &self.pipelines, effect_pipelines, sensor, mode, effects })
     }
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
     pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
         let sensor = &scene.sensor;
         sensor.validate()?;
+        scene.effects.validate()?;
         let label_bases = scene.label_bases()?;
         // Each model once, however many objects share it, and kept for the next render.
         let uploaded: Vec<Arc<GpuMesh>> =
@@ -188,46 +199,81 @@ impl Renderer {
             views,
             area: views.range.full(),
             shadow_area: views.shadow.map(|g| g.full()),
+            reflectivity_offset: 0,
         };
         let draw_table = draw_table(ctx, &scene.sensor, [(views, draws)])?;
+        let effects = &scene.effects;
+        let reflectivities = effects
+            .reflectivity
+            .map(|r| {
+                let table = scene.reflectivity_table(r.default);
+                Buffer::with_data(ctx, ash::vk::BufferUsageFlags::STORAGE_BUFFER, &table, "reflectivities")
+            })
+            .transpose()?;
         let shape = SlotShape {
             size: (w, h),
             shadow: views.shadow.as_ref().zip(draw_table.as_ref()).map(|(g, t)| (g.width, t)),
             sink: SinkKind::Readback,
+            effects: (!effects.is_empty())
+                .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
         };
         let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
+        let passes = self.passes(&scene.sensor, scene.shadow.mode, effects)?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
-            self.passes(&scene.sensor, scene.shadow.mode).record(&mut enc, &slot, &job, &sink, Some(&mut clock));
+            passes.record(&mut enc, &slot, &job, &sink, Some(&mut clock));
             Ok(())
         })?;
 
         let label_unshadowed: Vec<u32> = label_readback.read()?;
-        let label = match slot.masked() {
+        let mut label = match slot.masked() {
             Some(m) => m.read()?,
             None => label_unshadowed.clone(),
         };
-        // Offsets from the local origin back to range-frame z, where a surface was hit.
-        let z_origin = views.origin.z as f32;
-        let mut z: Vec<f32> = z_readback.read()?;
-        for (z, &label) in z.iter_mut().zip(&label_unshadowed) {
-            if label != 0 {
-                *z += z_origin;
+        let (losses, measured_z) = slot.effect_outputs();
+        let z: Vec<f32> = match measured_z {
+            Some(measured) => measured.read()?,
+            None => {
+                // Offsets from the local origin back to range-frame z, where a surface was hit.
+                let z_origin = views.origin.z as f32;
+                let mut z: Vec<f32> = z_readback.read()?;
+                for (z, &label) in z.iter_mut().zip(&label_unshadowed) {
+                    if label != 0 {
+                        *z += z_origin;
+                    }
+                }
+                z
+            }
+        };
+        let losses: Vec<u32> = losses.map(|l| l.read()).transpose()?.unwrap_or_default();
+        let reason: Vec<Reason> = (0..label.len())
+            .map(|i| match (label_unshadowed[i], label[i], losses.get(i).copied().unwrap_or(0)) {
+                (0, _, _) => Ok(Reason::NoSurface),
+                (_, 0, _) => Ok(Reason::Shadow),
+                (_, _, code) => Reason::from_code(code)
+                    .ok_or_else(|| Error::Unsupported(format!("an effect pass wrote an unknown reason {code}"))),
+            })
+            .collect::<Result<_>>()?;
+        for (label, reason) in label.iter_mut().zip(&reason) {
+            if *reason != Reason::Valid {
+                *label = 0;
             }
         }
         let timings = clock.times()?;
         Ok(RenderOutput {
             sensor: scene.sensor,
             shadow: scene.shadow,
+            effects: scene.effects,
             shadow_pass: views.shadow.is_some(),
             label,
             label_unshadowed,
             z,
+            reason,
             timings,
         })
     }

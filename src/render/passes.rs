@@ -1,19 +1,22 @@
 //! The pass list of one job, recorded by one function for `render` and for `verify`:
 //!
-//! range raster → [shadow raster → shadow mask] → sink
+//! range raster → [shadow raster → shadow mask] → [each named effect] → sink
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
-//! The shadow passes are recorded only when the mode and θ ask for them. Each pass states the
-//! use it makes of each resource and the [`Encoder`] derives the barriers.
+//! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
+//! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
+//! resource and the [`Encoder`] derives the barriers.
 
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
+use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::pipelines::Pipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
 use super::targets::ViewKind;
 use super::Views;
 use crate::error::Result;
+use crate::effects::{Effect, Effects, EFFECT_ORDER};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Sensor};
@@ -29,6 +32,10 @@ pub(crate) struct Slot<'a> {
     /// The shadow mask's output labels.
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
+    /// The effect passes' outputs, where effects are named.
+    effects: Option<EffectBuffers>,
+    /// The reflectivity table the effect passes read, where the reflectivity effect is named.
+    reflectivities: Option<&'a Buffer>,
 }
 
 /// What a slot must hold.
@@ -39,6 +46,8 @@ pub(crate) struct SlotShape<'a> {
     pub shadow: Option<(u32, &'a Buffer)>,
     /// `render` reads the masked labels on the host; `verify` scores them on the GPU.
     pub sink: SinkKind,
+    /// The effect buffers to make, where effects are named.
+    pub effects: Option<EffectShape<'a>>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -49,30 +58,48 @@ pub(crate) enum SinkKind {
 
 impl<'a> Slot<'a> {
     /// A slot whose targets come from `pool` (and go back to it when the slot is dropped).
+    /// `effect_pipelines` are needed where the shape names effects.
     pub fn new(
         ctx: &Arc<GpuContext>,
         p: &Pipelines,
+        effect_pipelines: Option<&EffectPipelines>,
         pool: &'a TargetPool,
-        shape: &SlotShape,
+        shape: &SlotShape<'a>,
         name: &str,
     ) -> Result<Self> {
         let (w, h) = shape.size;
         let range = pool.take(ctx, ViewKind::Range, (w, h), &format!("{name} range view"))?;
+        // A word a pixel, host-visible where the sink reads it back.
+        let per_pixel = || {
+            let bytes = u64::from(w) * u64::from(h) * 4;
+            match shape.sink {
+                SinkKind::Readback => BufferDesc::readback(bytes),
+                SinkKind::Compute => BufferDesc::gpu_storage(bytes),
+            }
+        };
         let (shadow, masked, mask_bindings) = match shape.shadow {
             None => (None, None, None),
             Some((shadow_width, draw_table)) => {
                 let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
-                let bytes = u64::from(w) * u64::from(h) * 4;
-                let desc = match shape.sink {
-                    SinkKind::Readback => BufferDesc::readback(bytes),
-                    SinkKind::Compute => BufferDesc::gpu_storage(bytes),
-                };
-                let masked = Buffer::new(ctx, desc, &format!("{name} shadowed labels"))?;
+                let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table)?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
         };
-        Ok(Self { range, shadow, masked, mask_bindings })
+        let effects = match (&shape.effects, effect_pipelines) {
+            (Some(effect_shape), Some(pipelines)) => Some(EffectBuffers::new(
+                ctx,
+                pipelines,
+                &range.colour,
+                masked.as_ref(),
+                effect_shape,
+                per_pixel,
+                name,
+            )?),
+            _ => None,
+        };
+        let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
+        Ok(Self { range, shadow, masked, mask_bindings, effects, reflectivities })
     }
 
     /// The range view's label and z attachments, which a compute sink reads.
@@ -83,6 +110,15 @@ impl<'a> Slot<'a> {
     /// The shadowed labels, where a shadow pass ran (host-visible for a readback slot).
     pub fn masked(&self) -> Option<&Buffer> {
         self.masked.as_ref()
+    }
+
+    /// The effects' losses and measured z, where effects are named (host-visible for a
+    /// readback slot).
+    pub fn effect_outputs(&self) -> (Option<&Buffer>, Option<&Buffer>) {
+        match &self.effects {
+            Some(e) => (Some(&e.losses), e.measured_z.as_ref()),
+            None => (None, None),
+        }
     }
 }
 
@@ -96,6 +132,8 @@ pub(crate) struct Job<'a> {
     pub area: PixelRect,
     /// The shadow pixels to render (the rows of `area`).
     pub shadow_area: Option<PixelRect>,
+    /// Where label 0 of this job's draws is in the reflectivity table.
+    pub reflectivity_offset: u32,
 }
 
 /// Where a job's images go.
@@ -113,6 +151,10 @@ pub(crate) struct JobImages<'a> {
     pub z: &'a Image,
     /// The shadow mask's output, where a shadow pass ran.
     pub shadowed_labels: Option<&'a Buffer>,
+    /// Per pixel, the reason an effect lost it (0 if none did), where effects are named.
+    pub losses: Option<&'a Buffer>,
+    /// Per pixel, z as measured (range frame), where an effect changes z.
+    pub measured_z: Option<&'a Buffer>,
 }
 
 /// Timestamps around the passes a job records, and their names: the render summary's
@@ -123,8 +165,9 @@ pub(crate) struct PassClock<'t> {
 }
 
 impl<'t> PassClock<'t> {
-    /// Room for every pass of a job, and the timestamp before the first.
-    pub const QUERIES: u32 = 4;
+    /// Room for every pass of a job (range, shadow, shadow mask and the effects), and the
+    /// timestamp before the first.
+    pub const QUERIES: u32 = 4 + EFFECT_ORDER.len() as u32;
 
     pub fn new(timestamps: &'t Timestamps) -> Self {
         Self { timestamps, names: Vec::new() }
@@ -152,8 +195,11 @@ impl<'t> PassClock<'t> {
 /// What is constant over the jobs of one submission.
 pub(crate) struct Passes<'a> {
     pub pipelines: &'a Pipelines,
+    /// Present where effects are named.
+    pub effect_pipelines: Option<&'a EffectPipelines>,
     pub sensor: &'a Sensor,
     pub mode: ShadowMode,
+    pub effects: &'a Effects,
 }
 
 impl Passes<'_> {
@@ -210,6 +256,33 @@ impl Passes<'_> {
             }
             shadowed_labels = Some(masked);
         }
+        if let (Some(buffers), Some(pipelines)) = (&slot.effects, self.effect_pipelines) {
+            enc.access(&[], &[(&buffers.losses, Access::TransferWrite)]);
+            // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
+            unsafe { enc.ctx().device.cmd_fill_buffer(cmd, buffers.losses.raw, 0, vk::WHOLE_SIZE, 0) };
+            let effect_job = EffectJob {
+                region: job.area,
+                size: (views.range.width, views.range.height),
+                z_origin: views.origin.z as f32,
+                use_shadowed: shadowed_labels.is_some(),
+                reflectivity_offset: job.reflectivity_offset,
+            };
+            let mut z_in_buffer = false;
+            for effect in self.effects.passes() {
+                let reads: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
+                let mut used = vec![(&buffers.losses, Access::ComputeWrite)];
+                used.extend(buffers.measured_z.as_ref().map(|z| (z, Access::ComputeWrite)));
+                used.extend(shadowed_labels.map(|m| (m, Access::ComputeRead)));
+                used.extend(slot.reflectivities.map(|r| (r, Access::ComputeRead)));
+                enc.access(&reads, &used);
+                buffers.record(cmd, pipelines, effect, (self.effects, sensor), &effect_job, z_in_buffer);
+                z_in_buffer |= matches!(effect, Effect::Noise | Effect::Quantize);
+                if let Some(c) = &mut clock {
+                    c.lap(cmd, effect.pass_name());
+                }
+            }
+        }
+        let (losses, measured_z) = slot.effect_outputs();
         match sink {
             Sink::Readback { label, z } => {
                 let sources = [(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
@@ -234,11 +307,12 @@ impl Passes<'_> {
                     }
                 }
                 let mut host = vec![(*label, Access::HostRead), (*z, Access::HostRead)];
-                host.extend(shadowed_labels.map(|m| (m, Access::HostRead)));
+                host.extend([shadowed_labels, losses, measured_z].into_iter().flatten().map(|b| (b, Access::HostRead)));
                 enc.access(&[], &host);
             }
             Sink::Compute(record) => {
-                let images = JobImages { label: slot.range.label(), z: slot.range.z(), shadowed_labels };
+                let images =
+                    JobImages { label: slot.range.label(), z: slot.range.z(), shadowed_labels, losses, measured_z };
                 record(enc, &images);
             }
         }

@@ -1,8 +1,10 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
 //! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs) and
-//! the shadow-mask compute pipeline.
+//! the shadow-mask compute pipeline; and the effect pipelines, built the first time a scene
+//! names an effect.
 
 use super::draw::DrawConstants;
+use super::effect_pass::EffectPipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
@@ -10,7 +12,7 @@ use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{ComputePipeline, GpuContext, DEPTH_FORMAT};
 use crate::shadow::ShadowMode;
 use ash::vk;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
@@ -33,6 +35,7 @@ pub struct Pipelines {
     pub range: ViewPipelines,
     pub shadow: ViewPipelines,
     pub mask: ComputePipeline,
+    effects: OnceLock<EffectPipelines>,
 }
 
 impl Pipelines {
@@ -56,6 +59,7 @@ impl Pipelines {
             range: ViewPipelines::default(),
             shadow: ViewPipelines::default(),
             mask,
+            effects: OnceLock::new(),
         };
         let raster_push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
@@ -86,6 +90,18 @@ impl Pipelines {
             view.ties = pipeline(Some(&ties_frag), Depth::Tie, " (ties)")?;
         }
         Ok(p)
+    }
+}
+
+impl Pipelines {
+    /// The effect pipelines, built on first use: a renderer that never meets an effect never
+    /// compiles them.
+    pub fn effects(&self) -> Result<&EffectPipelines> {
+        if let Some(built) = self.effects.get() {
+            return Ok(built);
+        }
+        let built = EffectPipelines::new(&self.ctx)?;
+        Ok(self.effects.get_or_init(|| built))
     }
 }
 

@@ -1,5 +1,5 @@
-//! Many hypotheses per submission: for each, the range pass, the shadow pass, the shadow mask
-//! and the verification counts, all recorded into one command buffer with barriers between
+//! Many hypotheses per submission: for each, the range pass, the shadow pass, the shadow mask,
+//! the named effects and the verification counts, all recorded into one command buffer with barriers between
 //! passes and no waits between hypotheses.
 //!
 //! The passes are render's (src/render/passes.rs); this file adds the score pass as their
@@ -14,10 +14,12 @@
 //! device-local buffer, zeroed first, copied to host memory at the end.
 
 use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass};
+use crate::effects::Effects;
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::render::{
-    draw_table, plan_views, Draw, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views,
+    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape,
+    ViewKind, Views,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
@@ -42,6 +44,7 @@ pub struct SensedBuffers<'a> {
 pub struct BatchSettings<'a> {
     pub sensor: &'a Sensor,
     pub mode: ShadowMode,
+    pub effects: &'a Effects,
     pub tolerance: f32,
     pub area_scale: f32,
     pub sensed: SensedBuffers<'a>,
@@ -54,6 +57,8 @@ pub struct BatchItem<'a> {
     pub sphere: (glam::DVec3, f64),
     pub pose: DMat4,
     pub surfaces: u32,
+    /// Each surface's material reflectivity, where it has one.
+    pub reflectivities: &'a [Option<f32>],
     /// Counts of the shadowed image (or the only image when there is no shadow pass).
     pub counts_offset: usize,
     /// Also count the unshadowed image here, when asked and a shadow pass runs.
@@ -68,13 +73,14 @@ impl BatchItem<'_> {
 
 /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
 /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
-/// bytes a pixel) and a shadow view as wide as the widest hypothesis needs (20 bytes a
-/// pixel).
+/// bytes a pixel, and 8 more for the effects' losses and measured z) and a shadow view as
+/// wide as the widest hypothesis needs (20 bytes a pixel).
 /// Fails as a batch would on a hypothesis whose views cannot be planned.
 pub(crate) fn batch_slot_memory(
     renderer: &Renderer,
     sensor: &Sensor,
     mode: ShadowMode,
+    effects: &Effects,
     posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
     hypotheses: usize,
 ) -> Result<u64> {
@@ -85,7 +91,8 @@ pub(crate) fn batch_slot_memory(
         shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
     }
     let rows = u64::from(sensor.height);
-    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4;
+    let effect_bytes = if effects.is_empty() { 0 } else { 8 };
+    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes;
     let per_slot =
         rows * (range_pixel * u64::from(sensor.width) + ViewKind::Shadow.bytes_per_pixel() * u64::from(shadow_width));
     Ok(per_slot * SLOTS.min(hypotheses) as u64)
@@ -111,10 +118,24 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
+    // Hypothesis i's labels 1..=M at reflectivity_offsets[i] + label; label 0 first.
+    let default_reflectivity = settings.effects.reflectivity.map_or(1.0, |r| r.default) as f32;
+    let mut reflectivity_offsets = Vec::with_capacity(items.len());
+    let mut reflectivity_table = Vec::new();
+    for item in items {
+        reflectivity_offsets.push(reflectivity_table.len() as u32);
+        reflectivity_table.push(0.0);
+        reflectivity_table.extend(item.reflectivities.iter().map(|r| r.unwrap_or(default_reflectivity)));
+    }
+    let reflectivities = settings
+        .effects
+        .reflectivity
+        .map(|_| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &reflectivity_table, "reflectivities"))
+        .transpose()?;
     // Each hypothesis' footprint in both views; one that misses the image records nothing.
     let jobs: Vec<Option<Job>> = (0..)
-        .zip(items.iter().zip(&views).zip(&draws))
-        .map(|(index, ((item, views), draws))| {
+        .zip(items.iter().zip(&views).zip(&draws).zip(&reflectivity_offsets))
+        .map(|(index, (((item, views), draws), &reflectivity_offset))| {
             let (centre, radius) = item.sphere;
             let centre = item.pose.transform_point3(centre);
             let area = views.range.footprint(centre, radius, FOOTPRINT_MARGIN)?;
@@ -124,7 +145,7 @@ pub(crate) fn count_batch(
                 // Rows are the range view's (a rotation about y keeps y).
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
-            Some(Job { draws: draws.as_slice(), first_draw_index: index, views, area, shadow_area })
+            Some(Job { draws: draws.as_slice(), first_draw_index: index, views, area, shadow_area, reflectivity_offset })
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
@@ -134,25 +155,32 @@ pub(crate) fn count_batch(
         size: (sensor.width, sensor.height),
         shadow: shadow_width.zip(draw_table.as_ref()),
         sink: SinkKind::Compute,
+        effects: (!settings.effects.is_empty()).then(|| EffectShape {
+            changes_z: settings.effects.changes_z(),
+            reflectivities: reflectivities.as_ref(),
+        }),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
     let bytes = (counts_words as u64 * 4).max(4);
     let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
     let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
-    // Bound where a slot has no shadowed labels; never read then.
-    let no_shadowed_labels = Buffer::new(ctx, BufferDesc::gpu_storage(4), "no shadowed labels")?;
+    // Bound where a slot has no shadowed labels or effect outputs; never read then.
+    let placeholder = Buffer::new(ctx, BufferDesc::gpu_storage(4), "placeholder")?;
     let score_bindings: Vec<_> = slots
         .iter()
         .map(|slot| {
             let (label, z) = slot.range_label_and_z();
+            let (losses, measured_z) = slot.effect_outputs();
             let inputs = ScoreInputs {
                 label,
                 z,
-                shadowed_labels: slot.masked().unwrap_or(&no_shadowed_labels),
+                shadowed_labels: slot.masked().unwrap_or(&placeholder),
                 sensed_segments: settings.sensed.segments,
                 sensed_z: settings.sensed.z,
                 counts: &counts,
+                losses: losses.unwrap_or(&placeholder),
+                measured_z: measured_z.unwrap_or(&placeholder),
             };
             score_pass.bindings(ctx, &inputs)
         })
@@ -160,7 +188,7 @@ pub(crate) fn count_batch(
 
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
-        let passes = renderer.passes(sensor, settings.mode);
+        let passes = renderer.passes(sensor, settings.mode, settings.effects)?;
         enc.access(&[], &[(&counts, Access::TransferWrite)]);
         // SAFETY: cmd is recording; the buffer is not in use.
         unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
@@ -172,7 +200,9 @@ pub(crate) fn count_batch(
                 width: sensor.width,
                 height: sensor.height,
                 z_origin: job.views.origin.z as f32,
-                _pad: [0; 3],
+                use_losses: 0,
+                use_measured_z: 0,
+                _pad: 0,
                 region: [job.area.col, job.area.row, job.area.width, job.area.height],
                 surfaces: item.surfaces,
                 segments: settings.sensed.segment_count,
@@ -189,15 +219,21 @@ pub(crate) fn count_batch(
                     (settings.sensed.z, Access::ComputeRead),
                     (&counts, Access::ComputeWrite),
                 ];
-                buffers.extend(images.shadowed_labels.map(|m| (m, Access::ComputeRead)));
+                let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
+                buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
                 enc.access(&range_reads, &buffers);
+                let effects = ScoreConstants {
+                    use_losses: u32::from(images.losses.is_some()),
+                    use_measured_z: u32::from(images.measured_z.is_some()),
+                    ..score(item.counts_offset)
+                };
                 let use_shadowed = u32::from(images.shadowed_labels.is_some());
-                bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..score(item.counts_offset) });
+                bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..effects });
                 // Counted again unshadowed only where a shadow pass ran; else the verifier
                 // copies the counts. The counts are written again: ordered after the first.
                 if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
                     enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-                    bindings.record(enc.cmd, score_pass, &score(offset));
+                    bindings.record(enc.cmd, score_pass, &ScoreConstants { counts_offset: offset as u32, ..effects });
                 }
             };
             passes.record(&mut enc, &slots[recorded % slots.len()], job, &Sink::Compute(&record_scores), None);

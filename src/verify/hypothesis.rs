@@ -1,6 +1,7 @@
-//! The hypothesis file (DESIGN.md "Interfaces"): a depth tolerance, optional sensor and shadow
-//! settings, and hypotheses, each a model, a pose and bindings (scene label, model surface).
+//! The hypothesis file (DESIGN.md "Interfaces"): a depth tolerance, optional sensor, shadow and
+//! effects settings (src/effects.rs), and hypotheses, each a model, a pose and bindings (scene label, model surface).
 
+use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::read_input_text;
 use crate::limits::MemoryBudget;
@@ -24,6 +25,9 @@ pub struct HypothesisFile {
     pub tolerance: f64,
     pub sensor: Option<Sensor>,
     pub shadow: Option<ShadowSettings>,
+    /// The sensor effects the synthetic images get, where the file names them (`{}` names
+    /// none).
+    pub effects: Option<Effects>,
     pub hypotheses: Vec<HypothesisEntry>,
 }
 
@@ -44,6 +48,7 @@ struct RawFile {
     tolerance: f64,
     sensor: Option<Sensor>,
     shadow: Option<ShadowSettings>,
+    effects: Option<Effects>,
     hypotheses: Vec<RawHypothesis>,
 }
 
@@ -80,6 +85,9 @@ impl HypothesisFile {
         if let Some(sensor) = &raw.sensor {
             sensor.validate()?;
         }
+        if let Some(effects) = &raw.effects {
+            effects.validate()?;
+        }
         // Each output line is known by its id alone.
         let mut ids = HashSet::with_capacity(raw.hypotheses.len());
         if let Some(h) = raw.hypotheses.iter().find(|h| !ids.insert(h.id.as_str())) {
@@ -99,6 +107,6 @@ impl HypothesisFile {
                 Ok(HypothesisEntry { id: h.id, model: h.model, pose, bindings: h.bindings })
             })
             .collect::<Result<Vec<_>>>()?;
-        Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, hypotheses })
+        Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, effects: raw.effects, hypotheses })
     }
 }

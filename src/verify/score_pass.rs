@@ -19,7 +19,11 @@ pub struct ScoreConstants {
     pub height: u32,
     /// The range view's local origin's z: z = stored offset + z_origin (`ViewGrid::local_origin`).
     pub z_origin: f32,
-    pub _pad: [u32; 3],
+    /// 1: drop the pixels an effect lost.
+    pub use_losses: u32,
+    /// 1: z from the effects' measured z.
+    pub use_measured_z: u32,
+    pub _pad: u32,
     pub region: [u32; 4],
     pub surfaces: u32,
     pub segments: u32,
@@ -31,6 +35,7 @@ pub struct ScoreConstants {
 
 // std430 offsets of `Score` in shaders/score.comp: a uvec4 aligns to 16.
 const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 16);
+const _: () = assert!(std::mem::offset_of!(ScoreConstants, use_measured_z) == 24);
 const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 32);
 const _: () = assert!(size_of::<ScoreConstants>() == 72);
 
@@ -42,7 +47,7 @@ pub(crate) struct ScorePass {
 impl ScorePass {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         let bindings =
-            [[vk::DescriptorType::STORAGE_IMAGE; 2].as_slice(), &[vk::DescriptorType::STORAGE_BUFFER; 4]].concat();
+            [[vk::DescriptorType::STORAGE_IMAGE; 2].as_slice(), &[vk::DescriptorType::STORAGE_BUFFER; 6]].concat();
         let pipeline = ComputePipeline::new(
             ctx,
             &bindings,
@@ -55,16 +60,18 @@ impl ScorePass {
     }
 
     /// The descriptor set binding what one slot's score passes read and write: the range
-    /// view's label and z attachments, the shadowed labels (any buffer when there are none:
-    /// then they are not read), the sensed image and the batch's counts.
+    /// view's label and z attachments, the shadowed labels, the sensed image, the batch's
+    /// counts, and the effects' losses and measured z (any buffer where there are none: then
+    /// they are not read).
     pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
-        let buffers = [reads.shadowed_labels, reads.sensed_segments, reads.sensed_z, reads.counts];
+        let buffers =
+            [reads.shadowed_labels, reads.sensed_segments, reads.sensed_z, reads.counts, reads.losses, reads.measured_z];
         let set = StorageSet::new(ctx, self.pipeline.set_layout, &[reads.label, reads.z], &buffers, "score bindings")?;
         Ok(ScoreBindings { set })
     }
 }
 
-/// What a score pass binds (shaders/score.comp, bindings 0 to 5).
+/// What a score pass binds (shaders/score.comp, bindings 0 to 7).
 pub(crate) struct ScoreInputs<'a> {
     pub label: &'a Image,
     pub z: &'a Image,
@@ -72,6 +79,8 @@ pub(crate) struct ScoreInputs<'a> {
     pub sensed_segments: &'a Buffer,
     pub sensed_z: &'a Buffer,
     pub counts: &'a Buffer,
+    pub losses: &'a Buffer,
+    pub measured_z: &'a Buffer,
 }
 
 pub(crate) struct ScoreBindings {

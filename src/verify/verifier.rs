@@ -14,6 +14,7 @@ use super::counts::{Counts, CountsLayout};
 use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
+use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::render::{GpuMesh, Renderer};
@@ -50,6 +51,8 @@ pub struct Hypothesis {
 pub struct VerifySettings {
     pub sensor: Sensor,
     pub shadow: ShadowMode,
+    /// The sensor effects applied to the synthetic images.
+    pub effects: Effects,
     /// τ, model units.
     pub tolerance: f64,
     /// Also score the unshadowed image.
@@ -131,6 +134,7 @@ impl Verifier {
     fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
         let sensor = &settings.sensor;
         sensor.validate()?;
+        settings.effects.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
             return Err(Error::Scene(format!(
                 "the sensed image is {}×{} but the sensor is {}×{}",
@@ -174,7 +178,7 @@ impl Verifier {
             )));
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
-        let slots = batch_slot_memory(&self.renderer, sensor, settings.shadow, posed, hypotheses.len())?;
+        let slots = batch_slot_memory(&self.renderer, sensor, settings.shadow, &settings.effects, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // The sensed image on the host and the GPU, the slots, and the counts with their
         // readback.
@@ -206,6 +210,7 @@ impl Verifier {
         let batch = BatchSettings {
             sensor,
             mode: settings.shadow,
+            effects: &settings.effects,
             tolerance: settings.tolerance as f32,
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
             sensed: SensedBuffers {
@@ -238,6 +243,7 @@ impl Verifier {
                         sphere: h.model.sphere,
                         pose: h.pose,
                         surfaces: h.model.mesh.surface_count(),
+                        reflectivities: &h.model.mesh.surface_reflectivity,
                         counts_offset: offset,
                         unshadowed_offset: settings.compare_shadow.then_some(offset + words),
                     };

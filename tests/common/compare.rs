@@ -58,9 +58,9 @@ pub fn write_artifacts(name: &str, width: usize, height: usize, actual: &[u32], 
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("test-artifacts");
     std::fs::create_dir_all(&dir).expect("artifact directory");
     let (w, h) = (width as u32, height as u32);
-    let _ = write_label_preview(&dir.join(format!("{name}_actual.png")), w, h, actual, actual);
-    let _ = write_label_preview(&dir.join(format!("{name}_expected.png")), w, h, expected, expected);
+    let _ = write_label_preview(&dir.join(format!("{name}_actual.png")), w, h, actual, None);
+    let _ = write_label_preview(&dir.join(format!("{name}_expected.png")), w, h, expected, None);
     let diff: Vec<u32> = actual.iter().zip(expected).map(|(a, e)| u32::from(a != e)).collect();
-    let _ = write_label_preview(&dir.join(format!("{name}_diff.png")), w, h, &diff, &diff);
+    let _ = write_label_preview(&dir.join(format!("{name}_diff.png")), w, h, &diff, None);
     eprintln!("wrote {name}_actual/_expected/_diff.png to {}", dir.display());
 }

@@ -9,6 +9,7 @@ pub mod reference;
 pub mod scorer;
 
 use glam::DMat4;
+pub use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::mesh::builtin_mesh;
 use rangesynth::scene::SceneObject;
@@ -67,12 +68,14 @@ pub fn scene(sensor: Sensor, mode: ShadowMode, objects: &[(&str, DMat4)]) -> Sce
     Scene {
         sensor,
         shadow: ShadowSettings { mode },
+        effects: Effects::default(),
         objects: objects
             .iter()
             .map(|&(model, pose)| SceneObject {
                 model_ref: model.to_string(),
                 mesh: Arc::new(builtin_mesh(model).expect("built-in model")),
                 pose,
+                reflectivity: None,
             })
             .collect(),
     }

@@ -1,0 +1,86 @@
+// What every effect pass shares (src/effects.rs, src/render/effect_pass.rs): one invocation
+// per range pixel of the region, the range view's attachments, the labels after shadowing,
+// and the buffers the effects write: each pixel's loss (the Reason code of the first effect
+// that lost it, 0 while none has) and its measured z (absolute, range frame) where an effect
+// changes z. Effects are evaluated at every pixel that holds a surface before shadowing, so a
+// count of the unshadowed image sees the same losses.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
+layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
+layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
+layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
+layout(set = 0, binding = 4, std430) readonly buffer ShadowedLabels { uint shadowed_label[]; };
+layout(set = 0, binding = 5, std430) buffer Losses { uint loss[]; };
+layout(set = 0, binding = 6, std430) buffer MeasuredZ { float measured_z[]; };
+// Reflectivity of label l of this job at reflectivity_offset + l.
+layout(set = 0, binding = 7, std430) readonly buffer Reflectivities { float reflectivity[]; };
+
+layout(push_constant, std430) uniform Effect {
+    uvec4 region;          // the pixels to evaluate: first column, first row, width, height
+    uint width;
+    uint height;
+    uint use_shadowed;     // 1: labels after shadowing are in shadowed_label; 0: range_label
+    uint z_in_buffer;      // 1: an earlier pass changed z: it is in measured_z
+    float z_origin;        // the range view's z is stored as an offset from this
+    float cos_theta;
+    float sin_theta;
+    uint whole;            // the effect's seed, or edges' width in pixels
+    vec4 params;           // the effect's parameters (src/render/effect_pass.rs)
+    uint reflectivity_offset;
+} e;
+
+// This pass's Reason code (src/effects.rs), given by the host.
+layout(constant_id = 0) const uint REASON = 0xffffffffu;
+
+bool in_region(ivec2 p) {
+    return all(lessThan(uvec2(p) - e.region.xy, e.region.zw));
+}
+
+// The surface at p before shadowing; 0 outside the region, where nothing was drawn.
+uint surface_label(ivec2 p) {
+    return in_region(p) ? imageLoad(range_label, p).r : 0u;
+}
+
+uint label_after_shadow(ivec2 p) {
+    if (!in_region(p)) {
+        return 0u;
+    }
+    return e.use_shadowed == 0u ? imageLoad(range_label, p).r : shadowed_label[uint(p.y) * e.width + uint(p.x)];
+}
+
+// The range-frame z of p as rendered: one correctly rounded f32 addition of the local origin,
+// as the host and the score pass add it.
+float rendered_z(ivec2 p) {
+    precise float z = imageLoad(range_z, p).r + e.z_origin;
+    return z;
+}
+
+// z as the effects before this one left it.
+float current_z(ivec2 p, uint index) {
+    return e.z_in_buffer != 0u ? measured_z[index] : rendered_z(p);
+}
+
+// The surface's upward normal, unnormalised: (−∂z/∂x, −∂z/∂y, 1).
+vec3 surface_normal(ivec2 p) {
+    return vec3(-imageLoad(range_dz_dx, p).r, -imageLoad(range_dz_dy, p).r, 1.0);
+}
+
+// Records this pass's reason unless an earlier pass lost the pixel already.
+void lose(uint index) {
+    if (loss[index] == 0u) {
+        loss[index] = REASON;
+    }
+}
+
+// The pixel of this invocation, or (-1, -1) outside the region.
+ivec2 this_pixel() {
+    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, e.region.zw))) {
+        return ivec2(-1);
+    }
+    return ivec2(e.region.xy + gl_GlobalInvocationID.xy);
+}
+
+uint index_of(ivec2 p) {
+    return uint(p.y) * e.width + uint(p.x);
+}
