@@ -82,8 +82,15 @@ pub enum Effect {
 
 /// The order the effect passes run in: the losses, then noise, then quantization of the
 /// noisy z (a real sensor digitises what it measured).
-pub const EFFECT_ORDER: [Effect; 7] =
-    [Effect::Grazing, Effect::Range, Effect::Reflectivity, Effect::Edges, Effect::Dropout, Effect::Noise, Effect::Quantize];
+pub const EFFECT_ORDER: [Effect; 7] = [
+    Effect::Grazing,
+    Effect::Range,
+    Effect::Reflectivity,
+    Effect::Edges,
+    Effect::Dropout,
+    Effect::Noise,
+    Effect::Quantize,
+];
 
 impl Effect {
     /// The pass's name in the render summary's "GPU time per pass".

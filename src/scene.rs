@@ -131,9 +131,13 @@ impl Scene {
         let mut table = vec![0.0];
         for object in &self.objects {
             let own = object.reflectivity;
-            table.extend(object.mesh.surface_reflectivity.iter().map(|&material| {
-                own.or(material.map(f64::from)).unwrap_or(default) as f32
-            }));
+            table.extend(
+                object
+                    .mesh
+                    .surface_reflectivity
+                    .iter()
+                    .map(|&material| own.or(material.map(f64::from)).unwrap_or(default) as f32),
+            );
         }
         table
     }

@@ -60,6 +60,8 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
     assert_eq!(back.label, labels);
     assert_eq!(back.sensor, image.sensor);
     assert_eq!(back.shadow, image.shadow);
+    assert_eq!(back.reason, image.reason);
+    assert_eq!(back.effects, image.effects);
 
     let label_path = dir.join("label.exr");
     write_label_image(&label_path, w, h, &labels).unwrap();

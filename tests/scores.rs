@@ -16,7 +16,18 @@ fn sensed(rows: &[&[u32]]) -> SensedImage {
     let (w, h) = (rows[0].len() as u32, rows.len() as u32);
     let label: Vec<u32> = rows.iter().flat_map(|r| r.iter().copied()).collect();
     let z = label.iter().map(|&l| if l == 0 { f32::NAN } else { 1.0 }).collect::<Vec<_>>();
-    let image = RangeImage { width: w, height: h, x: z.clone(), y: z.clone(), z, label, reason: None, sensor: None, shadow: None, effects: None };
+    let image = RangeImage {
+        width: w,
+        height: h,
+        x: z.clone(),
+        y: z.clone(),
+        z,
+        label,
+        reason: None,
+        sensor: None,
+        shadow: None,
+        effects: None,
+    };
     SensedImage::new(&image, &sensor(w, h)).unwrap()
 }
 

@@ -48,7 +48,14 @@ fn correct() -> Hypothesis {
 }
 
 fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
-    VerifySettings { sensor, shadow, effects: Effects::default(), tolerance: TOLERANCE, compare_shadow: false, chunk_size: 1024 }
+    VerifySettings {
+        sensor,
+        shadow,
+        effects: Effects::default(),
+        tolerance: TOLERANCE,
+        compare_shadow: false,
+        chunk_size: 1024,
+    }
 }
 
 fn verify(sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Vec<Verification> {

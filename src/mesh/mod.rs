@@ -81,7 +81,15 @@ impl Mesh {
             return Err(invalid("it has no (non-degenerate) triangles".into()));
         }
         let surface_reflectivity = vec![None; surface_names.len()];
-        Ok(Self { name, positions, triangles, triangle_surfaces, surface_names, surface_reflectivity, dropped_degenerate })
+        Ok(Self {
+            name,
+            positions,
+            triangles,
+            triangle_surfaces,
+            surface_names,
+            surface_reflectivity,
+            dropped_degenerate,
+        })
     }
 
     pub fn surface_count(&self) -> u32 {

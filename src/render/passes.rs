@@ -15,8 +15,8 @@ use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
 use super::targets::ViewKind;
 use super::Views;
-use crate::error::Result;
 use crate::effects::{Effect, Effects, EFFECT_ORDER};
+use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Sensor};
@@ -87,15 +87,9 @@ impl<'a> Slot<'a> {
             }
         };
         let effects = match (&shape.effects, effect_pipelines) {
-            (Some(effect_shape), Some(pipelines)) => Some(EffectBuffers::new(
-                ctx,
-                pipelines,
-                &range.colour,
-                masked.as_ref(),
-                effect_shape,
-                per_pixel,
-                name,
-            )?),
+            (Some(effect_shape), Some(pipelines)) => {
+                Some(EffectBuffers::new(ctx, pipelines, &range.colour, masked.as_ref(), effect_shape, per_pixel, name)?)
+            }
             _ => None,
         };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);

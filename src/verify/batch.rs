@@ -145,7 +145,14 @@ pub(crate) fn count_batch(
                 // Rows are the range view's (a rotation about y keeps y).
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
-            Some(Job { draws: draws.as_slice(), first_draw_index: index, views, area, shadow_area, reflectivity_offset })
+            Some(Job {
+                draws: draws.as_slice(),
+                first_draw_index: index,
+                views,
+                area,
+                shadow_area,
+                reflectivity_offset,
+            })
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
@@ -155,10 +162,8 @@ pub(crate) fn count_batch(
         size: (sensor.width, sensor.height),
         shadow: shadow_width.zip(draw_table.as_ref()),
         sink: SinkKind::Compute,
-        effects: (!settings.effects.is_empty()).then(|| EffectShape {
-            changes_z: settings.effects.changes_z(),
-            reflectivities: reflectivities.as_ref(),
-        }),
+        effects: (!settings.effects.is_empty())
+            .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;

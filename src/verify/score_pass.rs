@@ -64,8 +64,14 @@ impl ScorePass {
     /// counts, and the effects' losses and measured z (any buffer where there are none: then
     /// they are not read).
     pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
-        let buffers =
-            [reads.shadowed_labels, reads.sensed_segments, reads.sensed_z, reads.counts, reads.losses, reads.measured_z];
+        let buffers = [
+            reads.shadowed_labels,
+            reads.sensed_segments,
+            reads.sensed_z,
+            reads.counts,
+            reads.losses,
+            reads.measured_z,
+        ];
         let set = StorageSet::new(ctx, self.pipeline.set_layout, &[reads.label, reads.z], &buffers, "score bindings")?;
         Ok(ScoreBindings { set })
     }

@@ -178,7 +178,8 @@ impl Verifier {
             )));
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
-        let slots = batch_slot_memory(&self.renderer, sensor, settings.shadow, &settings.effects, posed, hypotheses.len())?;
+        let slots =
+            batch_slot_memory(&self.renderer, sensor, settings.shadow, &settings.effects, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // The sensed image on the host and the GPU, the slots, and the counts with their
         // readback.
