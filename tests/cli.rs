@@ -119,6 +119,20 @@ fn bad_scenes_are_refused_with_a_clear_message() {
             "not a rigid transform",
         ),
         ("projective", SENSOR.to_string() + object + "pose = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]]\n", "last row"),
+        ("negative_sigma", SENSOR.to_string() + object + "[effects.noise]\nsigma = -1\n", "effects.noise.sigma = -1"),
+        (
+            "dropout_above_1",
+            SENSOR.to_string() + object + "[effects.dropout]\nprobability = 1.5\n",
+            "effects.dropout.probability = 1.5",
+        ),
+        ("zero_step", SENSOR.to_string() + object + "[effects.quantize]\nz_step = 0\n", "effects.quantize.z_step = 0"),
+        (
+            "flat_grazing",
+            SENSOR.to_string() + object + "[effects.grazing]\nmax_incidence_deg = 0\n",
+            "effects.grazing.max_incidence_deg = 0",
+        ),
+        ("unknown_effect", SENSOR.to_string() + object + "[effects.bloom]\n", "unknown field `bloom`"),
+        ("bright_object", SENSOR.to_string() + object + "reflectivity = 2\n", "reflectivity = 2 is out of range"),
         (
             "nan_pose",
             SENSOR.to_string() + object + "pose = [[1,0,0,nan],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n",
@@ -280,4 +294,61 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     let out = verify(&hyps, &garbage, &d.join("s.jsonl"), &[]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("not a usable OpenEXR file"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn verify_takes_the_effects_from_the_sensed_header_and_refuses_a_mismatch() {
+    let d = dir("verify_effects");
+    let effects = "[effects.noise]\nsigma = 0.003\nseed = 8\n[effects.dropout]\nprobability = 0.1\nseed = 2\n";
+    let body = format!(
+        "{}[shadow]\nmode = \"depth\"\n[[object]]\nmodel = \"builtin:step\"\n{effects}",
+        SENSOR
+            .replace("width = 32", "width = 64")
+            .replace("height = 24", "height = 48")
+            .replace("0.1, 0.1", "0.06, 0.06")
+    );
+    let scene = write_scene(&d, &body);
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("sensed").to_str().unwrap()]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("effects: dropout, noise") && stdout.contains("pixels lost: shadow"), "{stdout}");
+    assert!(stdout.contains("dropout") && stdout.contains(", noise "), "{stdout}");
+    let exr = d.join("sensed/range.exr");
+    let image = rangesynth::io::read_range_image(&exr, Default::default()).unwrap();
+    let header = image.effects.expect("the header records the effects");
+    assert_eq!(header.noise.map(|n| (n.sigma, n.seed)), Some((0.003, 8)));
+    let dropped = image.reason.expect("a reason channel").iter().filter(|&&r| r == 7).count();
+    assert!(dropped > 0);
+
+    let identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+    let bindings = "[[1,1],[2,2],[3,3],[4,4],[5,5],[6,6],[7,7],[8,8]]";
+    let file = |effects: &str| {
+        format!(
+            r#"{{{effects}"hypotheses": [{{"id": "true", "model": "builtin:step", "pose": {identity}, "bindings": {bindings}}}]}}"#
+        )
+    };
+    let s_of = |name: &str, effects: &str| {
+        let hyps = d.join(format!("{name}.json"));
+        std::fs::write(&hyps, file(effects)).unwrap();
+        let scores = d.join(format!("{name}.jsonl"));
+        let out = verify(&hyps, &exr, &scores, &[]);
+        (out, scores)
+    };
+    // From the header, and named alike in the file: the true pose reproduces the image.
+    let same = r#""effects": {"dropout": {"probability": 0.1, "seed": 2}, "noise": {"sigma": 0.003, "seed": 8}}, "#;
+    for (name, effects) in [("from_header", ""), ("same", same)] {
+        let (out, scores) = s_of(name, effects);
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
+        assert_eq!(line["s"].as_f64(), Some(1.0), "{name}: {line}");
+    }
+    for (name, effects) in [("none", r#""effects": {}, "#), ("other_seed", &same.replace("\"seed\": 8", "\"seed\": 9"))]
+    {
+        let (out, _) = s_of(name, effects);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(stderr.contains("names the effects") && stderr.contains("was made with"), "{name}: {stderr}");
+    }
+    let (out, _) = s_of("bad", r#""effects": {"noise": {"sigma": -2}}, "#);
+    assert!(text(&out.stderr).contains("effects.noise.sigma = -2"), "{}", text(&out.stderr));
 }

@@ -21,7 +21,7 @@ pub use render_dir::{write_render_directory, RENDER_FILES};
 
 /// A fresh, empty directory for one unit test's files.
 #[cfg(test)]
-fn scratch_dir(name: &str) -> std::path::PathBuf {
+pub(crate) fn scratch_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("rangesynth-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

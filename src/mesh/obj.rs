@@ -10,9 +10,15 @@
 //! Before tobj sees the text, each line loses its comment (`#` to the end of the line, which
 //! tobj would otherwise read as vertex colours), and each group statement is replaced by one
 //! whose name is the statement's number, so tobj's models map back to statements exactly
-//! (tobj drops empty groups and may split one at a `usemtl`). Materials, texture coordinates
-//! and normals are dropped: nothing uses them, a `mtllib` can name any file, and tobj's
-//! arithmetic on huge texture or normal indices overflows.
+//! (tobj drops empty groups and may split one at a `usemtl`). Texture coordinates and normals
+//! are dropped: nothing uses them, and tobj's arithmetic on huge texture or normal indices
+//! overflows.
+//!
+//! Materials give each surface a reflectivity (`[effects.reflectivity]`): the mean of the
+//! `Kd` of the material its first face uses. A file loaded from a path reads its `mtllib`
+//! libraries from its directory, as every input is read (regular files within the budget);
+//! a library that cannot be read is skipped, and its surfaces take the effect's default.
+//! Text parsed without a path reads no library.
 
 use super::{merge_coplanar_surfaces, Mesh};
 use crate::error::{Error, Result};
@@ -26,17 +32,27 @@ const OBJ_EXPANSION: u64 = 16;
 
 pub fn load_obj(path: &Path, budget: MemoryBudget) -> Result<Mesh> {
     let bytes = read_input_file(path, "model", budget, OBJ_EXPANSION)?;
-    parse_obj(&bytes, &path.display().to_string())
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let libraries = |library: &Path| {
+        let bytes = read_input_file(&dir.join(library), "material library", budget, OBJ_EXPANSION)
+            .map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        tobj::load_mtl_buf(&mut bytes.as_slice())
+    };
+    parse(&bytes, &path.display().to_string(), libraries)
 }
 
-/// Parses OBJ text; `name` is the mesh's name in messages.
+/// Parses OBJ text; `name` is the mesh's name in messages. Material libraries are not read.
 pub fn parse_obj(bytes: &[u8], name: &str) -> Result<Mesh> {
+    parse(bytes, name, |_: &Path| Ok((Vec::new(), Default::default())))
+}
+
+fn parse(bytes: &[u8], name: &str, libraries: impl Fn(&Path) -> tobj::MTLLoadResult) -> Result<Mesh> {
     let text = String::from_utf8_lossy(bytes);
     let (tagged, statement_names) = tag_group_statements(&text);
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
-    let (models, _) = tobj::load_obj_buf(&mut tagged.as_bytes(), &options, no_materials)
+    let (models, materials) = tobj::load_obj_buf(&mut tagged.as_bytes(), &options, libraries)
         .map_err(|e| Error::Mesh { name: name.to_string(), reason: format!("not a readable OBJ file ({e})") })?;
+    let materials = materials.unwrap_or_default();
 
     // Statement 0 is the implicit group before any statement; it is a surface only when it
     // holds faces.
@@ -62,8 +78,26 @@ pub fn parse_obj(bytes: &[u8], name: &str) -> Result<Mesh> {
         }
     }
     let single_surface = surface_names.len() <= 1;
-    let mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
+    let mut surface_reflectivity = vec![None; surface_names.len()];
+    for model in &models {
+        if model.mesh.indices.is_empty() {
+            continue;
+        }
+        let slot = &mut surface_reflectivity[surface_of(group_of(model)) as usize - 1];
+        if slot.is_none() {
+            *slot = model.mesh.material_id.and_then(|id| materials.get(id)).and_then(reflectivity);
+        }
+    }
+    let mut mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
+    mesh.surface_reflectivity = surface_reflectivity;
     Ok(if single_surface { merge_coplanar_surfaces(mesh) } else { mesh })
+}
+
+/// A material's reflectivity: the mean of its diffuse colour `Kd`, within [0, 1].
+fn reflectivity(material: &tobj::Material) -> Option<f32> {
+    let kd = material.diffuse?;
+    let mean = kd.iter().sum::<f32>() / 3.0;
+    mean.is_finite().then(|| mean.clamp(0.0, 1.0))
 }
 
 /// The text with comments removed and group statement k (from 1, in file order) renamed to
@@ -82,9 +116,11 @@ fn tag_group_statements(text: &str) -> (String, Vec<Option<String>>) {
                 tagged.push_str(&format!("g {}\n", names.len()));
                 names.push(name);
             }
-            // Nothing uses materials, texture coordinates or normals: dropping them spares
-            // tobj's index arithmetic on them (which overflows on huge indices).
-            Some("mtllib" | "usemtl" | "vt" | "vn") => {}
+            // Nothing uses texture coordinates or normals: dropping them spares tobj's index
+            // arithmetic on them (which overflows on huge indices). A `usemtl` without a name
+            // is an error to tobj; it names no material.
+            Some("vt" | "vn") => {}
+            Some("usemtl") if words.next().is_none_or(|n| n.trim().is_empty()) => {}
             Some("f") => {
                 tagged.push('f');
                 for corner in words.next().unwrap_or("").split_whitespace() {
@@ -122,6 +158,26 @@ mod tests {
         let mesh = parse_obj(text.as_bytes(), "t").unwrap();
         assert_eq!(mesh.surface_names, ["surface1", "top"]);
         assert_eq!(mesh.triangle_surfaces, [1, 2]);
+    }
+
+    #[test]
+    fn materials_give_each_surface_the_mean_of_its_kd() {
+        let dir = crate::io::scratch_dir("obj_materials");
+        std::fs::write(dir.join("m.mtl"), "newmtl dark\nKd 0.1 0.2 0.3\nnewmtl bright\nKd 0.9 0.9 0.6\n").unwrap();
+        let text = format!(
+            "mtllib m.mtl\nmtllib missing.mtl\n{SQUARE}g a\nusemtl bright\nf 1 2 3\ng b\nf 1 3 4\n\
+             g c\nusemtl dark\nf 1 2 4\nusemtl bright\nf 2 3 4\ng d\nusemtl unknown\nf 1 2 3\n"
+        );
+        std::fs::write(dir.join("m.obj"), text).unwrap();
+        let mesh = load_obj(&dir.join("m.obj"), MemoryBudget::default()).unwrap();
+        assert_eq!(mesh.surface_names, ["a", "b", "c", "d"]);
+        // b keeps using the material set before it; c takes its first face's.
+        let expected = [Some(0.8), Some(0.8), Some(0.2), None];
+        for (got, want) in mesh.surface_reflectivity.iter().zip(expected) {
+            assert_eq!(got.map(|r| (r * 1e5).round() / 1e5), want);
+        }
+        let parsed = parse_obj(&std::fs::read(dir.join("m.obj")).unwrap(), "text").unwrap();
+        assert!(parsed.surface_reflectivity.iter().all(Option::is_none), "text alone reads no library");
     }
 
     #[test]
