@@ -3,10 +3,15 @@
 //! baseline, measured in the same run, verifies the same hypotheses one call (one
 //! submission) each, so the batching gain shows as a ratio.
 //!
+//! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
+//! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
+//! batch without effects, measured in the same run (each the best of five).
+//!
 //! Run: `cargo run --release --example bench_verify` (add `-- --quick` for a short run).
 //! RANGESYNTH_DEVICE picks the device.
 
 use glam::{DMat4, DVec3};
+use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::RangeImage;
 use rangesynth::limits::MemoryBudget;
@@ -44,14 +49,7 @@ fn main() -> anyhow::Result<()> {
                 chunk_size: 1024,
             };
             for &n in batches {
-                let hypotheses: Vec<Hypothesis> = (0..n)
-                    .map(|i| {
-                        let a = i as f64 * 0.002;
-                        let pose =
-                            DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44 + a);
-                        Hypothesis { id: format!("h{i}"), model: model.clone(), pose, bindings: vec![(1, 1), (2, 1)] }
-                    })
-                    .collect();
+                let hypotheses = hypotheses(&model, n);
                 // Warm up (pipelines, shader compilation in software drivers).
                 verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
                 let start = Instant::now();
@@ -74,6 +72,61 @@ fn main() -> anyhow::Result<()> {
                 );
             }
         }
+    }
+    effect_costs(&verifier, &sensed, &scene)
+}
+
+/// `n` poses of `model` about the sensed step's, turning by 0.002 rad each.
+fn hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>, n: usize) -> Vec<Hypothesis> {
+    (0..n)
+        .map(|i| {
+            let a = i as f64 * 0.002;
+            let pose = DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44 + a);
+            Hypothesis { id: format!("h{i}"), model: model.clone(), pose, bindings: vec![(1, 1), (2, 1)] }
+        })
+        .collect()
+}
+
+/// Each effect's cost per hypothesis, against no effects.
+fn effect_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
+    let model = verifier.model("builtin:box", Path::new("."))?;
+    let hypotheses = hypotheses(&model, 64);
+    let cases = [
+        ("none", ""),
+        ("grazing", "[grazing]\nmax_incidence_deg = 70"),
+        ("range", "[range]\nmin_z = 0.1\nmax_z = 1.0"),
+        ("reflectivity", "[reflectivity]\nthreshold = 0.5"),
+        ("edges (1 px)", "[edges]\njump = 0.1\nwidth_px = 1"),
+        ("edges (3 px)", "[edges]\njump = 0.1\nwidth_px = 3"),
+        ("dropout", "[dropout]\nprobability = 0.1"),
+        ("noise", "[noise]\nsigma = 0.002"),
+        ("quantize", "[quantize]\nz_step = 0.001"),
+    ];
+    // Every effect once (the 1-pixel edge filter).
+    let all = cases.iter().filter(|(name, _)| *name != "edges (3 px)").map(|(_, text)| *text).collect::<Vec<_>>();
+    let all = all.join("\n");
+    println!("\neffects: builtin:box, depth-mode shadows, batches of 64 at {}×{}", sensed.width, sensed.height);
+    println!("{:<14} {:>12} {:>10}", "effect", "ms/hyp", "vs none");
+    let mut baseline = None;
+    for (name, text) in cases.iter().copied().chain([("all", all.as_str())]) {
+        let effects: Effects = toml::from_str(text)?;
+        let settings = VerifySettings {
+            sensor: scene.sensor,
+            shadow: ShadowMode::Depth,
+            effects,
+            tolerance: 0.1,
+            compare_shadow: false,
+            chunk_size: 1024,
+        };
+        verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+        let mut best = f64::INFINITY;
+        for _ in 0..5 {
+            let start = Instant::now();
+            verifier.verify(sensed, &settings, &hypotheses, &mut |_| {})?;
+            best = best.min(start.elapsed().as_secs_f64() * 1e3 / hypotheses.len() as f64);
+        }
+        let none = *baseline.get_or_insert(best);
+        println!("{name:<14} {best:>12.3} {:>9.2}×", best / none);
     }
     Ok(())
 }

@@ -91,16 +91,19 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
 /// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
-/// readback buffers (12) and the returned label, unshadowed label and z (12); per shadow
-/// pixel its visibility and depth attachments (20). Writing: the returned image (12), the
-/// range image's X, Y, Z and label (16) and the EXR encoder's copy of them (16), and the
-/// previews (4). Measured before the range view gained its gradient: a 16384² render peaked
-/// at 47 bytes per pixel.
-fn render_memory(views: &Views) -> u64 {
+/// readback buffers (12) and the returned label, unshadowed label, z and reason (16), and with
+/// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
+/// visibility and depth attachments (20). Writing: the returned image (16), the range image's
+/// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
+/// (4). Measured before the range view gained its gradient: a 16384² render peaked at 47 bytes
+/// per pixel.
+fn render_memory(views: &Views, effects: &Effects) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
-    let rendering = (ViewKind::Range.bytes_per_pixel() + 24) * range + ViewKind::Shadow.bytes_per_pixel() * shadow;
-    rendering.max(48 * range)
+    let effect_bytes = if effects.is_empty() { 0 } else { 16 };
+    let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes;
+    let rendering = range_pixel * range + ViewKind::Shadow.bytes_per_pixel() * shadow;
+    rendering.max(60 * range)
 }
 
 /// The two views of one render, with the grids they were rendered on.
@@ -184,7 +187,7 @@ impl Renderer {
         let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views),
+            render_memory(&views, &scene.effects),
         )?;
         self.render_views(scene, &views, &draws)
     }
