@@ -207,7 +207,7 @@ pub struct Dropout {
 /// where α is the angle between the surface normal and the projector (+z): the axial model of
 /// Nguyen, Izadi and Lovell (2012) for the Kinect, σ = 0.0012 + 0.0019·(z − 0.4)² +
 /// 0.0001/√z·α²/(π/2 − α)² in metres, with the distance to the sensor as z. α is capped
-/// [`MAX_NOISE_INCIDENCE_DEG`] so that σ stays finite.
+/// at [`MAX_NOISE_INCIDENCE_DEG`] so that σ stays finite.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Noise {

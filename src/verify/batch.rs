@@ -191,9 +191,9 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
+    let passes = renderer.passes(sensor, settings.mode, settings.effects)?;
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
-        let passes = renderer.passes(sensor, settings.mode, settings.effects)?;
         enc.access(&[], &[(&counts, Access::TransferWrite)]);
         // SAFETY: cmd is recording; the buffer is not in use.
         unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
