@@ -25,7 +25,7 @@ layout(push_constant, std430) uniform Effect {
     float z_origin;        // the range view's z is stored as an offset from this
     float cos_theta;
     float sin_theta;
-    uint whole;            // the effect's seed, or edges' width in pixels
+    uint seed_or_width;            // the effect's seed, or edges' width in pixels
     vec4 params;           // the effect's parameters (src/render/effect_pass.rs)
     uint reflectivity_offset;
 } e;

@@ -1,6 +1,6 @@
 #version 460
 // [effects.dropout]: each point is lost with the given probability, drawn from (seed, pixel).
-// whole: seed; params.x: probability.
+// seed_or_width: seed; params.x: probability.
 #include "effect.glsl"
 #include "random.glsl"
 
@@ -12,7 +12,7 @@ void main() {
     if (p.x < 0 || surface_label(p) == 0u) {
         return;
     }
-    if (uniform2(e.whole, p, DROPOUT_STREAM).x < e.params.x) {
+    if (uniform2(e.seed_or_width, p, DROPOUT_STREAM).x < e.params.x) {
         lose(index_of(p));
     }
 }

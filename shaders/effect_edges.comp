@@ -1,7 +1,7 @@
 #version 460
 // [effects.edges]: the mixed-pixel filter. A point is lost when any pixel within `width`
 // of it (Chebyshev distance, inside the image) holds no surface after shadowing or differs
-// from it in z by more than the jump. whole: width_px; params.x: jump.
+// from it in z by more than the jump. seed_or_width: width_px; params.x: jump.
 #include "effect.glsl"
 
 void main() {
@@ -10,7 +10,7 @@ void main() {
         return;
     }
     float z = imageLoad(range_z, p).r;
-    int width = int(e.whole);
+    int width = int(e.seed_or_width);
     ivec2 lo = max(p - width, ivec2(0));
     ivec2 hi = min(p + width, ivec2(e.width, e.height) - 1);
     for (int y = lo.y; y <= hi.y; y++) {

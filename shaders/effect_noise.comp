@@ -2,7 +2,7 @@
 // [effects.noise]: Gaussian noise along z, drawn from (seed, pixel), with
 // σ = sigma + depth_coefficient·(z − depth_reference)² + incidence_coefficient·α²/(π/2 − α)²,
 // α the angle between the normal and the projector, capped (src/effects.rs).
-// whole: seed; params: sigma, depth_coefficient, depth_reference, incidence_coefficient.
+// seed_or_width: seed; params: sigma, depth_coefficient, depth_reference, incidence_coefficient.
 #include "effect.glsl"
 #include "random.glsl"
 
@@ -21,5 +21,5 @@ void main() {
     float from_reference = z - e.params.z;
     float oblique = alpha / (1.5707963267948966 - alpha);
     float sigma = e.params.x + e.params.y * from_reference * from_reference + e.params.w * oblique * oblique;
-    measured_z[index] = z + sigma * gaussian(e.whole, p, NOISE_STREAM);
+    measured_z[index] = z + sigma * gaussian(e.seed_or_width, p, NOISE_STREAM);
 }

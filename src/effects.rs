@@ -226,6 +226,9 @@ fn is_zero(value: &f64) -> bool {
     *value == 0.0
 }
 
+/// The largest value of each σ term's coefficient: noise beyond it would overflow f32 z.
+pub const MAX_SIGMA: f64 = 1e18;
+
 /// The incidence angle the noise model's α²/(π/2 − α)² term is capped at, degrees.
 pub const MAX_NOISE_INCIDENCE_DEG: f64 = 89.0;
 
@@ -264,12 +267,14 @@ impl Effects {
         self.noise.is_some() || self.quantize.is_some()
     }
 
-    /// Checks every parameter; the error names the key and the allowed range.
+    /// Checks every parameter; the error names the key and the allowed range. The GPU takes
+    /// them as f32, so lengths must be finite in f32 too, and σ terms at most [`MAX_SIGMA`].
     pub fn validate(&self) -> Result<()> {
         let bad = |key: &str, value: &dyn std::fmt::Display, allowed: &str| {
             Err(Error::Scene(format!("effects.{key} = {value} is out of range: it must be {allowed}")))
         };
-        let finite = |key: &str, value: f64| if value.is_finite() { Ok(()) } else { bad(key, &value, "finite") };
+        let finite =
+            |key: &str, value: f64| if (value as f32).is_finite() { Ok(()) } else { bad(key, &value, "finite in f32") };
         if let Some(g) = &self.grazing {
             if !(g.max_incidence_deg > 0.0 && g.max_incidence_deg <= 90.0) {
                 return bad("grazing.max_incidence_deg", &g.max_incidence_deg, "in (0, 90] degrees");
@@ -296,7 +301,7 @@ impl Effects {
             }
         }
         if let Some(e) = &self.edges {
-            if !(e.jump > 0.0 && e.jump.is_finite()) {
+            if !(e.jump > 0.0 && (e.jump as f32).is_finite()) {
                 return bad("edges.jump", &e.jump, "positive and finite (model units)");
             }
             if !(1..=MAX_EDGE_WIDTH_PX).contains(&e.width_px) {
@@ -314,14 +319,14 @@ impl Effects {
                 ("noise.depth_coefficient", n.depth_coefficient),
                 ("noise.incidence_coefficient", n.incidence_coefficient),
             ] {
-                if !(value >= 0.0 && value.is_finite()) {
-                    return bad(key, &value, "non-negative and finite");
+                if !(0.0..=MAX_SIGMA).contains(&value) {
+                    return bad(key, &value, &format!("in [0, {MAX_SIGMA:e}]"));
                 }
             }
             finite("noise.depth_reference", n.depth_reference)?;
         }
         if let Some(q) = &self.quantize {
-            if !(q.z_step > 0.0 && q.z_step.is_finite()) {
+            if !(q.z_step as f32 >= f32::MIN_POSITIVE && (q.z_step as f32).is_finite()) {
                 return bad("quantize.z_step", &q.z_step, "positive and finite (model units)");
             }
         }
@@ -364,6 +369,11 @@ mod tests {
             ("[range]", "effects.range needs"),
             ("[reflectivity]\nthreshold = 2", "reflectivity.threshold"),
             ("[noise]\nsigma = nan", "noise.sigma"),
+            ("[noise]\nsigma = 1e30", "noise.sigma"),
+            ("[quantize]\nz_step = 1e39", "quantize.z_step"),
+            ("[quantize]\nz_step = 1e-46", "quantize.z_step"),
+            ("[range]\nmax_z = 1e39", "range.max_z"),
+            ("[edges]\njump = 1e39", "edges.jump"),
         ] {
             let message = parse(text).validate().unwrap_err().to_string();
             assert!(message.contains(key), "{text}: {message}");

@@ -131,13 +131,11 @@ impl Scene {
         let mut table = vec![0.0];
         for object in &self.objects {
             let own = object.reflectivity;
-            table.extend(
-                object
-                    .mesh
-                    .surface_reflectivity
-                    .iter()
-                    .map(|&material| own.or(material.map(f64::from)).unwrap_or(default) as f32),
-            );
+            let mesh = &object.mesh;
+            table.extend((0..mesh.surface_count() as usize).map(|s| {
+                let material = mesh.surface_reflectivity.get(s).copied().flatten();
+                own.or(material.map(f64::from)).unwrap_or(default) as f32
+            }));
         }
         table
     }

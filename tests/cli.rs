@@ -349,6 +349,14 @@ fn verify_takes_the_effects_from_the_sensed_header_and_refuses_a_mismatch() {
         assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
         assert!(stderr.contains("names the effects") && stderr.contains("was made with"), "{name}: {stderr}");
     }
+    // A simpler sensor model than the image's, on request: the true pose no longer scores 1.
+    let hyps = d.join("simpler.json");
+    std::fs::write(&hyps, file(r#""effects": {}, "#)).unwrap();
+    let scores = d.join("simpler.jsonl");
+    let out = verify(&hyps, &exr, &scores, &["--override-effects"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
+    assert!(line["s"].as_f64().unwrap() < 0.99, "{line}");
     let (out, _) = s_of("bad", r#""effects": {"noise": {"sigma": -2}}, "#);
     assert!(text(&out.stderr).contains("effects.noise.sigma = -2"), "{}", text(&out.stderr));
 }

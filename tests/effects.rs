@@ -193,11 +193,9 @@ fn the_working_volume_loses_points_outside_it() {
     let base = plate(20.0, 0.0, 0.0, 128);
     let clean = render(&base);
     let out = render(&with(&base, "[range]\nmin_z = -0.1\nmax_z = 0.15"));
+    // z as stored (f32) against the bounds in f32, as the GPU compares them.
     let (mut below, mut above) = (0, 0);
     for (i, &z) in clean.z.iter().enumerate() {
-        if (z + 0.1).abs() < 1e-4 || (z - 0.15).abs() < 1e-4 {
-            continue;
-        }
         let outside = !(-0.1..=0.15).contains(&z);
         below += usize::from(z < -0.1);
         above += usize::from(z > 0.15);
@@ -362,4 +360,48 @@ fn counts_with_effects_do_not_depend_on_the_batch_or_the_order() {
     let mut reversed = counts(&verify_settings(sensor), &hypotheses.iter().rev().cloned().collect::<Vec<_>>());
     reversed.reverse();
     assert_eq!(reversed, alone, "reversed order");
+}
+
+#[test]
+fn verification_reads_each_models_material_reflectivity_at_its_place_in_the_batch() {
+    // An OBJ model of two raised squares side by side, one dark (Kd mean 0.1), one bright (0.9).
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("effects_materials");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("m.mtl"), "newmtl dark\nKd 0.1 0.1 0.1\nnewmtl bright\nKd 0.9 0.9 0.9\n").unwrap();
+    let obj = "mtllib m.mtl\nv -1 -0.8 0.2\nv 0 -0.8 0.2\nv 0 0.8 0.2\nv -1 0.8 0.2\nv 1 -0.8 0.2\nv 1 0.8 0.2\n\
+               g dark\nusemtl dark\nf 1 2 3 4\ng bright\nusemtl bright\nf 2 5 6 3\n";
+    std::fs::write(dir.join("squares.obj"), obj).unwrap();
+    let sensor = centred_sensor(64, 64, 0.04, [0.0, 0.0], 30.0);
+    let text = format!(
+        "[sensor]\nkind = \"orthographic\"\nwidth = 64\nheight = 64\npitch = [0.04, 0.04]\norigin = {:?}\n\
+         theta_deg = 30.0\n[shadow]\nmode = \"depth\"\n[effects.reflectivity]\nthreshold = 0.5\n\
+         [[object]]\nmodel = \"squares.obj\"\n",
+        sensor.origin
+    );
+    let sensed_scene = Scene::from_toml(&text, &dir, Default::default()).unwrap();
+    let out = render(&sensed_scene);
+    let dark_lost = out.pixels_lost_to(Reason::Dark);
+    assert!(dark_lost > 500 && out.label.iter().all(|&l| l != 1), "the dark square is lost: {dark_lost}");
+    assert!(out.label.iter().filter(|&&l| l == 2).count() > 500, "the bright square is kept");
+    let image = RangeImage::from(&out);
+    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let squares = Hypothesis {
+        id: "squares".into(),
+        model: VERIFIER.model("squares.obj", &dir).unwrap(),
+        pose: DMat4::IDENTITY,
+        bindings: vec![(2, 2)],
+    };
+    let boxed = Hypothesis {
+        id: "box".into(),
+        model: VERIFIER.model("builtin:box", Path::new(".")).unwrap(),
+        pose: DMat4::from_translation(DVec3::new(0.2, 0.1, 0.0)),
+        bindings: vec![(2, 1)],
+    };
+    let settings = VerifySettings { effects: sensed_scene.effects, ..verify_settings(sensor) };
+    let alone = VERIFIER.verify(&sensed, &settings, std::slice::from_ref(&squares), &mut |_| {}).unwrap();
+    let batch = VERIFIER.verify(&sensed, &settings, &[boxed, squares], &mut |_| {}).unwrap();
+    assert_no_validation_messages();
+    assert_eq!(alone[0].scores.s, 1.0, "{:?}", alone[0].scores);
+    assert_eq!(batch[1].counts, alone[0].counts, "the same after another model in the batch");
+    assert_eq!(alone[0].counts.surface_population[0], 0, "the dark surface has no synthetic pixels");
 }

@@ -1,7 +1,7 @@
 //! `rangesynth verify HYPS.json --scene SENSED.exr --out SCORES.jsonl`: scores every
 //! hypothesis, writes one JSON line each, and prints a ranked summary. Sensor, shadow and
 //! effects settings come from the hypothesis file, else from the sensed EXR's header; effects
-//! named in both must agree.
+//! given by both must agree unless `--override-effects` says to use the file's.
 //!
 //! Every hypothesis is checked (models loaded, bindings, views, memory) before anything is
 //! written. Hypotheses are then verified a slice at a time and their lines written as each
@@ -40,6 +40,11 @@ pub struct VerifyArgs {
     /// (without it, a difference is refused).
     #[arg(long)]
     override_sensor: bool,
+    /// Use the hypothesis file's "effects" even where they differ from those the sensed image's
+    /// header records (without it, a difference is refused): to verify with a simpler sensor
+    /// model than the one that made the image.
+    #[arg(long)]
+    override_effects: bool,
     /// Most hypotheses per GPU submission.
     #[arg(long, default_value_t = MAX_CHUNK)]
     chunk_size: usize,
@@ -69,9 +74,9 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
     };
     let shadow = file.shadow.or(image.shadow).unwrap_or_default();
     let effects = match (file.effects, image.effects) {
-        (Some(given), Some(header)) if given != header => anyhow::bail!(
-            "{} names the effects {} but {} was made with {}; the synthetic images must have the sensed \
-             image's effects: make them agree, or leave \"effects\" out of the hypothesis file",
+        (Some(given), Some(header)) if given != header && !args.override_effects => anyhow::bail!(
+            "{} names the effects {} but {} was made with {}; make them agree, leave \"effects\" out of \
+             the hypothesis file, or pass --override-effects to use the hypothesis file's",
             args.hypotheses.display(),
             effects_text(&given),
             args.scene.display(),

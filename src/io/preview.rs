@@ -80,6 +80,13 @@ pub fn write_label_preview(
     label: &[u32],
     reason: Option<&[Reason]>,
 ) -> Result<()> {
+    let pixels_given = |n: usize| n == (width as usize) * (height as usize);
+    if !pixels_given(label.len()) || !reason.is_none_or(|r| pixels_given(r.len())) {
+        return Err(Error::file(
+            path,
+            format!("a {width}×{height} preview needs {} labels and reasons", u64::from(width) * u64::from(height)),
+        ));
+    }
     let pixels: Vec<u8> = (0..label.len())
         .flat_map(|i| match label[i] {
             0 => reason_colour(reason.map_or(Reason::NoSurface, |r| r[i])),

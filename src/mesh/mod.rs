@@ -118,7 +118,7 @@ impl Mesh {
 
 /// A triangle whose area is zero in f64 (repeated vertex or collinear corners) covers no
 /// pixel and has no normal; it is dropped.
-fn is_degenerate(positions: &[[f32; 3]], tri: &[u32; 3]) -> bool {
+pub(super) fn is_degenerate(positions: &[[f32; 3]], tri: &[u32; 3]) -> bool {
     let p = tri.map(|i| {
         let [x, y, z] = positions[i as usize];
         DVec3::new(x.into(), y.into(), z.into())

@@ -20,7 +20,7 @@
 //! a library that cannot be read is skipped, and its surfaces take the effect's default.
 //! Text parsed without a path reads no library.
 
-use super::{merge_coplanar_surfaces, Mesh};
+use super::{is_degenerate, merge_coplanar_surfaces, Mesh};
 use crate::error::{Error, Result};
 use crate::io::read_input_file;
 use crate::limits::MemoryBudget;
@@ -69,28 +69,36 @@ fn parse(bytes: &[u8], name: &str, libraries: impl Fn(&Path) -> tobj::MTLLoadRes
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     let mut triangle_surfaces = Vec::new();
+    let mut triangle_reflectivity = Vec::new();
     for model in &models {
         let base = positions.len() as u32;
         positions.extend(model.mesh.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+        let material = model.mesh.material_id.and_then(|id| materials.get(id)).and_then(reflectivity);
         for tri in model.mesh.indices.chunks_exact(3) {
             triangles.push([tri[0], tri[1], tri[2]].map(|i| i.saturating_add(base)));
             triangle_surfaces.push(surface_of(group_of(model)));
+            triangle_reflectivity.push(material);
         }
     }
+    // Aligned with the triangles Mesh::new keeps.
+    let kept_reflectivity: Vec<Option<f32>> = triangles
+        .iter()
+        .zip(triangle_reflectivity)
+        .filter(|(tri, _)| !is_degenerate(&positions, tri))
+        .map(|(_, r)| r)
+        .collect();
     let single_surface = surface_names.len() <= 1;
-    let mut surface_reflectivity = vec![None; surface_names.len()];
-    for model in &models {
-        if model.mesh.indices.is_empty() {
-            continue;
-        }
-        let slot = &mut surface_reflectivity[surface_of(group_of(model)) as usize - 1];
-        if slot.is_none() {
-            *slot = model.mesh.material_id.and_then(|id| materials.get(id)).and_then(reflectivity);
+    let mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
+    let mut mesh = if single_surface { merge_coplanar_surfaces(mesh) } else { mesh };
+    // Each surface takes its first face's material.
+    let mut seen = vec![false; mesh.surface_names.len()];
+    for (&surface, &material) in mesh.triangle_surfaces.iter().zip(&kept_reflectivity) {
+        let s = surface as usize - 1;
+        if !std::mem::replace(&mut seen[s], true) {
+            mesh.surface_reflectivity[s] = material;
         }
     }
-    let mut mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
-    mesh.surface_reflectivity = surface_reflectivity;
-    Ok(if single_surface { merge_coplanar_surfaces(mesh) } else { mesh })
+    Ok(mesh)
 }
 
 /// A material's reflectivity: the mean of its diffuse colour `Kd`, within [0, 1].
@@ -117,10 +125,15 @@ fn tag_group_statements(text: &str) -> (String, Vec<Option<String>>) {
                 names.push(name);
             }
             // Nothing uses texture coordinates or normals: dropping them spares tobj's index
-            // arithmetic on them (which overflows on huge indices). A `usemtl` without a name
-            // is an error to tobj; it names no material.
+            // arithmetic on them (which overflows on huge indices).
             Some("vt" | "vn") => {}
-            Some("usemtl") if words.next().is_none_or(|n| n.trim().is_empty()) => {}
+            // Material statements are passed on with one space, as tobj splits them; a
+            // `usemtl` without a name is an error to tobj and names no material.
+            Some(keyword @ ("usemtl" | "mtllib")) => {
+                if let Some(name) = words.next().map(str::trim).filter(|n| !n.is_empty()) {
+                    tagged.push_str(&format!("{keyword} {name}\n"));
+                }
+            }
             Some("f") => {
                 tagged.push('f');
                 for corner in words.next().unwrap_or("").split_whitespace() {
@@ -173,6 +186,15 @@ mod tests {
         assert_eq!(mesh.surface_names, ["a", "b", "c", "d"]);
         // b keeps using the material set before it; c takes its first face's.
         let expected = [Some(0.8), Some(0.8), Some(0.2), None];
+        // Tabs after the keywords, and an ungrouped file with two materials: its merged faces
+        // each take their own triangle's.
+        let ungrouped = "mtllib\tm.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\n\
+                         usemtl\tdark\nf 1 2 3\nusemtl bright\nf 1 2 5 4\n";
+        std::fs::write(dir.join("u.obj"), ungrouped).unwrap();
+        let merged = load_obj(&dir.join("u.obj"), MemoryBudget::default()).unwrap();
+        assert_eq!(merged.surface_names.len(), 2);
+        let rounded: Vec<_> = merged.surface_reflectivity.iter().map(|r| r.map(|r| (r * 1e5).round() / 1e5)).collect();
+        assert_eq!(rounded, [Some(0.2), Some(0.8)]);
         for (got, want) in mesh.surface_reflectivity.iter().zip(expected) {
             assert_eq!(got.map(|r| (r * 1e5).round() / 1e5), want);
         }

@@ -62,9 +62,8 @@ pub fn merge_coplanar_surfaces(mut mesh: Mesh) -> Mesh {
         })
         .collect();
     mesh.surface_names = (1..=surface_of_root.len()).map(|i| format!("face{i}")).collect();
-    // A mesh that named at most one surface had at most one material.
-    let material = mesh.surface_reflectivity.first().copied().flatten();
-    mesh.surface_reflectivity = vec![material; surface_of_root.len()];
+    // The caller knows the triangles' materials (obj.rs).
+    mesh.surface_reflectivity = vec![None; surface_of_root.len()];
     mesh
 }
 

@@ -24,7 +24,7 @@ pub struct EffectConstants {
     cos_theta: f32,
     sin_theta: f32,
     /// The seed (noise, dropout) or the width in pixels (edges).
-    whole: u32,
+    seed_or_width: u32,
     params: [f32; 4],
     reflectivity_offset: u32,
     _pad: [u32; 3],
@@ -50,7 +50,7 @@ impl EffectConstants {
     /// earlier pass of the job changed z.
     fn new(effect: Effect, effects: &Effects, sensor: &Sensor, job: &EffectJob, z_in_buffer: bool) -> Self {
         let f = |v: f64| v as f32;
-        let (whole, params) = match effect {
+        let (seed_or_width, params) = match effect {
             Effect::Grazing => {
                 let g = effects.grazing.expect("named");
                 (0, [f(g.max_incidence_deg.to_radians().cos()), 0.0, 0.0, 0.0])
@@ -84,7 +84,7 @@ impl EffectConstants {
             z_origin: job.z_origin,
             cos_theta: f(sensor.theta().cos()),
             sin_theta: f(sensor.theta().sin()),
-            whole,
+            seed_or_width,
             params,
             reflectivity_offset: job.reflectivity_offset,
             _pad: [0; 3],

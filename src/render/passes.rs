@@ -251,9 +251,13 @@ impl Passes<'_> {
             shadowed_labels = Some(masked);
         }
         if let (Some(buffers), Some(pipelines)) = (&slot.effects, self.effect_pipelines) {
-            enc.access(&[], &[(&buffers.losses, Access::TransferWrite)]);
-            // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
-            unsafe { enc.ctx().device.cmd_fill_buffer(cmd, buffers.losses.raw, 0, vk::WHOLE_SIZE, 0) };
+            // No losses yet, and z 0.0 where no surface is (as the range view is cleared).
+            let cleared: Vec<&Buffer> = std::iter::once(&buffers.losses).chain(&buffers.measured_z).collect();
+            enc.access(&[], &cleared.iter().map(|&b| (b, Access::TransferWrite)).collect::<Vec<_>>());
+            for buffer in cleared {
+                // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
+                unsafe { enc.ctx().device.cmd_fill_buffer(cmd, buffer.raw, 0, vk::WHOLE_SIZE, 0) };
+            }
             let effect_job = EffectJob {
                 region: job.area,
                 size: (views.range.width, views.range.height),

@@ -125,7 +125,8 @@ pub(crate) fn count_batch(
     for item in items {
         reflectivity_offsets.push(reflectivity_table.len() as u32);
         reflectivity_table.push(0.0);
-        reflectivity_table.extend(item.reflectivities.iter().map(|r| r.unwrap_or(default_reflectivity)));
+        let material = |s: u32| item.reflectivities.get(s as usize).copied().flatten();
+        reflectivity_table.extend((0..item.surfaces).map(|s| material(s).unwrap_or(default_reflectivity)));
     }
     let reflectivities = settings
         .effects
