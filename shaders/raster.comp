@@ -6,6 +6,7 @@
 // top-left rule, framebuffer y down), in exact 64-bit integer arithmetic. Each covered pixel
 // keeps the nearest triangle by atomicMin on its visibility word.
 layout(local_size_x = 64) in;
+#define FIRST_BUFFER 0
 #include "raster_compute.glsl"
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
@@ -35,7 +36,8 @@ bool top_left(i64vec2 a, i64vec2 b) {
 }
 
 void main() {
-    uint t = gl_GlobalInvocationID.x;
+    // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
+    uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     if (t >= r.triangles) {
         return;
     }

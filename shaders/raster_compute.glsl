@@ -7,8 +7,10 @@
 #extension GL_EXT_shader_atomic_int64 : require
 #include "draw.glsl"
 
-layout(set = 0, binding = 0, std430) readonly buffer DrawTable { DrawData draws[]; };
-layout(set = 0, binding = 1, std430) buffer Nearest { uint64_t nearest[]; };
+// The buffers follow the pass's storage images (src/gpu/descriptors.rs binds images first):
+// the including shader defines FIRST_BUFFER as the number of its images.
+layout(set = 0, binding = FIRST_BUFFER, std430) readonly buffer DrawTable { DrawData draws[]; };
+layout(set = 0, binding = FIRST_BUFFER + 1, std430) buffer Nearest { uint64_t nearest[]; };
 
 layout(push_constant, std430) uniform Raster {
     uvec4 area;        // the pixels to draw: first column, first row, width, height

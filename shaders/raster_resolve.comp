@@ -4,16 +4,19 @@
 // the view's attachments, or zeros where no triangle covers the pixel (the graphics pass
 // clears to 0).
 layout(local_size_x = 8, local_size_y = 8) in;
-#include "raster_compute.glsl"
 
+// The view's colour attachments, in src/render/targets.rs order.
 #ifdef SHADOW_VIEW
-layout(set = 0, binding = 2, rgba32ui) uniform writeonly uimage2D visibility;
+#define FIRST_BUFFER 1
+layout(set = 0, binding = 0, rgba32ui) uniform writeonly uimage2D visibility;
 #else
-layout(set = 0, binding = 2, r32ui) uniform writeonly uimage2D label;
-layout(set = 0, binding = 3, r32f) uniform writeonly image2D z;
-layout(set = 0, binding = 4, r32f) uniform writeonly image2D dz_dx;
-layout(set = 0, binding = 5, r32f) uniform writeonly image2D dz_dy;
+#define FIRST_BUFFER 4
+layout(set = 0, binding = 0, r32ui) uniform writeonly uimage2D label;
+layout(set = 0, binding = 1, r32f) uniform writeonly image2D z;
+layout(set = 0, binding = 2, r32f) uniform writeonly image2D dz_dx;
+layout(set = 0, binding = 3, r32f) uniform writeonly image2D dz_dy;
 #endif
+#include "raster_compute.glsl"
 
 void main() {
     if (any(greaterThanEqual(gl_GlobalInvocationID.xy, r.area.zw))) {

@@ -14,6 +14,8 @@ pub struct RenderOutput {
     pub effects: Effects,
     /// Whether a shadow pass ran (not with mode `none` or θ = 0).
     pub shadow_pass: bool,
+    /// The rasterizer that rendered the views.
+    pub raster: crate::render::Raster,
     /// Row-major labels after shadowing and the effects; 0 = no data.
     pub label: Vec<u32>,
     /// Row-major labels of the range view alone.

@@ -11,6 +11,7 @@ use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
+use rangesynth::render::Raster;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
 
@@ -30,6 +31,11 @@ pub struct Cli {
     /// RANGESYNTH_MEMORY_BUDGET; default 4G).
     #[arg(long, global = true, value_name = "SIZE")]
     memory_budget: Option<String>,
+    /// Render with the graphics pipeline (default) or the compute rasterizer, which renders
+    /// views of one object (every verify hypothesis) and leaves the others to the graphics
+    /// pipeline.
+    #[arg(long, global = true, value_name = "graphics|compute", default_value = "graphics")]
+    raster: Raster,
     #[command(subcommand)]
     command: Command,
 }
@@ -70,14 +76,15 @@ pub fn run(cli: Cli) -> Result<()> {
             (scene, out, inputs)
         }
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
-        Command::Verify(args) => return verify::run(&options, budget, &args),
+        Command::Verify(args) => return verify::run(&options, budget, cli.raster, &args),
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
-    let renderer = Renderer::new(&options).context("starting Vulkan")?.with_memory_budget(budget);
+    let renderer =
+        Renderer::new(&options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(cli.raster);
     let output = renderer.render(&scene)?;
     let written = write_render_directory(&out_dir, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
@@ -109,6 +116,7 @@ fn check_validation(renderer: &Renderer) -> Result<()> {
 fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Result<()> {
     let s = &scene.sensor;
     println!("device: {}", renderer.context().device_name());
+    println!("raster: {}", out.raster.as_str());
     println!(
         "image: {}×{} at pitch {}×{}, θ = {}°, shadow mode {}{}",
         s.width,

@@ -15,6 +15,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
+use rangesynth::render::Raster;
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -53,7 +54,7 @@ pub struct VerifyArgs {
     top: usize,
 }
 
-pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) -> Result<()> {
+pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args: &VerifyArgs) -> Result<()> {
     let file = HypothesisFile::from_file(&args.hypotheses, budget)?;
     let image = read_range_image(&args.scene, budget)?;
     let sensor = match (file.sensor, image.sensor) {
@@ -92,8 +93,8 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &VerifyArgs) ->
     )?;
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     drop(image);
-    let verifier = Verifier::new(Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget))
-        .context("starting Vulkan")?;
+    let renderer = Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(raster);
+    let verifier = Verifier::new(renderer).context("starting Vulkan")?;
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
     let mut inputs = vec![args.hypotheses.clone(), args.scene.clone()];
@@ -202,6 +203,7 @@ impl From<&Verification> for SummaryRow {
 fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
     let s = &settings.sensor;
     println!("device: {}", renderer.context().device_name());
+    println!("raster: {}", renderer.raster().as_str());
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
     }

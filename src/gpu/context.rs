@@ -72,6 +72,9 @@ pub struct GpuContext {
     /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
     pub(crate) timestamp_period: Option<f64>,
     device_name: String,
+    /// Whether shaders may use 64-bit integers and 64-bit atomics on storage buffers (the
+    /// compute rasterizer needs both).
+    int64_atomics: bool,
     /// Command pools, buffers and fences of finished submissions, reused by the next.
     recorders: Mutex<Vec<Recorder>>,
 }
@@ -149,12 +152,15 @@ impl GpuContext {
         let priorities = [1.0];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true);
+        let int64_atomics = supports_int64_atomics(&instance, physical_device);
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
+            .buffer_device_address(true)
+            .shader_buffer_int64_atomics(int64_atomics);
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
         let mut rendering = vk::PhysicalDeviceDynamicRenderingFeatures::default().dynamic_rendering(true);
         let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
         // gl_PrimitiveID in a fragment shader needs geometryShader.
-        let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
+        let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true).shader_int64(int64_atomics);
         let extensions = if core_1_3 { vec![] } else { EXTENSIONS_1_2.iter().map(|e| e.as_ptr()).collect() };
         let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
@@ -205,8 +211,14 @@ impl GpuContext {
             limits: properties.limits,
             timestamp_period,
             device_name,
+            int64_atomics,
             recorders: Mutex::new(Vec::new()),
         }))
+    }
+
+    /// Whether the device can run the compute rasterizer (64-bit integers and buffer atomics).
+    pub fn supports_compute_raster(&self) -> bool {
+        self.int64_atomics
     }
 
     /// Whether the device runs the core Vulkan 1.3 path (else the 1.2 extensions).
@@ -603,6 +615,15 @@ fn suitability(
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
         .map(|i| i as u32)
         .ok_or_else(|| "no queue family with graphics and compute".into())
+}
+
+/// Whether the device has `shaderInt64` and `shaderBufferInt64Atomics`.
+fn supports_int64_atomics(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12);
+    // SAFETY: valid physical device; the chain outlives the call.
+    unsafe { instance.get_physical_device_features2(pd, &mut features) };
+    features.features.shader_int64 == vk::TRUE && v12.shader_buffer_int64_atomics == vk::TRUE
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
+mod compute_raster;
 mod draw;
 mod effect_pass;
 mod gpu_mesh;
@@ -17,6 +18,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
+pub use compute_raster::Raster;
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -44,6 +46,7 @@ pub struct Renderer {
     budget: MemoryBudget,
     meshes: MeshCache,
     targets: TargetPool,
+    raster: Raster,
 }
 
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
@@ -128,7 +131,18 @@ impl Renderer {
             budget: MemoryBudget::default(),
             meshes: MeshCache::default(),
             targets: TargetPool::default(),
+            raster: Raster::default(),
         })
+    }
+
+    /// The same renderer, rendering with `raster` (views of several objects stay on the
+    /// graphics path; see compute_raster.rs).
+    pub fn with_raster(self, raster: Raster) -> Self {
+        Self { raster, ..self }
+    }
+
+    pub fn raster(&self) -> Raster {
+        self.raster
     }
 
     /// The same renderer, refusing calls that would need more than `budget`.
@@ -147,7 +161,8 @@ impl Renderer {
     /// Render targets for jobs of this shape (passes.rs).
     pub(crate) fn slot<'a>(&'a self, shape: &SlotShape<'a>, name: &str) -> Result<Slot<'a>> {
         let effect_pipelines = shape.effects.as_ref().map(|_| self.pipelines.effects()).transpose()?;
-        Slot::new(&self.ctx, &self.pipelines, effect_pipelines, &self.targets, shape, name)
+        let raster_pipelines = shape.compute_raster.map(|_| self.pipelines.compute_raster()).transpose()?;
+        Slot::new(&self.ctx, &self.pipelines, effect_pipelines, raster_pipelines, &self.targets, shape, name)
     }
 
     /// The pass list for jobs seen by this sensor in this shadow mode, with these effects.
@@ -158,7 +173,8 @@ impl Renderer {
         effects: &'a Effects,
     ) -> Result<Passes<'a>> {
         let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
-        Ok(Passes { pipelines: &self.pipelines, effect_pipelines, sensor, mode, effects })
+        let raster_pipelines = (self.raster == Raster::Compute).then(|| self.pipelines.compute_raster()).transpose()?;
+        Ok(Passes { pipelines: &self.pipelines, raster_pipelines, effect_pipelines, sensor, mode, effects })
     }
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
@@ -204,7 +220,11 @@ impl Renderer {
             shadow_area: views.shadow.map(|g| g.full()),
             reflectivity_offset: 0,
         };
-        let draw_table = draw_table(ctx, &scene.sensor, [(views, draws)])?;
+        let shadow_table = draw_table(ctx, ViewKind::Shadow, &scene.sensor, [(views, draws)])?;
+        // The compute rasterizer renders views of one draw.
+        let compute = self.raster == Raster::Compute && draws.len() == 1;
+        let range_table =
+            compute.then(|| draw_table(ctx, ViewKind::Range, &scene.sensor, [(views, draws)])).transpose()?.flatten();
         let effects = &scene.effects;
         let reflectivities = effects
             .reflectivity
@@ -215,10 +235,11 @@ impl Renderer {
             .transpose()?;
         let shape = SlotShape {
             size: (w, h),
-            shadow: views.shadow.as_ref().zip(draw_table.as_ref()).map(|(g, t)| (g.width, t)),
+            shadow: views.shadow.as_ref().zip(shadow_table.as_ref()).map(|(g, t)| (g.width, t)),
             sink: SinkKind::Readback,
             effects: (!effects.is_empty())
                 .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
+            compute_raster: range_table.as_ref(),
         };
         let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
@@ -273,6 +294,7 @@ impl Renderer {
             shadow: scene.shadow,
             effects: scene.effects,
             shadow_pass: views.shadow.is_some(),
+            raster: if compute { Raster::Compute } else { Raster::Graphics },
             label,
             label_unshadowed,
             z,

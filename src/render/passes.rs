@@ -8,6 +8,7 @@
 //! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
 //! resource and the [`Encoder`] derives the barriers.
 
+use super::compute_raster::{ComputeRasterPipelines, ComputeView};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::pipelines::Pipelines;
@@ -36,6 +37,14 @@ pub(crate) struct Slot<'a> {
     effects: Option<EffectBuffers>,
     /// The reflectivity table the effect passes read, where the reflectivity effect is named.
     reflectivities: Option<&'a Buffer>,
+    /// The compute rasterizer's state for the range view and the shadow view, with the draw
+    /// tables it reads, where it renders.
+    compute: Option<ComputeSlot<'a>>,
+}
+
+struct ComputeSlot<'a> {
+    range: (ComputeView, &'a Buffer),
+    shadow: Option<(ComputeView, &'a Buffer)>,
 }
 
 /// What a slot must hold.
@@ -48,6 +57,9 @@ pub(crate) struct SlotShape<'a> {
     pub sink: SinkKind,
     /// The effect buffers to make, where effects are named.
     pub effects: Option<EffectShape<'a>>,
+    /// The range view's draw table, where the compute rasterizer renders (it reads the
+    /// shadow view's from `shadow`).
+    pub compute_raster: Option<&'a Buffer>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -58,11 +70,14 @@ pub(crate) enum SinkKind {
 
 impl<'a> Slot<'a> {
     /// A slot whose targets come from `pool` (and go back to it when the slot is dropped).
-    /// `effect_pipelines` are needed where the shape names effects.
+    /// `effect_pipelines` are needed where the shape names effects, `raster_pipelines` where
+    /// the compute rasterizer renders.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<GpuContext>,
         p: &Pipelines,
         effect_pipelines: Option<&EffectPipelines>,
+        raster_pipelines: Option<&ComputeRasterPipelines>,
         pool: &'a TargetPool,
         shape: &SlotShape<'a>,
         name: &str,
@@ -93,7 +108,23 @@ impl<'a> Slot<'a> {
             _ => None,
         };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
-        Ok(Self { range, shadow, masked, mask_bindings, effects, reflectivities })
+        let compute = match (shape.compute_raster, raster_pipelines) {
+            (Some(range_table), Some(rp)) => {
+                let view = |kind, targets, size, table| {
+                    ComputeView::new(ctx, rp, kind, targets, size, table, &format!("{name} {kind:?} view"))
+                };
+                let range_view = view(ViewKind::Range, &range, (w, h), range_table)?;
+                let shadow_view = match (&shadow, shape.shadow) {
+                    (Some(targets), Some((shadow_width, table))) => {
+                        Some((view(ViewKind::Shadow, targets, (shadow_width, h), table)?, table))
+                    }
+                    _ => None,
+                };
+                Some(ComputeSlot { range: (range_view, range_table), shadow: shadow_view })
+            }
+            _ => None,
+        };
+        Ok(Self { range, shadow, masked, mask_bindings, effects, reflectivities, compute })
     }
 
     /// The range view's label and z attachments, which a compute sink reads.
@@ -189,6 +220,8 @@ impl<'t> PassClock<'t> {
 /// What is constant over the jobs of one submission.
 pub(crate) struct Passes<'a> {
     pub pipelines: &'a Pipelines,
+    /// Present where the compute rasterizer renders views of one draw.
+    pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
     pub sensor: &'a Sensor,
@@ -202,12 +235,19 @@ impl Passes<'_> {
         let (p, sensor, mode) = (self.pipelines, self.sensor, self.mode);
         let cmd = enc.cmd;
         let views = job.views;
-        let mut prepare = Vec::new();
-        for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
-            prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
-            prepare.push((&targets.depth, Access::DepthAttachmentWrite));
+        // The compute rasterizer renders views of one draw (compute_raster.rs).
+        let compute = match (&slot.compute, self.raster_pipelines, job.draws) {
+            (Some(state), Some(rp), [draw]) => Some((state, rp, (job.first_draw_index, draw))),
+            _ => None,
+        };
+        if compute.is_none() {
+            let mut prepare = Vec::new();
+            for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
+                prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
+                prepare.push((&targets.depth, Access::DepthAttachmentWrite));
+            }
+            enc.access(&prepare, &[]);
         }
-        enc.access(&prepare, &[]);
         if let Some(c) = &mut clock {
             c.start(cmd);
         }
@@ -220,7 +260,13 @@ impl Passes<'_> {
             origin: views.origin,
             area: job.area,
         };
-        record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
+        match compute {
+            Some((state, rp, draw)) => {
+                let (view, table) = &state.range;
+                view.record(enc, rp, &slot.range, table, draw, job.area);
+            }
+            None => record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index),
+        }
         if let Some(c) = &mut clock {
             c.lap(cmd, "range");
         }
@@ -237,7 +283,10 @@ impl Passes<'_> {
                 origin: views.origin,
                 area: shadow_area,
             };
-            record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
+            match compute.and_then(|(state, rp, draw)| Some((state.shadow.as_ref()?, rp, draw))) {
+                Some(((view, table), rp, draw)) => view.record(enc, rp, targets, table, draw, shadow_area),
+                None => record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index),
+            }
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow");
             }
@@ -317,27 +366,39 @@ impl Passes<'_> {
     }
 }
 
-/// The shadow view's draw table: for each group of draws seen on planned views, in order,
-/// each draw's constants in the shadow view, numbered consecutively from 0 (a job's
-/// `first_draw_index` is the number of draws before it). The mask reads it to reach the
-/// triangles the shadow view stored (shaders/shadow_mask.comp). `None` without a shadow view
-/// (mode `none` or θ = 0, which every job of a submission shares).
+/// A view's draw table: for each group of draws seen on planned views, in order, each draw's
+/// constants in that view, numbered consecutively from 0 (a job's `first_draw_index` is the
+/// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
+/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer reads both.
+/// `None` for the shadow view where there is none (mode `none` or θ = 0, which every job of a
+/// submission shares).
 pub(crate) fn draw_table<'a>(
     ctx: &Arc<GpuContext>,
+    kind: ViewKind,
     sensor: &Sensor,
     groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
 ) -> Result<Option<Buffer>> {
-    let to_shadow = sensor.to_shadow_frame();
+    let view_from_range = match kind {
+        ViewKind::Range => DMat4::IDENTITY,
+        ViewKind::Shadow => sensor.to_shadow_frame(),
+    };
     let mut entries = Vec::new();
     for (views, draws) in groups {
-        let Some(grid) = &views.shadow else { return Ok(None) };
+        let grid = match kind {
+            ViewKind::Range => &views.range,
+            ViewKind::Shadow => match &views.shadow {
+                Some(grid) => grid,
+                None => return Ok(None),
+            },
+        };
         for draw in draws {
             let index = entries.len() as u32;
-            entries.push(DrawConstants::new(grid, to_shadow, views.origin, draw, index));
+            entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index));
         }
     }
+    let name = format!("{kind:?} view draw table");
     match entries.is_empty() {
         true => Ok(None),
-        false => Ok(Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "shadow draw table")?)),
+        false => Ok(Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, &name)?)),
     }
 }

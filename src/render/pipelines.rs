@@ -1,8 +1,9 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
 //! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs) and
-//! the shadow-mask compute pipeline; and the effect pipelines, built the first time a scene
-//! names an effect.
+//! the shadow-mask compute pipeline; and the effect and compute-raster pipelines, built the
+//! first time a call needs them.
 
+use super::compute_raster::ComputeRasterPipelines;
 use super::draw::DrawConstants;
 use super::effect_pass::EffectPipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
@@ -36,6 +37,7 @@ pub struct Pipelines {
     pub shadow: ViewPipelines,
     pub mask: ComputePipeline,
     effects: OnceLock<EffectPipelines>,
+    compute_raster: OnceLock<ComputeRasterPipelines>,
 }
 
 impl Pipelines {
@@ -60,6 +62,7 @@ impl Pipelines {
             shadow: ViewPipelines::default(),
             mask,
             effects: OnceLock::new(),
+            compute_raster: OnceLock::new(),
         };
         let raster_push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
@@ -102,6 +105,23 @@ impl Pipelines {
         }
         let built = EffectPipelines::new(&self.ctx)?;
         Ok(self.effects.get_or_init(|| built))
+    }
+
+    /// The compute rasterizer's pipelines, built on first use; an error on a device without
+    /// 64-bit buffer atomics.
+    pub fn compute_raster(&self) -> Result<&ComputeRasterPipelines> {
+        if let Some(built) = self.compute_raster.get() {
+            return Ok(built);
+        }
+        if !self.ctx.supports_compute_raster() {
+            return Err(Error::Unsupported(format!(
+                "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \
+                 use the graphics rasterizer",
+                self.ctx.device_name()
+            )));
+        }
+        let built = ComputeRasterPipelines::new(&self.ctx)?;
+        Ok(self.compute_raster.get_or_init(|| built))
     }
 }
 

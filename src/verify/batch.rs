@@ -18,8 +18,8 @@ use crate::effects::Effects;
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::render::{
-    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape,
-    ViewKind, Views,
+    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Raster, Renderer, Sink, SinkKind, Slot,
+    SlotShape, ViewKind, Views,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
@@ -157,14 +157,20 @@ pub(crate) fn count_batch(
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
-    let draw_table = draw_table(ctx, sensor, views.iter().zip(draws.iter().map(|d| d.as_slice())))?;
+    let groups = || views.iter().zip(draws.iter().map(|d| d.as_slice()));
+    let shadow_table = draw_table(ctx, ViewKind::Shadow, sensor, groups())?;
+    let range_table = match renderer.raster() {
+        Raster::Compute => draw_table(ctx, ViewKind::Range, sensor, groups())?,
+        Raster::Graphics => None,
+    };
     let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
     let shape = SlotShape {
         size: (sensor.width, sensor.height),
-        shadow: shadow_width.zip(draw_table.as_ref()),
+        shadow: shadow_width.zip(shadow_table.as_ref()),
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
+        compute_raster: range_table.as_ref(),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;

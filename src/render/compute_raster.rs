@@ -1,0 +1,186 @@
+//! The compute rasterizer (DESIGN.md "Raster paths"): a view rendered by two compute passes
+//! instead of the graphics pipeline, into the same attachments, so every pass after it is
+//! unchanged.
+//!
+//! - Coverage (shaders/raster.comp): one invocation per triangle finds the pixel centres it
+//!   covers (1/256-pixel snapped corners, the top-left rule, exact integer edge functions) and
+//!   keeps the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle).
+//! - Resolve (shaders/raster_resolve.comp): one invocation per pixel writes what the graphics
+//!   path's fragment shader would have written for that triangle.
+//!
+//! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
+//! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
+//! a compute pass spreads the triangles over every core. So far it renders views of one draw
+//! (every `verify` hypothesis, a scene of one object); a view of several draws keeps the
+//! graphics path, whose tie rule the compute path does not implement yet.
+
+use super::targets::{ViewKind, ViewTargets};
+use super::Draw;
+use crate::error::Result;
+use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, StorageSet};
+use crate::sensor::PixelRect;
+use ash::vk;
+use std::sync::Arc;
+
+/// Which rasterizer renders the views.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Raster {
+    /// The graphics pipeline (the prescribed path).
+    #[default]
+    Graphics,
+    /// The compute rasterizer, for views of one draw; needs 64-bit buffer atomics.
+    Compute,
+}
+
+impl Raster {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Raster::Graphics => "graphics",
+            Raster::Compute => "compute",
+        }
+    }
+}
+
+impl std::str::FromStr for Raster {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text {
+            "graphics" => Ok(Raster::Graphics),
+            "compute" => Ok(Raster::Compute),
+            other => Err(format!("unknown rasterizer {other:?}: expected graphics or compute")),
+        }
+    }
+}
+
+/// Push constants of both passes; matches `Raster` in shaders/raster_compute.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RasterConstants {
+    area: [u32; 4],
+    draw: u32,
+    stride: u32,
+    triangles: u32,
+    _pad: u32,
+}
+
+const _: () = assert!(std::mem::offset_of!(RasterConstants, triangles) == 24);
+
+/// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
+const COVERAGE_GROUP: u32 = 64;
+/// Most workgroups along one dispatch dimension that every device allows.
+const MAX_GROUPS: u32 = 65_535;
+
+pub struct ComputeRasterPipelines {
+    coverage: ComputePipeline,
+    resolve_range: ComputePipeline,
+    resolve_shadow: ComputePipeline,
+}
+
+impl ComputeRasterPipelines {
+    pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        let buffers = [vk::DescriptorType::STORAGE_BUFFER; 2];
+        let with_images = |kind: ViewKind| {
+            let images = kind.colour_attachments().len();
+            std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, images).chain(buffers).collect::<Vec<_>>()
+        };
+        let push = size_of::<RasterConstants>();
+        Ok(Self {
+            coverage: ComputePipeline::new(ctx, &buffers, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
+            resolve_range: ComputePipeline::new(
+                ctx,
+                &with_images(ViewKind::Range),
+                push,
+                shaders::RASTER_RESOLVE_RANGE_COMP,
+                &[],
+                "compute raster resolve (range view)",
+            )?,
+            resolve_shadow: ComputePipeline::new(
+                ctx,
+                &with_images(ViewKind::Shadow),
+                push,
+                shaders::RASTER_RESOLVE_SHADOW_COMP,
+                &[],
+                "compute raster resolve (shadow view)",
+            )?,
+        })
+    }
+
+    fn resolve(&self, kind: ViewKind) -> &ComputePipeline {
+        match kind {
+            ViewKind::Range => &self.resolve_range,
+            ViewKind::Shadow => &self.resolve_shadow,
+        }
+    }
+}
+
+/// A view's per-pixel visibility words and the bindings of both passes over them.
+pub(crate) struct ComputeView {
+    kind: ViewKind,
+    nearest: Buffer,
+    /// Pixels per row of `nearest` (the attachments' width).
+    stride: u32,
+    coverage: StorageSet,
+    resolve: StorageSet,
+}
+
+impl ComputeView {
+    /// Visibility words for `targets` (`size` pixels), rendering the draws of `draw_table`.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        pipelines: &ComputeRasterPipelines,
+        kind: ViewKind,
+        targets: &ViewTargets,
+        (width, height): (u32, u32),
+        draw_table: &Buffer,
+        name: &str,
+    ) -> Result<Self> {
+        let bytes = u64::from(width) * u64::from(height) * 8;
+        let nearest = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} visibility words"))?;
+        let buffers = [draw_table, &nearest];
+        let coverage =
+            StorageSet::new(ctx, pipelines.coverage.set_layout, &[], &buffers, &format!("{name} coverage bindings"))?;
+        let images: Vec<&Image> = targets.colour.iter().collect();
+        let resolve = StorageSet::new(
+            ctx,
+            pipelines.resolve(kind).set_layout,
+            &images,
+            &buffers,
+            &format!("{name} resolve bindings"),
+        )?;
+        Ok(Self { kind, nearest, stride: width, coverage, resolve })
+    }
+
+    /// Records both passes of one draw (number `index` in `draw_table`) over `area`: the
+    /// attachments' colour images end written in GENERAL layout, as a compute pass leaves them.
+    pub fn record(
+        &self,
+        enc: &mut Encoder,
+        pipelines: &ComputeRasterPipelines,
+        targets: &ViewTargets,
+        draw_table: &Buffer,
+        (index, draw): (u32, &Draw),
+        area: PixelRect,
+    ) {
+        let cmd = enc.cmd;
+        enc.access(&[], &[(&self.nearest, Access::TransferWrite)]);
+        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
+        unsafe { enc.ctx().device.cmd_fill_buffer(cmd, self.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
+        enc.access(&[], &[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)]);
+        let triangles = draw.mesh.index_count / 3;
+        let constants = RasterConstants {
+            area: [area.col, area.row, area.width, area.height],
+            draw: index,
+            stride: self.stride,
+            triangles,
+            _pad: 0,
+        };
+        let groups = triangles.div_ceil(COVERAGE_GROUP);
+        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
+        self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
+        let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
+        enc.access(&writes, &[(&self.nearest, Access::ComputeRead), (draw_table, Access::ComputeRead)]);
+        let pixels = [area.width, area.height].map(|n| n.div_ceil(8));
+        self.resolve.dispatch(cmd, pipelines.resolve(self.kind), bytemuck::bytes_of(&constants), pixels);
+    }
+}
