@@ -12,6 +12,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
     ("shadow_mask.comp", "shadow_mask.comp.spv", &[]),
     ("raster.comp", "raster.comp.spv", &[]),
+    ("raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
     ("raster_resolve.comp", "raster_resolve_range.comp.spv", &[]),
     ("raster_resolve.comp", "raster_resolve_shadow.comp.spv", &["SHADOW_VIEW"]),
     ("score.comp", "score.comp.spv", &[]),

@@ -1,13 +1,25 @@
 #version 460
-// The compute rasterizer's coverage pass (src/render/compute_raster.rs): one invocation per
-// triangle of one draw. Corners go to window coordinates as raster.vert and the viewport
-// transform put them, are snapped to 1/256 pixel (lavapipe's sub-pixel precision), and a
-// pixel is covered when its centre is inside every edge, or on a top or left edge (the
-// top-left rule, framebuffer y down), in exact 64-bit integer arithmetic. Each covered pixel
-// keeps the nearest triangle by atomicMin on its visibility word.
+// The compute rasterizer's coverage passes (src/render/compute_raster.rs). Corners go to
+// window coordinates as raster.vert and the viewport transform put them, are snapped to 1/256
+// pixel (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside
+// every edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact
+// 64-bit integer arithmetic. Each covered pixel keeps the nearest triangle by atomicMin on its
+// visibility word.
+//
+// Small triangles: one invocation per triangle walks its bounding box. A triangle whose box
+// holds more than LARGE_PIXELS pixels is queued instead (up to the queue's capacity), and
+// LARGE_TRIANGLES, dispatched indirectly, gives each queued triangle a workgroup whose 64
+// invocations share its pixels: one invocation never serialises thousands of pixels.
 layout(local_size_x = 64) in;
 #define FIRST_BUFFER 0
 #include "raster_compute.glsl"
+
+// The queue of large triangles, and the indirect dispatch's (x, y, z), x its length.
+layout(set = 0, binding = 2, std430) buffer Large { uint large[]; };
+layout(set = 0, binding = 3, std430) buffer LargeCount { uint large_count; uint large_y; uint large_z; };
+
+// A triangle with more pixels in its bounding box than this is queued.
+const int LARGE_PIXELS = 256;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -35,6 +47,90 @@ bool top_left(i64vec2 a, i64vec2 b) {
     return e.y < 0 || (e.y == 0 && e.x > 0);
 }
 
+// A triangle set up for coverage tests: snapped corners with positive area, which edges are
+// top or left, and the pixels of its bounding box within the area (empty when degenerate).
+struct Setup {
+    vec3 corner, normal;    // the plane: corner 0 and the unit normal, view frame
+    i64vec2 a, b, c;
+    bool ab, bc, ca;
+    ivec2 first, last;
+};
+
+Setup set_up(DrawData d, uint t) {
+    Setup s;
+    s.corner = triangle_corner(d, t, 0u);
+    s.normal = triangle_normal(d, t);
+    precise vec3 v0 = window(d, s.corner);
+    precise vec3 v1 = window(d, triangle_corner(d, t, 1u));
+    precise vec3 v2 = window(d, triangle_corner(d, t, 2u));
+    s.a = snap(v0.xy);
+    s.b = snap(v1.xy);
+    s.c = snap(v2.xy);
+    int64_t area = edge(s.a, s.b, s.c);
+    if (area < 0) {
+        i64vec2 swap = s.b;
+        s.b = s.c;
+        s.c = swap;
+    }
+    s.ab = top_left(s.a, s.b);
+    s.bc = top_left(s.b, s.c);
+    s.ca = top_left(s.c, s.a);
+    // Pixel centres (col + ½, row + ½) inside the bounding box and the area.
+    vec2 lo = min(min(v0.xy, v1.xy), v2.xy), hi = max(max(v0.xy, v1.xy), v2.xy);
+    s.first = max(ivec2(floor(lo - 0.5)), ivec2(r.area.xy));
+    s.last = min(ivec2(ceil(hi - 0.5)), ivec2(r.area.xy + r.area.zw) - 1);
+    if (area == 0) {
+        s.last = s.first - 1;
+    }
+    return s;
+}
+
+// Tests one pixel and keeps the triangle there if it is the nearest so far.
+void cover(DrawData d, uint t, Setup s, ivec2 pixel) {
+    i64vec2 p = i64vec2(pixel) * 256 + 128;
+    int64_t e0 = edge(s.b, s.c, p), e1 = edge(s.c, s.a, p), e2 = edge(s.a, s.b, p);
+    if (!((e0 > 0 || (e0 == 0 && s.bc)) && (e1 > 0 || (e1 == 0 && s.ca)) && (e2 > 0 || (e2 == 0 && s.ab)))) {
+        return;
+    }
+    float z = plane_z(d, s.corner, s.normal, pixel);
+    precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
+    // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
+    if (!(depth >= 0.0 && depth < 1.0)) {
+        return;
+    }
+    uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
+    atomicMin(nearest[uint(pixel.y) * r.stride + uint(pixel.x)], word);
+}
+
+#ifdef LARGE_TRIANGLES
+void main() {
+    if (gl_WorkGroupID.x >= large_count) {
+        return;
+    }
+    DrawData d = draws[r.draw];
+    uint t = large[gl_WorkGroupID.x];
+    Setup s = set_up(d, t);
+    ivec2 box = s.last - s.first + 1;
+    for (int i = int(gl_LocalInvocationIndex); i < box.x * box.y; i += int(gl_WorkGroupSize.x)) {
+        cover(d, t, s, s.first + ivec2(i % box.x, i / box.x));
+    }
+}
+#else
+// Queues t unless the queue is full; the queue's length never exceeds its capacity, so the
+// indirect dispatch stays within the device's limits.
+bool queue_large(uint t) {
+    uint length = large_count;
+    while (length < r.large_capacity) {
+        uint before = atomicCompSwap(large_count, length, length + 1u);
+        if (before == length) {
+            large[length] = t;
+            return true;
+        }
+        length = before;
+    }
+    return false;
+}
+
 void main() {
     // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
     uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
@@ -42,41 +138,15 @@ void main() {
         return;
     }
     DrawData d = draws[r.draw];
-    precise vec3 v0 = window(d, triangle_corner(d, t, 0u));
-    precise vec3 v1 = window(d, triangle_corner(d, t, 1u));
-    precise vec3 v2 = window(d, triangle_corner(d, t, 2u));
-    i64vec2 a = snap(v0.xy), b = snap(v1.xy), c = snap(v2.xy);
-    int64_t area = edge(a, b, c);
-    if (area == 0) {
+    Setup s = set_up(d, t);
+    ivec2 box = s.last - s.first + 1;
+    if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t)) {
         return;
     }
-    if (area < 0) {
-        i64vec2 swap = b;
-        b = c;
-        c = swap;
-    }
-    bool ab = top_left(a, b), bc = top_left(b, c), ca = top_left(c, a);
-    // Pixel centres (col + ½, row + ½) inside the bounding box and the area.
-    vec2 lo = min(min(v0.xy, v1.xy), v2.xy), hi = max(max(v0.xy, v1.xy), v2.xy);
-    ivec2 first = max(ivec2(floor(lo - 0.5)), ivec2(r.area.xy));
-    ivec2 last = min(ivec2(ceil(hi - 0.5)), ivec2(r.area.xy + r.area.zw) - 1);
-    for (int row = first.y; row <= last.y; row++) {
-        for (int col = first.x; col <= last.x; col++) {
-            i64vec2 p = i64vec2(col, row) * 256 + 128;
-            int64_t e0 = edge(b, c, p), e1 = edge(c, a, p), e2 = edge(a, b, p);
-            bool inside = (e0 > 0 || (e0 == 0 && bc)) && (e1 > 0 || (e1 == 0 && ca)) && (e2 > 0 || (e2 == 0 && ab));
-            if (!inside) {
-                continue;
-            }
-            ivec2 pixel = ivec2(col, row);
-            float z = plane_z(d, t, pixel);
-            precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
-            // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
-            if (!(depth >= 0.0 && depth < 1.0)) {
-                continue;
-            }
-            uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-            atomicMin(nearest[uint(row) * r.stride + uint(col)], word);
+    for (int row = s.first.y; row <= s.last.y; row++) {
+        for (int col = s.first.x; col <= s.last.x; col++) {
+            cover(d, t, s, ivec2(col, row));
         }
     }
 }
+#endif

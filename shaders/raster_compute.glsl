@@ -17,16 +17,15 @@ layout(push_constant, std430) uniform Raster {
     uint draw;         // the draw's entry in the table
     uint stride;       // pixels per row of the visibility words (the attachments' width)
     uint triangles;    // the mesh's triangle count
+    uint large_capacity; // room in the queue of large triangles (raster.comp)
 } r;
 
 // No triangle at this pixel (the words are filled with ones before the raster pass).
 const uint64_t EMPTY = 0xffffffffffffffffUL;
 
-// The view-frame z of the triangle's plane at the centre of pixel (c, r), as raster.frag
-// computes it.
-float plane_z(DrawData d, uint t, ivec2 pixel) {
-    vec3 a = triangle_corner(d, t, 0u);
-    vec3 n = triangle_normal(d, t);
+// The view-frame z at the centre of pixel (c, r) of the plane through corner a with unit
+// normal n, as raster.frag computes it.
+float plane_z(DrawData d, vec3 a, vec3 n, ivec2 pixel) {
     vec2 centre = vec2(d.grid.x + float(pixel.x) * d.grid.z, d.grid.y - float(pixel.y) * d.grid.w);
     return a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
 }

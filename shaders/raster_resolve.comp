@@ -39,7 +39,7 @@ void main() {
     }
     vec3 n = triangle_normal(d, t);
     imageStore(label, pixel, uvec4(triangle_label(d, t)));
-    imageStore(z, pixel, vec4(plane_z(d, t, pixel)));
+    imageStore(z, pixel, vec4(plane_z(d, triangle_corner(d, t, 0u), n, pixel)));
     imageStore(dz_dx, pixel, vec4(-n.x / n.z));
     imageStore(dz_dy, pixel, vec4(-n.y / n.z));
 #endif

@@ -3,6 +3,9 @@
 //! baseline, measured in the same run, verifies the same hypotheses one call (one
 //! submission) each, so the batching gain shows as a ratio.
 //!
+//! A third table compares the rasterizers (src/render/compute_raster.rs): the same batches
+//! verified with the graphics pipeline and with the compute rasterizer, in the same run.
+//!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
 //! batch without effects, measured in the same run (each the best of five).
@@ -15,6 +18,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::RangeImage;
 use rangesynth::limits::MemoryBudget;
+use rangesynth::render::Raster;
 use rangesynth::scene::Scene;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
@@ -73,7 +77,48 @@ fn main() -> anyhow::Result<()> {
             }
         }
     }
-    effect_costs(&verifier, &sensed, &scene)
+    effect_costs(&verifier, &sensed, &scene)?;
+    let compute = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute))?;
+    raster_costs(&[&verifier, &compute], &sensed, &scene, quick)
+}
+
+/// Hypotheses per second with each rasterizer, depth-mode shadows, batches of 64.
+fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
+    println!("\nrasterizers: depth-mode shadows, batches of 64 at {}×{}", sensed.width, sensed.height);
+    println!("{:<26} {:>14} {:>14} {:>10}", "model (triangles)", "graphics hyp/s", "compute hyp/s", "ratio");
+    let models: &[&str] = if quick {
+        &["builtin:box", "builtin:sphere:100"]
+    } else {
+        &["builtin:box", "builtin:sphere:100", "builtin:sphere:320"]
+    };
+    for model_name in models {
+        let settings = VerifySettings {
+            sensor: scene.sensor,
+            shadow: ShadowMode::Depth,
+            effects: Effects::default(),
+            tolerance: 0.1,
+            compare_shadow: false,
+            chunk_size: 1024,
+        };
+        let mut rates = Vec::new();
+        let mut triangles = 0;
+        for verifier in verifiers {
+            let model = verifier.model(model_name, Path::new("."))?;
+            triangles = model.mesh.triangles.len();
+            let hypotheses = hypotheses(&model, 64);
+            verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+            let mut best = 0.0f64;
+            for _ in 0..3 {
+                let start = Instant::now();
+                verifier.verify(sensed, &settings, &hypotheses, &mut |_| {})?;
+                best = best.max(hypotheses.len() as f64 / start.elapsed().as_secs_f64());
+            }
+            rates.push(best);
+        }
+        let name = format!("{model_name} ({triangles})");
+        println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
+    }
+    Ok(())
 }
 
 /// `n` poses of `model` about the sensed step's, turning by 0.002 rad each.

@@ -23,12 +23,21 @@ pub enum Access {
     HostRead,
     /// Read as vertex or index data, or as storage by any shader: a mesh or an input image.
     DrawAndComputeRead,
+    /// Read as a dispatch's indirect arguments, or as storage by a compute shader.
+    IndirectAndComputeRead,
 }
 
 impl Access {
     /// Whether the use only reads, so that the same use again needs no barrier.
     pub fn is_read_only(self) -> bool {
-        matches!(self, Access::ComputeRead | Access::TransferRead | Access::HostRead | Access::DrawAndComputeRead)
+        matches!(
+            self,
+            Access::ComputeRead
+                | Access::TransferRead
+                | Access::HostRead
+                | Access::DrawAndComputeRead
+                | Access::IndirectAndComputeRead
+        )
     }
 }
 
@@ -55,6 +64,9 @@ fn describe(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::I
             A::VERTEX_ATTRIBUTE_READ | A::INDEX_READ | A::SHADER_STORAGE_READ,
             L::GENERAL,
         ),
+        Access::IndirectAndComputeRead => {
+            (S::DRAW_INDIRECT | S::COMPUTE_SHADER, A::INDIRECT_COMMAND_READ | A::SHADER_STORAGE_READ, L::GENERAL)
+        }
     }
 }
 

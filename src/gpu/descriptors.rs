@@ -75,6 +75,26 @@ impl StorageSet {
     /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
     /// `constants` pushed at offset 0. The set's resources must already be in GENERAL layout.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
+        self.bind(cmd, pipeline, constants);
+        // SAFETY: cmd is recording with the pipeline and set bound.
+        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], 1) };
+    }
+
+    /// As [`StorageSet::dispatch`], with the workgroup counts read from `args` (a
+    /// `VkDispatchIndirectCommand` at offset 0) when the dispatch runs.
+    pub fn dispatch_indirect(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &ComputePipeline,
+        constants: &[u8],
+        args: &Buffer,
+    ) {
+        self.bind(cmd, pipeline, constants);
+        // SAFETY: cmd is recording with the pipeline and set bound; args holds the command.
+        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, args.raw, 0) };
+    }
+
+    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8]) {
         let (layout, pipeline) = (pipeline.layout, pipeline.pipeline);
         let d = &self.ctx.device;
         // SAFETY: cmd is recording; pipeline and layout match the set's layout; the set's
@@ -83,7 +103,6 @@ impl StorageSet {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, layout, 0, &[self.set], &[]);
             d.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, constants);
-            d.cmd_dispatch(cmd, groups[0], groups[1], 1);
         }
     }
 }

@@ -5,6 +5,8 @@
 //! - Coverage (shaders/raster.comp): one invocation per triangle finds the pixel centres it
 //!   covers (1/256-pixel snapped corners, the top-left rule, exact integer edge functions) and
 //!   keeps the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle).
+//!   A triangle whose bounding box holds more than 256 pixels is queued instead, and a second,
+//!   indirect dispatch gives each queued triangle a workgroup of 64 invocations.
 //! - Resolve (shaders/raster_resolve.comp): one invocation per pixel writes what the graphics
 //!   path's fragment shader would have written for that triangle.
 //!
@@ -61,7 +63,7 @@ struct RasterConstants {
     draw: u32,
     stride: u32,
     triangles: u32,
-    _pad: u32,
+    large_capacity: u32,
 }
 
 const _: () = assert!(std::mem::offset_of!(RasterConstants, triangles) == 24);
@@ -73,20 +75,32 @@ const MAX_GROUPS: u32 = 65_535;
 
 pub struct ComputeRasterPipelines {
     coverage: ComputePipeline,
+    large: ComputePipeline,
     resolve_range: ComputePipeline,
     resolve_shadow: ComputePipeline,
 }
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        // The draw table and the visibility words; coverage also binds the large-triangle queue
+        // and its dispatch arguments.
         let buffers = [vk::DescriptorType::STORAGE_BUFFER; 2];
+        let coverage = [vk::DescriptorType::STORAGE_BUFFER; 4];
         let with_images = |kind: ViewKind| {
             let images = kind.colour_attachments().len();
             std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, images).chain(buffers).collect::<Vec<_>>()
         };
         let push = size_of::<RasterConstants>();
         Ok(Self {
-            coverage: ComputePipeline::new(ctx, &buffers, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
+            coverage: ComputePipeline::new(ctx, &coverage, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
+            large: ComputePipeline::new(
+                ctx,
+                &coverage,
+                push,
+                shaders::RASTER_LARGE_COMP,
+                &[],
+                "compute raster coverage (large triangles)",
+            )?,
             resolve_range: ComputePipeline::new(
                 ctx,
                 &with_images(ViewKind::Range),
@@ -120,12 +134,18 @@ pub(crate) struct ComputeView {
     nearest: Buffer,
     /// Pixels per row of `nearest` (the attachments' width).
     stride: u32,
+    /// The queue of large triangles, and its length as an indirect dispatch's (x, 1, 1).
+    large: Buffer,
+    large_args: Buffer,
+    large_capacity: u32,
     coverage: StorageSet,
     resolve: StorageSet,
 }
 
 impl ComputeView {
-    /// Visibility words for `targets` (`size` pixels), rendering the draws of `draw_table`.
+    /// Visibility words for `targets` (`size` pixels), rendering the draws of `draw_table`,
+    /// none of more than `max_triangles`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
@@ -133,13 +153,27 @@ impl ComputeView {
         targets: &ViewTargets,
         (width, height): (u32, u32),
         draw_table: &Buffer,
+        max_triangles: u32,
         name: &str,
     ) -> Result<Self> {
         let bytes = u64::from(width) * u64::from(height) * 8;
         let nearest = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} visibility words"))?;
+        let large_capacity = max_triangles.clamp(1, MAX_GROUPS);
+        let large_bytes = u64::from(large_capacity) * 4;
+        let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
+        let args = BufferDesc {
+            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..BufferDesc::gpu_storage(12)
+        };
+        let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
+        let coverage = StorageSet::new(
+            ctx,
+            pipelines.coverage.set_layout,
+            &[],
+            &[draw_table, &nearest, &large, &large_args],
+            &format!("{name} coverage bindings"),
+        )?;
         let buffers = [draw_table, &nearest];
-        let coverage =
-            StorageSet::new(ctx, pipelines.coverage.set_layout, &[], &buffers, &format!("{name} coverage bindings"))?;
         let images: Vec<&Image> = targets.colour.iter().collect();
         let resolve = StorageSet::new(
             ctx,
@@ -148,7 +182,7 @@ impl ComputeView {
             &buffers,
             &format!("{name} resolve bindings"),
         )?;
-        Ok(Self { kind, nearest, stride: width, coverage, resolve })
+        Ok(Self { kind, nearest, stride: width, large, large_args, large_capacity, coverage, resolve })
     }
 
     /// Records both passes of one draw (number `index` in `draw_table`) over `area`: the
@@ -163,21 +197,35 @@ impl ComputeView {
         area: PixelRect,
     ) {
         let cmd = enc.cmd;
-        enc.access(&[], &[(&self.nearest, Access::TransferWrite)]);
-        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
-        unsafe { enc.ctx().device.cmd_fill_buffer(cmd, self.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
-        enc.access(&[], &[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)]);
+        enc.access(&[], &[(&self.nearest, Access::TransferWrite), (&self.large_args, Access::TransferWrite)]);
+        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers.
+        unsafe {
+            let d = &enc.ctx().device;
+            d.cmd_fill_buffer(cmd, self.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX);
+            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
+        }
+        let queue = [(&self.large, Access::ComputeWrite), (&self.large_args, Access::ComputeWrite)];
+        enc.access(
+            &[],
+            &[&[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)][..], &queue].concat(),
+        );
         let triangles = draw.mesh.index_count / 3;
         let constants = RasterConstants {
             area: [area.col, area.row, area.width, area.height],
             draw: index,
             stride: self.stride,
             triangles,
-            _pad: 0,
+            large_capacity: self.large_capacity,
         };
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
+        let queued = [(&self.large, Access::ComputeRead), (&self.large_args, Access::IndirectAndComputeRead)];
+        enc.access(
+            &[],
+            &[&[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)][..], &queued].concat(),
+        );
+        self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
         let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
         enc.access(&writes, &[(&self.nearest, Access::ComputeRead), (draw_table, Access::ComputeRead)]);
         let pixels = [area.width, area.height].map(|n| n.div_ceil(8));

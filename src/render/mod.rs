@@ -239,7 +239,7 @@ impl Renderer {
             sink: SinkKind::Readback,
             effects: (!effects.is_empty())
                 .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-            compute_raster: range_table.as_ref(),
+            compute_raster: range_table.as_ref().map(|t| (t, draws[0].mesh.index_count / 3)),
         };
         let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;

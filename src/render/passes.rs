@@ -57,9 +57,9 @@ pub(crate) struct SlotShape<'a> {
     pub sink: SinkKind,
     /// The effect buffers to make, where effects are named.
     pub effects: Option<EffectShape<'a>>,
-    /// The range view's draw table, where the compute rasterizer renders (it reads the
-    /// shadow view's from `shadow`).
-    pub compute_raster: Option<&'a Buffer>,
+    /// The range view's draw table and the most triangles of any draw, where the compute
+    /// rasterizer renders (it reads the shadow view's table from `shadow`).
+    pub compute_raster: Option<(&'a Buffer, u32)>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -109,9 +109,18 @@ impl<'a> Slot<'a> {
         };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
         let compute = match (shape.compute_raster, raster_pipelines) {
-            (Some(range_table), Some(rp)) => {
+            (Some((range_table, max_triangles)), Some(rp)) => {
                 let view = |kind, targets, size, table| {
-                    ComputeView::new(ctx, rp, kind, targets, size, table, &format!("{name} {kind:?} view"))
+                    ComputeView::new(
+                        ctx,
+                        rp,
+                        kind,
+                        targets,
+                        size,
+                        table,
+                        max_triangles,
+                        &format!("{name} {kind:?} view"),
+                    )
                 };
                 let range_view = view(ViewKind::Range, &range, (w, h), range_table)?;
                 let shadow_view = match (&shadow, shape.shadow) {

@@ -170,7 +170,7 @@ pub(crate) fn count_batch(
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-        compute_raster: range_table.as_ref(),
+        compute_raster: range_table.as_ref().zip(items.iter().map(|i| i.mesh.index_count / 3).max()),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
