@@ -98,14 +98,15 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 /// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). Measured before the range view gained its gradient: a 16384² render peaked at 47 bytes
-/// per pixel.
-fn render_memory(views: &Views, effects: &Effects) -> u64 {
+/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel. Measured
+/// before the range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
+fn render_memory(views: &Views, effects: &Effects, compute_raster: bool) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
     let effect_bytes = if effects.is_empty() { 0 } else { 16 };
-    let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes;
-    let rendering = range_pixel * range + ViewKind::Shadow.bytes_per_pixel() * shadow;
+    let visibility = if compute_raster { 8 } else { 0 };
+    let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
+    let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow;
     rendering.max(60 * range)
 }
 
@@ -203,7 +204,7 @@ impl Renderer {
         let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects),
+            render_memory(&views, &scene.effects, self.raster == Raster::Compute && draws.len() == 1),
         )?;
         self.render_views(scene, &views, &draws)
     }

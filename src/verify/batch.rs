@@ -74,7 +74,8 @@ impl BatchItem<'_> {
 /// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
 /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
 /// bytes a pixel, and 8 more for the effects' losses and measured z) and a shadow view as
-/// wide as the widest hypothesis needs (20 bytes a pixel).
+/// wide as the widest hypothesis needs (20 bytes a pixel), and with the compute rasterizer 8
+/// bytes a pixel of each view for its visibility words.
 /// Fails as a batch would on a hypothesis whose views cannot be planned.
 pub(crate) fn batch_slot_memory(
     renderer: &Renderer,
@@ -92,9 +93,11 @@ pub(crate) fn batch_slot_memory(
     }
     let rows = u64::from(sensor.height);
     let effect_bytes = if effects.is_empty() { 0 } else { 8 };
-    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes;
-    let per_slot =
-        rows * (range_pixel * u64::from(sensor.width) + ViewKind::Shadow.bytes_per_pixel() * u64::from(shadow_width));
+    // The compute rasterizer's visibility words, per pixel of each view.
+    let visibility = if renderer.raster() == Raster::Compute { 8 } else { 0 };
+    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
+    let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
+    let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width));
     Ok(per_slot * SLOTS.min(hypotheses) as u64)
 }
 
