@@ -130,12 +130,8 @@ impl Scene {
     pub fn reflectivity_table(&self, default: f64) -> Vec<f32> {
         let mut table = vec![0.0];
         for object in &self.objects {
-            let own = object.reflectivity;
-            let mesh = &object.mesh;
-            table.extend((0..mesh.surface_count() as usize).map(|s| {
-                let material = mesh.surface_reflectivity.get(s).copied().flatten();
-                own.or(material.map(f64::from)).unwrap_or(default) as f32
-            }));
+            let surfaces = object.mesh.surface_reflectivities(default);
+            table.extend(surfaces.map(|r| object.reflectivity.unwrap_or(r) as f32));
         }
         table
     }

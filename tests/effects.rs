@@ -314,15 +314,7 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
     assert!(results[1].scores.s < 0.9);
     for (h, v) in hypotheses.iter().zip(&results) {
         let synthetic = render(&step_scene(sensor, h.pose));
-        let images = Images {
-            width: 128,
-            height: 128,
-            pitch: sensor.pitch,
-            sensed_label: &image.label,
-            sensed_z: &image.z,
-            synthetic_label: &synthetic.label,
-            synthetic_z: &synthetic.z,
-        };
+        let images = Images::of(&image, &synthetic);
         let cpu = cpu_counts(&images, TOLERANCE as f32);
         assert_eq!((v.counts.n1_plus, v.counts.n1_minus, v.counts.n0), (cpu.n1_plus, cpu.n1_minus, cpu.n0), "{}", h.id);
         assert_eq!(v.counts.synthetic_valid(), cpu.n_s, "{}", h.id);

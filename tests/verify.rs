@@ -117,15 +117,7 @@ fn gpu_counts_and_scores_match_the_cpu_scorer() {
         let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
         for (h, v) in hypotheses.iter().zip(&results) {
             let synthetic = render(&scene(sensor, mode, &[(h.model.mesh.name.as_str(), h.pose)]));
-            let images = Images {
-                width: 128,
-                height: 128,
-                pitch: sensor.pitch,
-                sensed_label: &image.label,
-                sensed_z: &image.z,
-                synthetic_label: &synthetic.label,
-                synthetic_z: &synthetic.z,
-            };
+            let images = Images::of(&image, &synthetic);
             let cpu = cpu_counts(&images, TOLERANCE as f32);
             let name = format!("{} ({mode:?}, θ = {theta})", h.id);
             assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{name}: counts");

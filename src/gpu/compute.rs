@@ -15,23 +15,25 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// A compute pipeline whose set 0 has one binding of each given type (compute stage),
-    /// whose push constants are `push_size` bytes, and whose u32 specialization constants
+    /// A compute pipeline whose set 0 binds `images` storage images then `buffers` storage
+    /// buffers, from binding 0 (compute stage; the order a [`StorageSet`](super::StorageSet)
+    /// writes them in), whose push constants are `push_size` bytes, and whose u32 specialization constants
     /// `constant_id = 0, 1, …` take the values of `constants`: codes the host defines once
     /// (such as the shadow modes) reach the shader from that one definition.
     pub fn new(
         ctx: &Arc<GpuContext>,
-        binding_types: &[vk::DescriptorType],
+        (images, buffers): (usize, usize),
         push_size: usize,
         spirv: &[u8],
         constants: &[u32],
         name: &str,
     ) -> Result<Self> {
         let d = &ctx.device;
-        let bindings: Vec<_> = binding_types
-            .iter()
+        let types = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, images)
+            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, buffers));
+        let bindings: Vec<_> = types
             .enumerate()
-            .map(|(b, &ty)| {
+            .map(|(b, ty)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b as u32)
                     .descriptor_type(ty)

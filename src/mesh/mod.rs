@@ -96,6 +96,12 @@ impl Mesh {
         self.surface_names.len() as u32
     }
 
+    /// Each surface's reflectivity, surface 1 first: its material's, else `default`.
+    pub fn surface_reflectivities(&self, default: f64) -> impl Iterator<Item = f64> + '_ {
+        (0..self.surface_count() as usize)
+            .map(move |s| self.surface_reflectivity.get(s).copied().flatten().map_or(default, f64::from))
+    }
+
     pub fn vertex(&self, index: u32) -> DVec3 {
         let [x, y, z] = self.positions[index as usize];
         DVec3::new(x.into(), y.into(), z.into())

@@ -82,20 +82,16 @@ pub struct ComputeRasterPipelines {
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        // The draw table and the visibility words; coverage also binds the large-triangle queue
-        // and its dispatch arguments.
-        let buffers = [vk::DescriptorType::STORAGE_BUFFER; 2];
-        let coverage = [vk::DescriptorType::STORAGE_BUFFER; 4];
-        let with_images = |kind: ViewKind| {
-            let images = kind.colour_attachments().len();
-            std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, images).chain(buffers).collect::<Vec<_>>()
-        };
+        // Coverage binds the draw table, the visibility words, the large-triangle queue and its
+        // dispatch arguments; resolve the view's attachments, the draw table and the words.
+        let coverage = (0, 4);
+        let resolve = |kind: ViewKind| (kind.colour_attachments().len(), 2);
         let push = size_of::<RasterConstants>();
         Ok(Self {
-            coverage: ComputePipeline::new(ctx, &coverage, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
+            coverage: ComputePipeline::new(ctx, coverage, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
             large: ComputePipeline::new(
                 ctx,
-                &coverage,
+                coverage,
                 push,
                 shaders::RASTER_LARGE_COMP,
                 &[],
@@ -103,7 +99,7 @@ impl ComputeRasterPipelines {
             )?,
             resolve_range: ComputePipeline::new(
                 ctx,
-                &with_images(ViewKind::Range),
+                resolve(ViewKind::Range),
                 push,
                 shaders::RASTER_RESOLVE_RANGE_COMP,
                 &[],
@@ -111,7 +107,7 @@ impl ComputeRasterPipelines {
             )?,
             resolve_shadow: ComputePipeline::new(
                 ctx,
-                &with_images(ViewKind::Shadow),
+                resolve(ViewKind::Shadow),
                 push,
                 shaders::RASTER_RESOLVE_SHADOW_COMP,
                 &[],
@@ -204,10 +200,14 @@ impl ComputeView {
             d.cmd_fill_buffer(cmd, self.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX);
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
         }
-        let queue = [(&self.large, Access::ComputeWrite), (&self.large_args, Access::ComputeWrite)];
         enc.access(
             &[],
-            &[&[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)][..], &queue].concat(),
+            &[
+                (&self.nearest, Access::ComputeWrite),
+                (draw_table, Access::ComputeRead),
+                (&self.large, Access::ComputeWrite),
+                (&self.large_args, Access::ComputeWrite),
+            ],
         );
         let triangles = draw.mesh.index_count / 3;
         let constants = RasterConstants {
@@ -220,10 +220,14 @@ impl ComputeView {
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
-        let queued = [(&self.large, Access::ComputeRead), (&self.large_args, Access::IndirectAndComputeRead)];
         enc.access(
             &[],
-            &[&[(&self.nearest, Access::ComputeWrite), (draw_table, Access::ComputeRead)][..], &queued].concat(),
+            &[
+                (&self.nearest, Access::ComputeWrite),
+                (draw_table, Access::ComputeRead),
+                (&self.large, Access::ComputeRead),
+                (&self.large_args, Access::IndirectAndComputeRead),
+            ],
         );
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
         let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();

@@ -4,6 +4,7 @@
 //! slot's losses (a [`Reason`](crate::effects::Reason) code per pixel) and, where an effect
 //! changes z, its measured z; the sink reads both.
 
+use super::targets::ViewKind;
 use crate::effects::{Effect, Effects, EFFECT_ORDER, MAX_NOISE_INCIDENCE_DEG};
 use crate::error::Result;
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
@@ -100,14 +101,11 @@ pub struct EffectPipelines {
 
 impl EffectPipelines {
     /// Storage images bound from binding 0: the range view's attachments.
-    pub const IMAGES: usize = 4;
+    pub const IMAGES: usize = ViewKind::Range.colour_attachments().len();
     /// Storage buffers after them: shadowed labels, losses, measured z, reflectivities.
     pub const BUFFERS: usize = 4;
 
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        let bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, Self::IMAGES)
-            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, Self::BUFFERS))
-            .collect();
         let max_incidence = (MAX_NOISE_INCIDENCE_DEG.to_radians() as f32).to_bits();
         let pipelines = EFFECT_ORDER
             .iter()
@@ -125,7 +123,7 @@ impl EffectPipelines {
                 let name = format!("{} effect", effect.pass_name());
                 ComputePipeline::new(
                     ctx,
-                    &bindings,
+                    (Self::IMAGES, Self::BUFFERS),
                     size_of::<EffectConstants>(),
                     spirv,
                     &[reason, max_incidence],

@@ -146,6 +146,12 @@ impl Renderer {
         self.raster
     }
 
+    /// Whether the compute rasterizer renders a view of this many draws (it renders views of
+    /// one draw; compute_raster.rs).
+    pub(crate) fn computes(&self, draws: usize) -> bool {
+        self.raster == Raster::Compute && draws == 1
+    }
+
     /// The same renderer, refusing calls that would need more than `budget`.
     pub fn with_memory_budget(self, budget: MemoryBudget) -> Self {
         Self { budget, ..self }
@@ -204,7 +210,7 @@ impl Renderer {
         let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, self.raster == Raster::Compute && draws.len() == 1),
+            render_memory(&views, &scene.effects, self.computes(draws.len())),
         )?;
         self.render_views(scene, &views, &draws)
     }
@@ -222,8 +228,7 @@ impl Renderer {
             reflectivity_offset: 0,
         };
         let shadow_table = draw_table(ctx, ViewKind::Shadow, &scene.sensor, [(views, draws)])?;
-        // The compute rasterizer renders views of one draw.
-        let compute = self.raster == Raster::Compute && draws.len() == 1;
+        let compute = self.computes(draws.len());
         let range_table =
             compute.then(|| draw_table(ctx, ViewKind::Range, &scene.sensor, [(views, draws)])).transpose()?.flatten();
         let effects = &scene.effects;

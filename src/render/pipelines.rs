@@ -44,12 +44,9 @@ impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
-        let mask_bindings: Vec<_> = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, MaskBindings::IMAGES)
-            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, MaskBindings::BUFFERS))
-            .collect();
         let mask = ComputePipeline::new(
             ctx,
-            &mask_bindings,
+            (MaskBindings::IMAGES, MaskBindings::BUFFERS),
             size_of::<MaskConstants>(),
             shaders::SHADOW_MASK_COMP,
             &[ShadowMode::Label.shader_code()],

@@ -17,9 +17,10 @@ use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass};
 use crate::effects::Effects;
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
+use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Raster, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views,
+    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape,
+    ViewKind, Views,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowMode;
@@ -57,8 +58,8 @@ pub struct BatchItem<'a> {
     pub sphere: (glam::DVec3, f64),
     pub pose: DMat4,
     pub surfaces: u32,
-    /// Each surface's material reflectivity, where it has one.
-    pub reflectivities: &'a [Option<f32>],
+    /// The model, for its surfaces' reflectivities.
+    pub model: &'a Mesh,
     /// Counts of the shadowed image (or the only image when there is no shadow pass).
     pub counts_offset: usize,
     /// Also count the unshadowed image here, when asked and a shadow pass runs.
@@ -94,7 +95,7 @@ pub(crate) fn batch_slot_memory(
     let rows = u64::from(sensor.height);
     let effect_bytes = if effects.is_empty() { 0 } else { 8 };
     // The compute rasterizer's visibility words, per pixel of each view.
-    let visibility = if renderer.raster() == Raster::Compute { 8 } else { 0 };
+    let visibility = if renderer.computes(1) { 8 } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
     let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
     let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width));
@@ -122,14 +123,13 @@ pub(crate) fn count_batch(
         .collect::<Result<_>>()?;
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
     // Hypothesis i's labels 1..=M at reflectivity_offsets[i] + label; label 0 first.
-    let default_reflectivity = settings.effects.reflectivity.map_or(1.0, |r| r.default) as f32;
+    let default_reflectivity = settings.effects.reflectivity.map_or(1.0, |r| r.default);
     let mut reflectivity_offsets = Vec::with_capacity(items.len());
     let mut reflectivity_table = Vec::new();
     for item in items {
         reflectivity_offsets.push(reflectivity_table.len() as u32);
         reflectivity_table.push(0.0);
-        let material = |s: u32| item.reflectivities.get(s as usize).copied().flatten();
-        reflectivity_table.extend((0..item.surfaces).map(|s| material(s).unwrap_or(default_reflectivity)));
+        reflectivity_table.extend(item.model.surface_reflectivities(default_reflectivity).map(|r| r as f32));
     }
     let reflectivities = settings
         .effects
@@ -162,9 +162,10 @@ pub(crate) fn count_batch(
     // Hypothesis i is draw i of the table, seen or not.
     let groups = || views.iter().zip(draws.iter().map(|d| d.as_slice()));
     let shadow_table = draw_table(ctx, ViewKind::Shadow, sensor, groups())?;
-    let range_table = match renderer.raster() {
-        Raster::Compute => draw_table(ctx, ViewKind::Range, sensor, groups())?,
-        Raster::Graphics => None,
+    // Every hypothesis is a view of one draw.
+    let range_table = match renderer.computes(1) {
+        true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
+        false => None,
     };
     let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
     let shape = SlotShape {

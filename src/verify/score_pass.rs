@@ -46,11 +46,10 @@ pub(crate) struct ScorePass {
 
 impl ScorePass {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        let bindings =
-            [[vk::DescriptorType::STORAGE_IMAGE; 2].as_slice(), &[vk::DescriptorType::STORAGE_BUFFER; 6]].concat();
+        // The range view's label and z; the buffers of ScoreInputs.
         let pipeline = ComputePipeline::new(
             ctx,
-            &bindings,
+            (2, 6),
             size_of::<ScoreConstants>(),
             shaders::SCORE_COMP,
             &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS],

@@ -244,7 +244,7 @@ impl Verifier {
                         sphere: h.model.sphere,
                         pose: h.pose,
                         surfaces: h.model.mesh.surface_count(),
-                        reflectivities: &h.model.mesh.surface_reflectivity,
+                        model: &h.model.mesh,
                         counts_offset: offset,
                         unshadowed_offset: settings.compare_shadow.then_some(offset + words),
                     };

@@ -16,6 +16,21 @@ pub struct Images<'a> {
     pub synthetic_z: &'a [f32],
 }
 
+impl<'a> Images<'a> {
+    /// A sensed range image against a render's synthetic image of the same size.
+    pub fn of(sensed: &'a rangesynth::io::RangeImage, synthetic: &'a rangesynth::RenderOutput) -> Self {
+        Images {
+            width: sensed.width as usize,
+            height: sensed.height as usize,
+            pitch: synthetic.sensor.pitch,
+            sensed_label: &sensed.label,
+            sensed_z: &sensed.z,
+            synthetic_label: &synthetic.label,
+            synthetic_z: &synthetic.z,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct CpuCounts {
     pub n1_plus: u64,
