@@ -25,11 +25,17 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
-    uint mode;          // ShadowMode::shader_code
+    uint mode;          // ShadowSettings::shader_code
 } m;
 
-// ShadowMode::Label.shader_code(), given by the host (src/render/pipelines.rs).
+// The codes of the label test, nearest pixel and 2x2, given by the host (src/render/pipelines.rs).
 layout(constant_id = 0) const uint MODE_LABEL = 0xffffffffu;
+layout(constant_id = 1) const uint MODE_LABEL_SQUARE = 0xffffffffu;
+
+// Whether shadow pixel q exists and carries `label`.
+bool shadow_label_is(ivec2 q, uint label) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw)) && imageLoad(shadow_visibility, q).r == label;
+}
 
 // Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
 float edge_function(vec2 a, vec2 b, vec2 q) {
@@ -149,6 +155,13 @@ bool shadowed(ivec2 pixel, uint label) {
     bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
     if (m.mode == MODE_LABEL) {
         return in_grid && imageLoad(shadow_visibility, s).r != label;
+    }
+    if (m.mode == MODE_LABEL_SQUARE) {
+        // The four shadow pixels whose centres surround p'; outside the grid it is lit, as above.
+        ivec2 corner = ivec2(floor(vec2(column, row)));
+        bool outside = any(lessThan(corner, ivec2(-1))) || any(greaterThanEqual(corner, m.sizes.zw));
+        return !outside && !shadow_label_is(corner, label) && !shadow_label_is(corner + ivec2(1, 0), label)
+            && !shadow_label_is(corner + ivec2(0, 1), label) && !shadow_label_is(corner + ivec2(1, 1), label);
     }
     // Depth mode. The camera sees the side of a surface the projector lights only when that
     // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).

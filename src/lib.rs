@@ -3,6 +3,7 @@
 
 pub mod effects;
 pub mod error;
+pub mod exact;
 mod exact_array;
 pub mod gpu;
 pub mod io;

@@ -12,7 +12,8 @@ pub struct RenderOutput {
     pub sensor: Sensor,
     pub shadow: ShadowSettings,
     pub effects: Effects,
-    /// Whether a shadow pass ran (not with mode `none` or θ = 0).
+    /// Whether the image was shadowed: a shadow pass ran (not with mode `none` or θ = 0), or
+    /// mode `exact` cast the shadow rays.
     pub shadow_pass: bool,
     /// The rasterizer that rendered the views.
     pub raster: crate::render::Raster,
@@ -25,17 +26,21 @@ pub struct RenderOutput {
     pub z: Vec<f32>,
     /// Row-major: why the pixel has no point ([`Reason::Valid`] where it has one).
     pub reason: Vec<Reason>,
-    /// The passes recorded, in order, with their GPU times.
+    /// The passes recorded, in order, with their GPU times; in mode `exact`, first the CPU's
+    /// ray casting, timed on the wall clock.
     pub timings: Vec<PassTime>,
 }
 
-/// One recorded pass and its GPU time in milliseconds (`None` on a device without
-/// timestamps). Names: `range`, `shadow`, `shadow mask`, and each effect's
+/// One recorded pass and its time in milliseconds: on the GPU (`None` on a device without
+/// timestamps), or for exact mode's rays on the CPU's wall clock. Names: `range`, `shadow`,
+/// `shadow mask`, `exact rays` (CPU), `exact upload`, and each effect's
 /// [`Effect::pass_name`](crate::effects::Effect::pass_name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PassTime {
     pub name: &'static str,
     pub ms: Option<f64>,
+    /// Timed on the CPU (exact mode's ray casting), not on the GPU.
+    pub on_cpu: bool,
 }
 
 impl RenderOutput {

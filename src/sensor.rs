@@ -98,7 +98,8 @@ impl Sensor {
         ViewGrid { origin: self.origin, pitch: self.pitch, width: self.width, height: self.height, z_range }
     }
 
-    /// The shadow view's grid: same pitch and rows as the range view; columns cover the
+    /// The shadow view's grid: the range view's rows, and `columns` columns per range pitch
+    /// (`[shadow] columns`), which cover the
     /// shadow-frame x of every point the range view can see, i.e. the range image's
     /// footprint at any depth in `z_range` (the range frame's scene depth bounds), rotated
     /// by `R_y(−θ)`. `shadow_z_range` bounds the scene's depth in the shadow frame.
@@ -107,8 +108,15 @@ impl Sensor {
     /// `lattice_z` (the local origin's z, `ViewGrid::local_origin`), not wherever the depth
     /// range happens to start: the same scene moved with its sensor keeps the same columns,
     /// and so the same nearest shadow pixel for every point.
-    pub fn shadow_grid(&self, z_range: (f64, f64), shadow_z_range: (f64, f64), lattice_z: f64) -> Result<ViewGrid> {
+    pub fn shadow_grid(
+        &self,
+        z_range: (f64, f64),
+        shadow_z_range: (f64, f64),
+        lattice_z: f64,
+        columns: u32,
+    ) -> Result<ViewGrid> {
         let (c, s) = (self.theta().cos(), self.theta().sin());
+        let dx = self.pitch[0] / f64::from(columns);
         let half = self.pitch[0] / 2.0;
         let x_lo = self.origin[0] - half;
         let x_hi = self.origin[0] + (f64::from(self.width) - 0.5) * self.pitch[0];
@@ -120,20 +128,20 @@ impl Sensor {
         let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let anchor = c * self.origin[0] - s * lattice_z;
         // The lattice columns whose pixels reach lo and hi.
-        let first = ((lo - anchor) / self.pitch[0] + 0.5).floor();
-        let last = ((hi - anchor) / self.pitch[0] - 0.5).ceil();
+        let first = ((lo - anchor) / dx + 0.5).floor();
+        let last = ((hi - anchor) / dx - 0.5).ceil();
         let columns = last - first + 1.0;
         // NaN (a depth range that overflowed) is refused too.
         if columns.is_nan() || columns > f64::from(MAX_IMAGE_SIDE) {
             return Err(Error::Scene(format!(
                 "the shadow view would need {columns} columns (more than {MAX_IMAGE_SIDE}): the scene's depth \
                  range ({:.4} to {:.4}) is too deep for θ = {}° at pitch {}",
-                z_range.0, z_range.1, self.theta_deg, self.pitch[0]
+                z_range.0, z_range.1, self.theta_deg, dx
             )));
         }
         Ok(ViewGrid {
-            origin: [anchor + first * self.pitch[0], self.origin[1]],
-            pitch: self.pitch,
+            origin: [anchor + first * dx, self.origin[1]],
+            pitch: [dx, self.pitch[1]],
             width: columns as u32,
             height: self.height,
             z_range: shadow_z_range,

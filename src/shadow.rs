@@ -23,8 +23,18 @@
 //!   f32 rounding ([`DEPTH_BIAS_RELATIVE`] of the coordinates, scaled by how steep the planes
 //!   are). A walk is at most 32 steps; one that gives up falls back on the seen triangle's
 //!   plane, extrapolated to p', with an allowance for the creases in between.
+//! - `exact`: two rays in f64 on the CPU at every pixel centre (src/exact.rs): the first hit
+//!   along −z, then a ray from it toward the camera. The product's own ground truth, and the
+//!   slow end of `rangesynth accuracy`'s curve; its images go through the same effect and
+//!   score passes as the GPU modes'.
 //! - `none`: no shadow pass at all.
+//!
+//! Two knobs refine the GPU modes: `columns = k` renders the shadow view with k columns per
+//! range pitch (its rows already coincide with the range rows), and `neighbourhood = "2x2"`
+//! makes the label test keep a pixel whose label is seen at any of the four shadow pixels
+//! around p' (the paper's test reads only the nearest).
 
+use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -34,15 +44,89 @@ pub enum ShadowMode {
     #[default]
     Label,
     Depth,
+    Exact,
+}
+
+/// Which shadow pixels the label test reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Neighbourhood {
+    /// The nearest (the paper's Fig. 4).
+    #[default]
+    #[serde(rename = "nearest")]
+    Nearest,
+    /// The four whose centres surround p': lit if any of them carries the pixel's label.
+    #[serde(rename = "2x2")]
+    Square2,
 }
 
 /// The scene file's `[shadow]` table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShadowSettings {
     #[serde(default)]
     pub mode: ShadowMode,
+    /// Shadow-view columns per range-view column (1 to [`MAX_SHADOW_COLUMNS`]).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub columns: u32,
+    /// The label test's shadow pixels (mode `label` only).
+    #[serde(default, skip_serializing_if = "is_nearest")]
+    pub neighbourhood: Neighbourhood,
 }
+
+/// Most shadow-view columns per range-view column.
+pub const MAX_SHADOW_COLUMNS: u32 = 8;
+
+fn one() -> u32 {
+    1
+}
+
+fn is_one(k: &u32) -> bool {
+    *k == 1
+}
+
+fn is_nearest(n: &Neighbourhood) -> bool {
+    *n == Neighbourhood::Nearest
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self::of(ShadowMode::default())
+    }
+}
+
+impl ShadowSettings {
+    /// `mode` with one shadow column per range column and the nearest-pixel label test.
+    pub fn of(mode: ShadowMode) -> Self {
+        Self { mode, columns: 1, neighbourhood: Neighbourhood::Nearest }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=MAX_SHADOW_COLUMNS).contains(&self.columns) {
+            return Err(Error::Scene(format!(
+                "[shadow] columns = {} must lie between 1 and {MAX_SHADOW_COLUMNS}",
+                self.columns
+            )));
+        }
+        if self.neighbourhood != Neighbourhood::Nearest && self.mode != ShadowMode::Label {
+            return Err(Error::Scene(format!(
+                "[shadow] neighbourhood = \"2x2\" refines the label test; mode \"{}\" does not read labels",
+                self.mode.as_str()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The code the shadow-mask shader switches on.
+    pub(crate) fn shader_code(&self) -> u32 {
+        match (self.mode, self.neighbourhood) {
+            (ShadowMode::Label, Neighbourhood::Square2) => SQUARE_LABEL_CODE,
+            (mode, _) => mode.shader_code(),
+        }
+    }
+}
+
+/// The mask shader's code for the label test over a 2×2 neighbourhood.
+pub(crate) const SQUARE_LABEL_CODE: u32 = 3;
 
 /// Constant part of the depth test's bias, as a fraction of the pixel pitch dx.
 pub const DEPTH_BIAS_PIXELS: f64 = 1e-3;
@@ -55,19 +139,26 @@ impl ShadowMode {
             ShadowMode::None => "none",
             ShadowMode::Label => "label",
             ShadowMode::Depth => "depth",
+            ShadowMode::Exact => "exact",
         }
     }
 
-    /// Whether a shadow pass runs at all: not in mode `none`, and not at θ = 0, where the
-    /// camera looks along the projector and nothing can be in shadow.
+    /// Whether the GPU renders a shadow view: in modes `label` and `depth`, and not at θ = 0,
+    /// where the camera looks along the projector and nothing can be in shadow.
     pub fn needs_shadow_pass(self, theta_deg: f64) -> bool {
-        self != ShadowMode::None && theta_deg != 0.0
+        matches!(self, ShadowMode::Label | ShadowMode::Depth) && theta_deg != 0.0
     }
 
-    /// The code the shadow-mask shader switches on.
+    /// Whether images carry shadowed labels beside the unshadowed ones: a shadow pass ran, or
+    /// the CPU cast the shadow rays.
+    pub fn shadows(self, theta_deg: f64) -> bool {
+        self == ShadowMode::Exact || self.needs_shadow_pass(theta_deg)
+    }
+
+    /// The code the shadow-mask shader switches on (modes with a shadow pass).
     pub(crate) fn shader_code(self) -> u32 {
         match self {
-            ShadowMode::None => 0,
+            ShadowMode::None | ShadowMode::Exact => 0,
             ShadowMode::Label => 1,
             ShadowMode::Depth => 2,
         }

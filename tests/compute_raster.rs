@@ -9,7 +9,7 @@ use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::render::Raster;
 use rangesynth::scene::Scene;
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use rangesynth::RenderOutput;
 use std::path::Path;
@@ -93,7 +93,7 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
     };
     let settings = VerifySettings {
         sensor: s,
-        shadow: ShadowMode::Depth,
+        shadow: ShadowSettings::of(ShadowMode::Depth),
         effects: Default::default(),
         tolerance: 0.05,
         compare_shadow: true,

@@ -99,7 +99,7 @@ fn check(name: &str, scene: &Scene, out: &RenderOutput, reference: &Reference) -
 
     let expected: Vec<u32> = match scene.shadow.mode {
         ShadowMode::None => reference.label.clone(),
-        ShadowMode::Depth => reference.label_shadowed(),
+        ShadowMode::Depth | ShadowMode::Exact => reference.label_shadowed(),
         ShadowMode::Label => reference.label_paper_shadowed(),
     };
     let near_boundary = near_label_change(&expected, w, h);

@@ -10,7 +10,7 @@ use rangesynth::effects::Reason;
 use rangesynth::io::RangeImage;
 use rangesynth::scene::Scene;
 use rangesynth::sensor::Sensor;
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, VerifySettings};
 use rangesynth::RenderOutput;
 use std::path::Path;
@@ -259,7 +259,7 @@ fn an_effect_free_scene_records_the_passes_it_always_did_and_effects_add_theirs_
         "quantize",
     ];
     assert_eq!(names(&render(&with(&base, all))), expected);
-    let no_shadow = Scene { shadow: rangesynth::shadow::ShadowSettings { mode: ShadowMode::None }, ..base.clone() };
+    let no_shadow = Scene { shadow: rangesynth::shadow::ShadowSettings::of(ShadowMode::None), ..base.clone() };
     assert_eq!(names(&render(&with(&no_shadow, "[noise]\nsigma = 0.01"))), ["range", "noise"]);
     // Effects that lose nothing and change nothing leave the image as it was.
     let idle = render(&with(&base, "[dropout]\nprobability = 0\n[grazing]\nmax_incidence_deg = 90"));
@@ -291,7 +291,7 @@ fn hypothesis(id: &str, pose: DMat4) -> Hypothesis {
 fn verify_settings(sensor: Sensor) -> VerifySettings {
     VerifySettings {
         sensor,
-        shadow: ShadowMode::Depth,
+        shadow: ShadowSettings::of(ShadowMode::Depth),
         effects: effects(EFFECTS),
         tolerance: TOLERANCE,
         compare_shadow: true,

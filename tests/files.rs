@@ -46,7 +46,7 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
         label: labels.clone(),
         sensor: Some(sensor(w, h, 0.25, [-1.0, 2.0], 37.5)),
         reason: Some((0..n as u32).map(|i| if labels[i as usize] == 0 { 1 } else { 0 }).collect()),
-        shadow: Some(ShadowSettings { mode: ShadowMode::Depth }),
+        shadow: Some(ShadowSettings::of(ShadowMode::Depth)),
         effects: Some(toml::from_str("[noise]\nsigma = 0.25\nseed = 9\n[edges]\njump = 0.5\n").unwrap()),
     };
     let dir = temp_dir("files_round_trip");

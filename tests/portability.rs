@@ -8,7 +8,7 @@ use ash::vk;
 use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::io::RangeImage;
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use std::path::Path;
 
@@ -37,7 +37,7 @@ fn the_vulkan_1_2_path_matches_the_core_path() {
         let sensed = SensedImage::new(&RangeImage::from(&core), &s).unwrap();
         let settings = VerifySettings {
             sensor: s,
-            shadow: mode,
+            shadow: ShadowSettings::of(mode),
             effects: Default::default(),
             tolerance: 0.1,
             compare_shadow: true,

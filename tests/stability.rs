@@ -70,7 +70,7 @@ fn convex_shadow_errors(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, 
     let s = centred_sensor(size, size, 2.4 * radius / f64::from(size), [at.x, at.y], theta);
     let scene = Scene {
         sensor: s,
-        shadow: ShadowSettings { mode: ShadowMode::Depth },
+        shadow: ShadowSettings::of(ShadowMode::Depth),
         effects: Default::default(),
         objects: vec![SceneObject { model_ref: name.into(), mesh: Arc::new(mesh), pose, reflectivity: None }],
     };

@@ -11,7 +11,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rangesynth::io::RangeImage;
 use rangesynth::sensor::Sensor;
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Counts, Hypothesis, SensedImage, Verification, VerifySettings};
 use std::path::Path;
 
@@ -50,7 +50,7 @@ fn correct() -> Hypothesis {
 fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
     VerifySettings {
         sensor,
-        shadow,
+        shadow: ShadowSettings::of(shadow),
         effects: Effects::default(),
         tolerance: TOLERANCE,
         compare_shadow: false,
@@ -96,9 +96,13 @@ fn assert_close(name: &str, gpu: f64, cpu: f64) {
 
 #[test]
 fn gpu_counts_and_scores_match_the_cpu_scorer() {
-    for (theta, mode) in
-        [(45.0, ShadowMode::Depth), (45.0, ShadowMode::Label), (30.0, ShadowMode::None), (-30.0, ShadowMode::Depth)]
-    {
+    for (theta, mode) in [
+        (45.0, ShadowMode::Depth),
+        (45.0, ShadowMode::Label),
+        (30.0, ShadowMode::None),
+        (-30.0, ShadowMode::Depth),
+        (45.0, ShadowMode::Exact),
+    ] {
         let sensor = test_sensor(theta);
         let (image, sensed) = sensed(sensor);
         let wrong_pose =

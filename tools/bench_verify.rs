@@ -20,7 +20,7 @@ use rangesynth::io::RangeImage;
 use rangesynth::limits::MemoryBudget;
 use rangesynth::render::Raster;
 use rangesynth::scene::Scene;
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use rangesynth::Renderer;
 use std::path::Path;
@@ -46,7 +46,7 @@ fn main() -> anyhow::Result<()> {
         for shadow in [ShadowMode::Depth, ShadowMode::None] {
             let settings = VerifySettings {
                 sensor: scene.sensor,
-                shadow,
+                shadow: ShadowSettings::of(shadow),
                 effects: Default::default(),
                 tolerance: 0.1,
                 compare_shadow: false,
@@ -94,7 +94,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
     for model_name in models {
         let settings = VerifySettings {
             sensor: scene.sensor,
-            shadow: ShadowMode::Depth,
+            shadow: ShadowSettings::of(ShadowMode::Depth),
             effects: Effects::default(),
             tolerance: 0.1,
             compare_shadow: false,
@@ -157,7 +157,7 @@ fn effect_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> any
         let effects: Effects = toml::from_str(text)?;
         let settings = VerifySettings {
             sensor: scene.sensor,
-            shadow: ShadowMode::Depth,
+            shadow: ShadowSettings::of(ShadowMode::Depth),
             effects,
             tolerance: 0.1,
             compare_shadow: false,

@@ -12,6 +12,7 @@ use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_director
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
 use rangesynth::render::Raster;
+use rangesynth::shadow::ShadowMode;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
 
@@ -116,7 +117,10 @@ fn check_validation(renderer: &Renderer) -> Result<()> {
 fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Result<()> {
     let s = &scene.sensor;
     println!("device: {}", renderer.context().device_name());
-    println!("raster: {}", out.raster.as_str());
+    match scene.shadow.mode {
+        ShadowMode::Exact => println!("raster: none (shadow mode exact casts rays on the CPU)"),
+        _ => println!("raster: {}", out.raster.as_str()),
+    }
     println!(
         "image: {}×{} at pitch {}×{}, θ = {}°, shadow mode {}{}",
         s.width,
@@ -167,8 +171,12 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     let passes: Vec<String> = out
         .timings
         .iter()
+        .filter(|t| !t.on_cpu)
         .map(|t| format!("{} {}", t.name, t.ms.map_or("-".to_string(), |ms| format!("{ms:.2} ms"))))
         .collect();
+    for t in out.timings.iter().filter(|t| t.on_cpu) {
+        println!("CPU time: {} {:.2} ms", t.name, t.ms.unwrap_or(0.0));
+    }
     println!("GPU time per pass: {}", passes.join(", "));
     Ok(())
 }

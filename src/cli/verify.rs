@@ -113,7 +113,7 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
         .collect::<Result<Vec<_>>>()?;
     let settings = VerifySettings {
         sensor,
-        shadow: shadow.mode,
+        shadow,
         effects,
         tolerance,
         compare_shadow: args.compare_shadow,
@@ -213,7 +213,7 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Summ
         s.width,
         s.height,
         s.theta_deg,
-        settings.shadow.as_str(),
+        settings.shadow.mode.as_str(),
         settings.tolerance,
         seconds,
         results.len() as f64 / seconds.max(1e-9)

@@ -10,6 +10,7 @@ mod compute_raster;
 mod draw;
 mod effect_pass;
 mod gpu_mesh;
+mod host_view;
 mod mesh_cache;
 mod passes;
 mod pipelines;
@@ -22,21 +23,24 @@ pub use compute_raster::Raster;
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
+pub(crate) use host_view::HostView;
 pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
 pub(crate) use targets::ViewKind;
 
 use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
+use crate::exact::{self, render_scene_exact};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::MemoryBudget;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
-use crate::shadow::ShadowMode;
+use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::DVec3;
 use mesh_cache::MeshCache;
 use passes::PassClock;
 use pipelines::Pipelines;
 use std::sync::Arc;
+use std::time::Instant;
 use target_pool::TargetPool;
 
 pub struct Renderer {
@@ -59,7 +63,12 @@ pub struct Renderer {
 /// footprint misses the shadow grid cannot shadow any of those points, so it leaves the
 /// shadow view's depth range alone. Such objects are still drawn, and clipped. A box far away
 /// in depth beside the image therefore no longer makes the shadow view impossibly wide.
-pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f64)], max_side: u32) -> Result<Views> {
+pub(crate) fn plan_views(
+    sensor: &Sensor,
+    shadow: &ShadowSettings,
+    spheres: &[(DVec3, f64)],
+    max_side: u32,
+) -> Result<Views> {
     let full_range = sensor.range_grid((0.0, 0.0));
     let seen = |grid: &ViewGrid, (centre, radius): (DVec3, f64)| grid.footprint(centre, radius, 1).is_some();
     let z_range = depth_bounds(spheres.iter().copied().filter(|&s| seen(&full_range, s)));
@@ -71,17 +80,17 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
             z_range.0, z_range.1
         )));
     }
-    let shadow = match mode.needs_shadow_pass(sensor.theta_deg) {
+    let shadow_grid = match shadow.mode.needs_shadow_pass(sensor.theta_deg) {
         false => None,
         true => {
             let to_shadow = sensor.to_shadow_frame();
             let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
-            let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z)?;
+            let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z, shadow.columns)?;
             let shadow_z = depth_bounds(in_shadow_frame.filter(|&s| seen(&columns, s)));
             Some(ViewGrid { z_range: shadow_z, ..columns })
         }
     };
-    for grid in std::iter::once(&range).chain(shadow.as_ref()) {
+    for grid in std::iter::once(&range).chain(shadow_grid.as_ref()) {
         if grid.width > max_side || grid.height > max_side {
             return Err(Error::Scene(format!(
                 "a {}×{} view exceeds this device's image limit of {max_side} pixels per side",
@@ -89,7 +98,7 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
             )));
         }
     }
-    Ok(Views { origin, range, shadow })
+    Ok(Views { origin, range, shadow: shadow_grid })
 }
 
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
@@ -98,16 +107,19 @@ pub(crate) fn plan_views(sensor: &Sensor, mode: ShadowMode, spheres: &[(DVec3, f
 /// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel. Measured
-/// before the range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
-fn render_memory(views: &Views, effects: &Effects, compute_raster: bool) -> u64 {
+/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel. In shadow
+/// mode `exact`, the CPU's casters and image (exact.rs) and their upload (20 bytes a pixel).
+/// Measured before the range view gained its gradient: a 16384² render peaked at 47 bytes
+/// per pixel.
+fn render_memory(views: &Views, effects: &Effects, compute_raster: bool, exact_triangles: Option<u64>) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
     let effect_bytes = if effects.is_empty() { 0 } else { 16 };
     let visibility = if compute_raster { 8 } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
     let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow;
-    rendering.max(60 * range)
+    let exact = exact_triangles.map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + 20) * range);
+    (rendering + exact).max(60 * range)
 }
 
 /// The two views of one render, with the grids they were rendered on.
@@ -172,16 +184,16 @@ impl Renderer {
         Slot::new(&self.ctx, &self.pipelines, effect_pipelines, raster_pipelines, &self.targets, shape, name)
     }
 
-    /// The pass list for jobs seen by this sensor in this shadow mode, with these effects.
+    /// The pass list for jobs seen by this sensor with these shadow settings and effects.
     pub(crate) fn passes<'a>(
         &'a self,
         sensor: &'a Sensor,
-        mode: ShadowMode,
+        shadow: ShadowSettings,
         effects: &'a Effects,
     ) -> Result<Passes<'a>> {
         let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
         let raster_pipelines = (self.raster == Raster::Compute).then(|| self.pipelines.compute_raster()).transpose()?;
-        Ok(Passes { pipelines: &self.pipelines, raster_pipelines, effect_pipelines, sensor, mode, effects })
+        Ok(Passes { pipelines: &self.pipelines, raster_pipelines, effect_pipelines, sensor, shadow, effects })
     }
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
@@ -189,6 +201,7 @@ impl Renderer {
         let sensor = &scene.sensor;
         sensor.validate()?;
         scene.effects.validate()?;
+        scene.shadow.validate()?;
         let label_bases = scene.label_bases()?;
         // Each model once, however many objects share it, and kept for the next render.
         let uploaded: Vec<Arc<GpuMesh>> =
@@ -207,10 +220,12 @@ impl Renderer {
                 (o.pose.transform_point3(centre), radius)
             })
             .collect();
-        let views = plan_views(&scene.sensor, scene.shadow.mode, &spheres, self.ctx.limits.max_image_dimension2_d)?;
+        let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.limits.max_image_dimension2_d)?;
+        let exact_triangles = (scene.shadow.mode == ShadowMode::Exact)
+            .then(|| scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum());
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, self.computes(draws.len())),
+            render_memory(&views, &scene.effects, self.computes(draws.len()), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws)
     }
@@ -219,6 +234,20 @@ impl Renderer {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
+        // Shadow mode `exact`: both rays cast on the CPU, timed on the wall clock.
+        let started = Instant::now();
+        let host_view = match scene.shadow.mode {
+            ShadowMode::Exact => {
+                let image = render_scene_exact(scene)?;
+                Some(HostView::new(ctx, &image, views.origin.z, "exact range view")?)
+            }
+            _ => None,
+        };
+        let cpu_time = host_view.as_ref().map(|_| PassTime {
+            name: "exact rays",
+            ms: Some(started.elapsed().as_secs_f64() * 1e3),
+            on_cpu: true,
+        });
         let job = Job {
             draws,
             first_draw_index: 0,
@@ -226,9 +255,10 @@ impl Renderer {
             area: views.range.full(),
             shadow_area: views.shadow.map(|g| g.full()),
             reflectivity_offset: 0,
+            host_view: host_view.as_ref(),
         };
         let shadow_table = draw_table(ctx, ViewKind::Shadow, &scene.sensor, [(views, draws)])?;
-        let compute = self.computes(draws.len());
+        let compute = self.computes(draws.len()) && host_view.is_none();
         let range_table =
             compute.then(|| draw_table(ctx, ViewKind::Range, &scene.sensor, [(views, draws)])).transpose()?.flatten();
         let effects = &scene.effects;
@@ -246,13 +276,14 @@ impl Renderer {
             effects: (!effects.is_empty())
                 .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
             compute_raster: range_table.as_ref().map(|t| (t, draws[0].mesh.index_count / 3)),
+            from_host: host_view.is_some(),
         };
         let slot = self.slot(&shape, "render")?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
-        let passes = self.passes(&scene.sensor, scene.shadow.mode, effects)?;
+        let passes = self.passes(&scene.sensor, scene.shadow, effects)?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
@@ -294,12 +325,12 @@ impl Renderer {
                 *label = 0;
             }
         }
-        let timings = clock.times()?;
+        let timings = cpu_time.into_iter().chain(clock.times()?).collect();
         Ok(RenderOutput {
             sensor: scene.sensor,
             shadow: scene.shadow,
             effects: scene.effects,
-            shadow_pass: views.shadow.is_some(),
+            shadow_pass: views.shadow.is_some() || host_view.is_some(),
             raster: if compute { Raster::Compute } else { Raster::Graphics },
             label,
             label_unshadowed,

@@ -2,6 +2,9 @@
 //!
 //! range raster → [shadow raster → shadow mask] → [each named effect] → sink
 //!
+//! or, in shadow mode `exact`, the range view and its shadowed labels copied from the host
+//! (host_view.rs) in place of the three passes before the effects.
+//!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
 //! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
@@ -11,6 +14,7 @@
 use super::compute_raster::{ComputeRasterPipelines, ComputeView};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
+use super::host_view::HostView;
 use super::pipelines::Pipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
@@ -21,7 +25,7 @@ use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Sensor};
-use crate::shadow::ShadowMode;
+use crate::shadow::ShadowSettings;
 use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
@@ -60,6 +64,9 @@ pub(crate) struct SlotShape<'a> {
     /// The range view's draw table and the most triangles of any draw, where the compute
     /// rasterizer renders (it reads the shadow view's table from `shadow`).
     pub compute_raster: Option<(&'a Buffer, u32)>,
+    /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
+    /// shadowed labels without a shadow view.
+    pub from_host: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -93,6 +100,9 @@ impl<'a> Slot<'a> {
             }
         };
         let (shadow, masked, mask_bindings) = match shape.shadow {
+            None if shape.from_host => {
+                (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None)
+            }
             None => (None, None, None),
             Some((shadow_width, draw_table)) => {
                 let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
@@ -168,6 +178,8 @@ pub(crate) struct Job<'a> {
     pub shadow_area: Option<PixelRect>,
     /// Where label 0 of this job's draws is in the reflectivity table.
     pub reflectivity_offset: u32,
+    /// The range view cast on the host, in shadow mode `exact`: copied in, not rendered.
+    pub host_view: Option<&'a HostView>,
 }
 
 /// Where a job's images go.
@@ -221,7 +233,7 @@ impl<'t> PassClock<'t> {
     pub fn times(&self) -> Result<Vec<PassTime>> {
         (0..)
             .zip(&self.names)
-            .map(|(i, &name)| Ok(PassTime { name, ms: self.timestamps.millis_between(i, i + 1)? }))
+            .map(|(i, &name)| Ok(PassTime { name, ms: self.timestamps.millis_between(i, i + 1)?, on_cpu: false }))
             .collect()
     }
 }
@@ -234,14 +246,14 @@ pub(crate) struct Passes<'a> {
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
     pub sensor: &'a Sensor,
-    pub mode: ShadowMode,
+    pub shadow: ShadowSettings,
     pub effects: &'a Effects,
 }
 
 impl Passes<'_> {
     /// Records one job's passes into the encoder's command buffer.
     pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, mut clock: Option<&mut PassClock>) {
-        let (p, sensor, mode) = (self.pipelines, self.sensor, self.mode);
+        let (p, sensor) = (self.pipelines, self.sensor);
         let cmd = enc.cmd;
         let views = job.views;
         // The compute rasterizer renders views of one draw (compute_raster.rs).
@@ -249,6 +261,9 @@ impl Passes<'_> {
             (Some(state), Some(rp), [draw]) => Some((state, rp, (job.first_draw_index, draw))),
             _ => None,
         };
+        if let Some(host_view) = job.host_view {
+            return self.record_from_host(enc, slot, job, host_view, sink, clock);
+        }
         if compute.is_none() {
             let mut prepare = Vec::new();
             for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
@@ -302,12 +317,49 @@ impl Passes<'_> {
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
-            bindings.record(cmd, p, &MaskConstants::new(sensor, mode, views, grid, job.area));
+            bindings.record(cmd, p, &MaskConstants::new(sensor, &self.shadow, views, grid, job.area));
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
             }
             shadowed_labels = Some(masked);
         }
+        self.record_effects_and_sink(enc, slot, job, shadowed_labels, sink, clock);
+    }
+
+    /// Records a job of shadow mode `exact`: its host view copied into the slot, then the
+    /// effects and the sink.
+    fn record_from_host(
+        &self,
+        enc: &mut Encoder,
+        slot: &Slot,
+        job: &Job,
+        host_view: &HostView,
+        sink: &Sink,
+        mut clock: Option<&mut PassClock>,
+    ) {
+        let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
+        if let Some(c) = &mut clock {
+            c.start(enc.cmd);
+        }
+        host_view.record(enc, &slot.range, shadowed);
+        if let Some(c) = &mut clock {
+            c.lap(enc.cmd, "exact upload");
+        }
+        self.record_effects_and_sink(enc, slot, job, Some(shadowed), sink, clock);
+    }
+
+    /// Records the named effects' passes and the sink, after the range view and (where any)
+    /// the shadowed labels were written.
+    fn record_effects_and_sink(
+        &self,
+        enc: &mut Encoder,
+        slot: &Slot,
+        job: &Job,
+        shadowed_labels: Option<&Buffer>,
+        sink: &Sink,
+        mut clock: Option<&mut PassClock>,
+    ) {
+        let (sensor, cmd, views) = (self.sensor, enc.cmd, job.views);
         if let (Some(buffers), Some(pipelines)) = (&slot.effects, self.effect_pipelines) {
             // No losses yet, and z 0.0 where no surface is (as the range view is cleared).
             let cleared: Vec<&Buffer> = std::iter::once(&buffers.losses).chain(&buffers.measured_z).collect();

@@ -11,7 +11,7 @@ use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{ComputePipeline, GpuContext, DEPTH_FORMAT};
-use crate::shadow::ShadowMode;
+use crate::shadow::{ShadowMode, SQUARE_LABEL_CODE};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -49,7 +49,7 @@ impl Pipelines {
             (MaskBindings::IMAGES, MaskBindings::BUFFERS),
             size_of::<MaskConstants>(),
             shaders::SHADOW_MASK_COMP,
-            &[ShadowMode::Label.shader_code()],
+            &[ShadowMode::Label.shader_code(), SQUARE_LABEL_CODE],
             "shadow mask",
         )?;
         let mut p = Self {

@@ -7,7 +7,7 @@ use super::Views;
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext, Image, StorageSet};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
-use crate::shadow::{ShadowMode, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
+use crate::shadow::{ShadowSettings, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
 use glam::DVec3;
 use std::sync::Arc;
@@ -35,7 +35,13 @@ const _: () = assert!(std::mem::offset_of!(MaskConstants, mode) == 80);
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
     /// views' local origin, as the views were rendered (draw.rs).
-    pub fn new(sensor: &Sensor, mode: ShadowMode, views: &Views, shadow: &ViewGrid, region: PixelRect) -> Self {
+    pub fn new(
+        sensor: &Sensor,
+        shadow_settings: &ShadowSettings,
+        views: &Views,
+        shadow: &ViewGrid,
+        region: PixelRect,
+    ) -> Self {
         let range = &views.range;
         let grid = |g: &ViewGrid, origin: DVec3| {
             [g.origin[0] - origin.x, g.origin[1] - origin.y, g.pitch[0], g.pitch[1]].map(|v| v as f32)
@@ -49,7 +55,7 @@ impl MaskConstants {
             sin_theta: sensor.theta().sin() as f32,
             bias_pitch: (DEPTH_BIAS_PIXELS * sensor.pitch[0]) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
-            mode: mode.shader_code(),
+            mode: shadow_settings.shader_code(),
             _pad: [0; 3],
         }
     }

@@ -16,14 +16,15 @@
 use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass};
 use crate::effects::Effects;
 use crate::error::Result;
+use crate::exact::{render_exact, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, plan_views, Draw, EffectShape, GpuMesh, Job, JobImages, Renderer, Sink, SinkKind, Slot, SlotShape,
-    ViewKind, Views,
+    draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
+    SlotShape, ViewKind, Views,
 };
 use crate::sensor::{PixelRect, Sensor};
-use crate::shadow::ShadowMode;
+use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
 
@@ -44,7 +45,7 @@ pub struct SensedBuffers<'a> {
 /// What is constant over a batch.
 pub struct BatchSettings<'a> {
     pub sensor: &'a Sensor,
-    pub mode: ShadowMode,
+    pub shadow: ShadowSettings,
     pub effects: &'a Effects,
     pub tolerance: f32,
     pub area_scale: f32,
@@ -81,7 +82,7 @@ impl BatchItem<'_> {
 pub(crate) fn batch_slot_memory(
     renderer: &Renderer,
     sensor: &Sensor,
-    mode: ShadowMode,
+    shadow: &ShadowSettings,
     effects: &Effects,
     posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
     hypotheses: usize,
@@ -89,7 +90,7 @@ pub(crate) fn batch_slot_memory(
     let max_side = renderer.context().limits.max_image_dimension2_d;
     let mut shadow_width = 0;
     for sphere in posed_spheres {
-        let views = plan_views(sensor, mode, &[sphere], max_side)?;
+        let views = plan_views(sensor, shadow, &[sphere], max_side)?;
         shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
     }
     let rows = u64::from(sensor.height);
@@ -118,10 +119,23 @@ pub(crate) fn count_batch(
         .iter()
         .map(|item| {
             let (centre, radius) = item.sphere;
-            plan_views(sensor, settings.mode, &[(item.pose.transform_point3(centre), radius)], max_side)
+            plan_views(sensor, &settings.shadow, &[(item.pose.transform_point3(centre), radius)], max_side)
         })
         .collect::<Result<_>>()?;
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
+    // Shadow mode `exact`: each hypothesis' range view cast on the CPU, to be copied in.
+    let host_views: Vec<HostView> = match settings.shadow.mode {
+        ShadowMode::Exact => items
+            .iter()
+            .zip(&views)
+            .map(|(item, views)| {
+                let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
+                let image = render_exact(sensor, &[object])?;
+                HostView::new(ctx, &image, views.origin.z, "exact range view")
+            })
+            .collect::<Result<_>>()?,
+        _ => Vec::new(),
+    };
     // Hypothesis i's labels 1..=M at reflectivity_offsets[i] + label; label 0 first.
     let default_reflectivity = settings.effects.reflectivity.map_or(1.0, |r| r.default);
     let mut reflectivity_offsets = Vec::with_capacity(items.len());
@@ -156,6 +170,7 @@ pub(crate) fn count_batch(
                 area,
                 shadow_area,
                 reflectivity_offset,
+                host_view: host_views.get(index as usize),
             })
         })
         .collect();
@@ -163,7 +178,7 @@ pub(crate) fn count_batch(
     let groups = || views.iter().zip(draws.iter().map(|d| d.as_slice()));
     let shadow_table = draw_table(ctx, ViewKind::Shadow, sensor, groups())?;
     // Every hypothesis is a view of one draw.
-    let range_table = match renderer.computes(1) {
+    let range_table = match renderer.computes(1) && host_views.is_empty() {
         true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
         false => None,
     };
@@ -175,6 +190,7 @@ pub(crate) fn count_batch(
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
         compute_raster: range_table.as_ref().zip(items.iter().map(|i| i.mesh.index_count / 3).max()),
+        from_host: !host_views.is_empty(),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
@@ -202,7 +218,7 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(sensor, settings.mode, settings.effects)?;
+    let passes = renderer.passes(sensor, settings.shadow, settings.effects)?;
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
         enc.access(&[], &[(&counts, Access::TransferWrite)]);

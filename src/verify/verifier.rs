@@ -20,7 +20,7 @@ use crate::mesh::Mesh;
 use crate::render::{GpuMesh, Renderer};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
-use crate::shadow::ShadowMode;
+use crate::shadow::ShadowSettings;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -50,7 +50,7 @@ pub struct Hypothesis {
 #[derive(Debug, Clone, Copy)]
 pub struct VerifySettings {
     pub sensor: Sensor,
-    pub shadow: ShadowMode,
+    pub shadow: ShadowSettings,
     /// The sensor effects applied to the synthetic images.
     pub effects: Effects,
     /// τ, model units.
@@ -135,6 +135,7 @@ impl Verifier {
         let sensor = &settings.sensor;
         sensor.validate()?;
         settings.effects.validate()?;
+        settings.shadow.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
             return Err(Error::Scene(format!(
                 "the sensed image is {}×{} but the sensor is {}×{}",
@@ -179,7 +180,7 @@ impl Verifier {
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
         let slots =
-            batch_slot_memory(&self.renderer, sensor, settings.shadow, &settings.effects, posed, hypotheses.len())?;
+            batch_slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // The sensed image on the host and the GPU, the slots, and the counts with their
         // readback.
@@ -210,7 +211,7 @@ impl Verifier {
         let on_gpu = sensed.on_gpu(ctx)?;
         let batch = BatchSettings {
             sensor,
-            mode: settings.shadow,
+            shadow: settings.shadow,
             effects: &settings.effects,
             tolerance: settings.tolerance as f32,
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
@@ -253,7 +254,7 @@ impl Verifier {
                 })
                 .collect();
             let words = count_batch(&self.renderer, &self.score_pass, &batch, &items, offset)?;
-            let shadow_pass = settings.shadow.needs_shadow_pass(sensor.theta_deg);
+            let shadow_pass = settings.shadow.mode.shadows(sensor.theta_deg);
             for (h, item) in chunk.iter().zip(&items) {
                 let l = layout(h);
                 let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()], sensed.valid);

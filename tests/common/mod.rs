@@ -67,7 +67,7 @@ pub fn centred_sensor(width: u32, height: u32, pitch: f64, centre: [f64; 2], the
 pub fn scene(sensor: Sensor, mode: ShadowMode, objects: &[(&str, DMat4)]) -> Scene {
     Scene {
         sensor,
-        shadow: ShadowSettings { mode },
+        shadow: ShadowSettings::of(mode),
         effects: Effects::default(),
         objects: objects
             .iter()

@@ -35,6 +35,10 @@ pub struct Reference {
     /// surface edge as the camera sees it, which is where shadow boundaries are cast and
     /// where a shadow buffer of that pitch cannot decide.
     pub near_camera_edge: Vec<bool>,
+    /// Whether the primary ray meets more than one triangle at the front depth (within the tie
+    /// tolerance): the pixel centre lies on an edge or a vertex, or on coincident faces, and
+    /// which triangle's plane it takes is a matter of rule.
+    pub tied: Vec<bool>,
 }
 
 impl Reference {
@@ -211,6 +215,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
         occluded: vec![false; width * height],
         camera_label: vec![0; width * height],
         near_camera_edge: vec![false; width * height],
+        tied: vec![false; width * height],
     };
     let tie = TIE_RELATIVE * scale;
     let first_seen = |p: DVec2| camera.front(p, tie).map_or(0, |(_, l, _)| l);
@@ -222,6 +227,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
             let Some((z, label, t)) = range.front(DVec2::new(x, y), tie) else { continue };
             reference.label[i] = label;
             reference.z[i] = z;
+            reference.tied[i] = range.hits(DVec2::new(x, y)).filter(|h| h.0 >= z - tie).count() > 1;
             let [a, b, c] = t.corners;
             let normal = (b - a).cross(c - a).normalize();
             reference.normal_z[i] = normal.z.abs();

@@ -1,0 +1,191 @@
+//! Shadow mode `exact` (src/shadow.rs): the range image by two rays in f64 at every pixel
+//! centre, on the CPU. The product's own ground truth, against which `rangesynth accuracy`
+//! measures the GPU modes, and the slow end of that curve.
+//!
+//! The first ray travels down −z from the pixel centre; the nearest surface it meets gives the
+//! pixel's label, z and plane. The second travels from that point p toward the camera, along
+//! d_cam; rotated by R_y(−θ) it travels down −z too, so both rays ask one question of a
+//! [`VerticalCaster`]: which triangles lie over (x, y), and at what heights. Each caster
+//! answers it from a bounding-volume hierarchy (parry3d-f64's) over the triangles' extents,
+//! with an exact f64 point-in-triangle test, edges included.
+//!
+//! The point is shadowed when its surface's lit side turns away from the camera (n · d_cam ≤ 0,
+//! however thin the surface, as in depth mode) or when any surface lies above p on the camera
+//! ray. Coincident faces follow the product's tie rule (README "the tie rule"): surfaces within
+//! [`TIE_RELATIVE`] of the scene's largest coordinate of the nearest are a tie, won by the
+//! lowest label, and they do not shadow each other. Rows are cast in parallel (rayon).
+
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::sensor::Sensor;
+use glam::{DMat4, DVec2, DVec3};
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector as BvhVector;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use rayon::prelude::*;
+
+/// Heights this close, relative to the scene's largest coordinate, are a tie: 2^-17, the GPU
+/// paths' tie tolerance (shaders/draw.glsl `TIE_RELATIVE`).
+pub const TIE_RELATIVE: f64 = 1.0 / 131072.0;
+
+/// n · d_cam (unit normal) at or below which a surface counts as turned away from the camera:
+/// one seen exactly edge-on, up to the rounding of its posed corners, is not measured.
+const FACING_TOLERANCE: f64 = 1e-9;
+
+/// Bytes exact mode takes per triangle (its two casters: corners, label, bounds and their
+/// hierarchy) and per pixel (the image it returns), for memory budgets.
+pub const BYTES_PER_TRIANGLE: u64 = 2 * (3 * 24 + 8 + 48 + 96);
+pub const BYTES_PER_PIXEL: u64 = 4 + 4 + 8 + 16;
+
+/// One object of the scene: a mesh, its pose (model → range frame) and the label of its
+/// surface 0 (its surface s is labelled `label_base + s`).
+#[derive(Clone, Copy)]
+pub struct ExactObject<'a> {
+    pub mesh: &'a Mesh,
+    pub pose: DMat4,
+    pub label_base: u32,
+}
+
+/// The range image exact ray casting sees, unshadowed and shadowed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExactImage {
+    pub width: u32,
+    pub height: u32,
+    /// Label of the first surface along −z at each pixel centre, 0 for none.
+    pub label: Vec<u32>,
+    /// `label`, with 0 where the camera cannot see the point.
+    pub shadowed: Vec<u32>,
+    /// z of the first hit (range frame); 0 where there is none.
+    pub z: Vec<f64>,
+    /// (∂z/∂x, ∂z/∂y) of the hit triangle's plane, which effects such as grazing read; 0 where
+    /// there is no hit.
+    pub gradient: Vec<[f64; 2]>,
+}
+
+struct Triangle {
+    corners: [DVec3; 3],
+    label: u32,
+}
+
+/// Triangles in one frame, with a hierarchy over their bounds: answers which triangles lie
+/// over a point (x, y), and at what heights.
+struct VerticalCaster {
+    triangles: Vec<Triangle>,
+    bvh: Bvh,
+}
+
+impl VerticalCaster {
+    fn new(triangles: Vec<Triangle>) -> Self {
+        let to_bvh = |v: DVec3| BvhVector::new(v.x, v.y, v.z);
+        let bounds: Vec<Aabb> = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.corners;
+                Aabb::new(to_bvh(a.min(b).min(c)), to_bvh(a.max(b).max(c)))
+            })
+            .collect();
+        Self { bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &bounds), triangles }
+    }
+
+    /// (height, index, triangle) of every triangle whose xy projection holds p, edges included.
+    fn hits(&self, p: DVec2) -> impl Iterator<Item = (f64, u32, &Triangle)> + '_ {
+        let column = Aabb::new(BvhVector::new(p.x, p.y, -f64::MAX), BvhVector::new(p.x, p.y, f64::MAX));
+        let leaves: Vec<u32> = self.bvh.intersect_aabb(&column).collect();
+        leaves.into_iter().filter_map(move |i| {
+            let t = &self.triangles[i as usize];
+            height_over(&t.corners, p).map(|z| (z, i, t))
+        })
+    }
+
+    /// The nearest surface over p and its height: the largest height; among heights within
+    /// `tie` of it, the lowest label, and of that label's triangles (a point on an edge, or a
+    /// vertex) the first in scene order, whose plane gives z and which way the surface faces.
+    fn front(&self, p: DVec2, tie: f64) -> Option<(f64, &Triangle)> {
+        let hits: Vec<(f64, u32, &Triangle)> = self.hits(p).collect();
+        let top = hits.iter().map(|h| h.0).max_by(f64::total_cmp)?;
+        let (z, _, triangle) = hits.into_iter().filter(|h| h.0 >= top - tie).min_by_key(|h| (h.2.label, h.1))?;
+        Some((z, triangle))
+    }
+}
+
+/// The height of the triangle over p, interpolated from its corners, when p lies inside its xy
+/// projection (edges included); `None` outside, or for a triangle seen exactly edge-on.
+fn height_over(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
+    let [a, b, d] = c.map(|v| v.truncate());
+    let area = (b - a).perp_dot(d - a);
+    if area == 0.0 {
+        return None;
+    }
+    let w = [(b - p).perp_dot(d - p), (d - p).perp_dot(a - p), (a - p).perp_dot(b - p)].map(|w| w / area);
+    w.iter().all(|&w| w >= 0.0).then(|| w[0] * c[0].z + w[1] * c[1].z + w[2] * c[2].z)
+}
+
+fn posed_triangles(objects: &[ExactObject], frame: DMat4) -> Vec<Triangle> {
+    let mut out = Vec::new();
+    for object in objects {
+        let m = frame * object.pose;
+        let mesh = object.mesh;
+        for (triangle, &surface) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
+            let corners = triangle.map(|v| m.transform_point3(mesh.vertex(v)));
+            out.push(Triangle { corners, label: object.label_base + surface });
+        }
+    }
+    out
+}
+
+/// Casts both rays at every pixel centre of the scene's image, its objects labelled as the
+/// GPU modes label them (`Scene::label_bases`).
+pub fn render_scene_exact(scene: &Scene) -> Result<ExactImage> {
+    let objects: Vec<ExactObject> = scene
+        .objects
+        .iter()
+        .zip(scene.label_bases()?)
+        .map(|(object, label_base)| ExactObject { mesh: &object.mesh, pose: object.pose, label_base })
+        .collect();
+    render_exact(&scene.sensor, &objects)
+}
+
+/// Casts both rays at every pixel centre of the sensor's image.
+pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactImage> {
+    sensor.validate()?;
+    let range = VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY));
+    let to_camera = sensor.to_shadow_frame();
+    let camera = VerticalCaster::new(posed_triangles(objects, to_camera));
+    let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    if !scale.is_finite() {
+        return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
+    }
+    let tie = TIE_RELATIVE * scale;
+    let d_cam = sensor.camera_direction();
+    let (width, height) = (sensor.width, sensor.height);
+    // One pixel: (label, shadowed label, z, gradient).
+    let cast = |col: u32, row: u32| -> (u32, u32, f64, [f64; 2]) {
+        let (x, y) = sensor.pixel_centre(col, row);
+        let Some((z, triangle)) = range.front(DVec2::new(x, y), tie) else {
+            return (0, 0, 0.0, [0.0; 2]);
+        };
+        let [a, b, c] = triangle.corners;
+        let normal = (b - a).cross(c - a).normalize();
+        let gradient = [-normal.x / normal.z, -normal.y / normal.z];
+        let lit_side = normal * normal.z.signum();
+        let p = to_camera.transform_point3(DVec3::new(x, y, z));
+        let occluded =
+            lit_side.dot(d_cam) <= FACING_TOLERANCE || camera.hits(p.truncate()).any(|(above, _, _)| above > p.z + tie);
+        let label = triangle.label;
+        (label, if occluded { 0 } else { label }, z, gradient)
+    };
+    let pixels: Vec<(u32, u32, f64, [f64; 2])> = (0..height)
+        .into_par_iter()
+        .flat_map_iter(|row| (0..width).map(move |col| (col, row)))
+        .map(|(col, row)| cast(col, row))
+        .collect();
+    Ok(ExactImage {
+        width,
+        height,
+        label: pixels.iter().map(|p| p.0).collect(),
+        shadowed: pixels.iter().map(|p| p.1).collect(),
+        z: pixels.iter().map(|p| p.2).collect(),
+        gradient: pixels.iter().map(|p| p.3).collect(),
+    })
+}
