@@ -1,6 +1,7 @@
 //! rangesynth: realistic range images (triangulation shadows included) for verifying 3D
 //! object hypotheses, rendered with explicit Vulkan. See README.md and DESIGN.md.
 
+pub mod accuracy;
 pub mod effects;
 pub mod error;
 pub mod exact;
@@ -9,6 +10,7 @@ pub mod gpu;
 pub mod io;
 pub mod limits;
 pub mod mesh;
+mod plot;
 pub mod pose;
 pub mod render;
 pub mod render_output;

@@ -1,7 +1,9 @@
 //! The `rangesynth` command line: `render` a scene file, run the `demo` on the embedded
-//! default scene, or `verify` hypotheses against a sensed image. Errors come back as values;
+//! default scene, `verify` hypotheses against a sensed image, or measure what `accuracy`
+//! costs in time. Errors come back as values;
 //! `main` prints them and exits non-zero.
 
+mod accuracy;
 mod verify;
 
 use anyhow::{Context, Result};
@@ -56,6 +58,9 @@ enum Command {
     },
     /// Score the hypotheses of HYPS.json against a sensed range image; one JSON line each.
     Verify(verify::VerifyArgs),
+    /// Measure what accuracy costs in time: every shadow setting on standard scenes against
+    /// exact ray casting, into DIR/accuracy.csv and DIR/accuracy.png.
+    Accuracy(accuracy::AccuracyArgs),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -78,6 +83,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
         Command::Verify(args) => return verify::run(&options, budget, cli.raster, &args),
+        Command::Accuracy(args) => return accuracy::run(&options, budget, &args),
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;

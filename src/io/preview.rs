@@ -113,7 +113,7 @@ fn label_colour(label: u32) -> [u8; 3] {
     [r, g, b].map(|x| (x * 255.0).round() as u8)
 }
 
-fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[u8]) -> Result<()> {
+pub(crate) fn write_rgb(path: &Path, width: u32, height: u32, pixels: &[u8]) -> Result<()> {
     write_atomically(path, |file| {
         // Unbuffered: the encoder writes whole chunks, and an error on a buffered flush at drop
         // would be lost.

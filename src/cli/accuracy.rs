@@ -1,0 +1,80 @@
+//! `rangesynth accuracy`: the sweep of src/accuracy/ with a progress bar; writes
+//! `DIR/accuracy.csv` and `DIR/accuracy.png` together and prints the table.
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use rangesynth::accuracy::{self, standard_scenes, sweep_settings, SweepOptions, SweepScene, SweepVerifiers, Table};
+use rangesynth::gpu::ContextOptions;
+use rangesynth::io::{refuse_overwriting_inputs, StagedSet};
+use rangesynth::limits::MemoryBudget;
+use rangesynth::render::Raster;
+use rangesynth::verify::Verifier;
+use rangesynth::Renderer;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct AccuracyArgs {
+    /// Write accuracy.csv and accuracy.png into this directory.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// A smaller sweep (128² images, fewer settings and poses) that finishes in a few minutes
+    /// on lavapipe.
+    #[arg(long)]
+    quick: bool,
+    /// Also measure this scene file (its effects are left out); may be repeated.
+    #[arg(long = "scene", value_name = "FILE")]
+    scenes: Vec<PathBuf>,
+}
+
+const FILES: [&str; 2] = ["accuracy.csv", "accuracy.png"];
+
+pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) -> Result<()> {
+    let outputs = FILES.map(|name| args.out.join(name));
+    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), args.scenes.iter().map(PathBuf::as_path))?;
+    let (size, dense, poses, reference_tessellation) = match args.quick {
+        true => (128, 160, 8, 512),
+        false => (256, 320, 32, accuracy::REFERENCE_TESSELLATION),
+    };
+    let mut scenes = standard_scenes(size, dense)?;
+    for path in &args.scenes {
+        scenes.push(SweepScene::from_file(path, budget)?);
+    }
+    let renderer = Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget);
+    let ctx = renderer.context().clone();
+    let graphics = Verifier::new(renderer)?;
+    let compute = match ctx.supports_compute_raster() {
+        true => Some(Verifier::new(
+            Renderer::with_context(ctx.clone())?.with_memory_budget(budget).with_raster(Raster::Compute),
+        )?),
+        false => None,
+    };
+    let settings = sweep_settings(args.quick, compute.is_some());
+    let cells = accuracy::cells(&settings, &scenes)?.len();
+    let bar = match std::io::stderr().is_terminal() {
+        true => ProgressBar::new(cells as u64),
+        false => ProgressBar::hidden(),
+    };
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}, eta {eta}").expect("valid template"));
+    let verifiers = SweepVerifiers { graphics: &graphics, compute: compute.as_ref() };
+    let options = SweepOptions { poses, reference_tessellation };
+    let mut started = 0;
+    let rows = accuracy::sweep(&verifiers, &settings, &scenes, options, &mut |cell| {
+        bar.set_position(started);
+        bar.set_message(cell.to_string());
+        started += 1;
+    })?;
+    bar.finish_and_clear();
+
+    let staged = StagedSet::new(&args.out)?;
+    accuracy::write_csv(&staged.staged(FILES[0]), &rows)?;
+    accuracy::write_plot(&staged.staged(FILES[1]), &rows)?;
+    let written = staged.commit(&FILES)?;
+    println!("device: {}", ctx.device_name());
+    print!("{}", Table(&rows));
+    println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    for verifier in std::iter::once(&graphics).chain(compute.as_ref()) {
+        super::check_validation(verifier.renderer())?;
+    }
+    Ok(())
+}
