@@ -201,6 +201,32 @@ fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
 }
 
 #[test]
+fn exact_mode_scores_the_same_alone_or_in_chunks() {
+    let sensor = test_sensor(45.0);
+    let (_, sensed) = sensed(sensor);
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let models = ["builtin:step", "builtin:box", "builtin:sphere:16"];
+    let mut hypotheses: Vec<Hypothesis> = (0..19)
+        .map(|i| {
+            let pose = DMat4::from_translation(DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 0.0))
+                * DMat4::from_rotation_z(rng.gen_range(0.0..6.3));
+            hypothesis(&format!("h{i}"), models[i % 3], pose, &[(1, 1), (2, 1)])
+        })
+        .collect();
+    hypotheses.push(correct());
+    let base = settings(sensor, ShadowMode::Exact);
+    // 20 hypotheses: more than one exact-mode chunk (EXACT_CHUNK).
+    assert!(hypotheses.len() > rangesynth::verify::EXACT_CHUNK);
+    let batch = verify(&sensed, &VerifySettings { chunk_size: 1024, ..base }, &hypotheses);
+    for (h, b) in hypotheses.iter().zip(&batch) {
+        let alone = verify(&sensed, &base, std::slice::from_ref(h)).remove(0);
+        assert_eq!(alone.counts, b.counts, "{}", h.id);
+        assert_eq!(alone.scores.s.to_bits(), b.scores.s.to_bits(), "{}", h.id);
+    }
+    assert!(batch.last().unwrap().scores.s > 0.5, "the correct hypothesis scores high in exact mode");
+}
+
+#[test]
 fn a_batch_of_1024_runs_in_chunks() {
     let sensor = centred_sensor(64, 64, 0.07, [0.0, 0.0], 45.0);
     let (_, sensed) = sensed(sensor);

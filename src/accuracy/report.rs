@@ -63,6 +63,24 @@ impl fmt::Display for Table<'_> {
     }
 }
 
+/// Each setting's means over its scenes, as the command prints them after the table, the
+/// Pareto front's settings marked `*`.
+pub struct Summary<'a>(pub &'a [Row]);
+
+impl fmt::Display for Summary<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let summaries = summarise(self.0);
+        let front = pareto_front(summaries.iter().filter(|s| !s.tessellated));
+        writeln!(f, "\nmeans over scenes (* on the Pareto front; N= settings: curved scenes only)")?;
+        writeln!(f, "  {:<18} {:>9} {:>9}", "setting", "wrong %", "ms/pose")?;
+        for s in &summaries {
+            let mark = if front.iter().any(|p| p.setting == s.setting) { '*' } else { ' ' };
+            writeln!(f, "{mark} {:<18} {:>9.3} {:>9.2}", s.setting, s.wrong_pct, s.ms_per_pose)?;
+        }
+        Ok(())
+    }
+}
+
 /// One setting over its scenes: mean time per pose and mean % wrong pixels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SettingSummary {

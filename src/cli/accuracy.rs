@@ -3,7 +3,9 @@
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use rangesynth::accuracy::{self, standard_scenes, sweep_settings, SweepOptions, SweepScene, SweepVerifiers, Table};
+use rangesynth::accuracy::{
+    self, standard_scenes, sweep_settings, Summary, SweepOptions, SweepScene, SweepVerifiers, Table,
+};
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{refuse_overwriting_inputs, StagedSet};
 use rangesynth::limits::MemoryBudget;
@@ -32,9 +34,11 @@ const FILES: [&str; 2] = ["accuracy.csv", "accuracy.png"];
 pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) -> Result<()> {
     let outputs = FILES.map(|name| args.out.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), args.scenes.iter().map(PathBuf::as_path))?;
-    let (size, dense, poses, reference_tessellation) = match args.quick {
-        true => (128, 160, 8, 512),
-        false => (256, 320, 32, accuracy::REFERENCE_TESSELLATION),
+    let (size, dense, sweep_options) = match args.quick {
+        true => (128, 160, SweepOptions { poses: 8, runs: 2, reference_tessellation: 512 }),
+        false => {
+            (256, 320, SweepOptions { poses: 32, runs: 3, reference_tessellation: accuracy::REFERENCE_TESSELLATION })
+        }
     };
     let mut scenes = standard_scenes(size, dense)?;
     for path in &args.scenes {
@@ -57,9 +61,8 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) 
     };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}, eta {eta}").expect("valid template"));
     let verifiers = SweepVerifiers { graphics: &graphics, compute: compute.as_ref() };
-    let options = SweepOptions { poses, reference_tessellation };
     let mut started = 0;
-    let rows = accuracy::sweep(&verifiers, &settings, &scenes, options, &mut |cell| {
+    let rows = accuracy::sweep(&verifiers, &settings, &scenes, sweep_options, &mut |cell| {
         bar.set_position(started);
         bar.set_message(cell.to_string());
         started += 1;
@@ -72,6 +75,7 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) 
     let written = staged.commit(&FILES)?;
     println!("device: {}", ctx.device_name());
     print!("{}", Table(&rows));
+    print!("{}", Summary(&rows));
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     for verifier in std::iter::once(&graphics).chain(compute.as_ref()) {
         super::check_validation(verifier.renderer())?;

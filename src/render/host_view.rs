@@ -23,6 +23,8 @@ const MAX_GRADIENT: f64 = 1e30;
 impl HostView {
     /// Planes 0..4 are the attachments; plane 4 the shadowed labels.
     const PLANES: usize = ViewKind::Range.colour_attachments().len() + 1;
+    /// Bytes a pixel takes (a word per plane).
+    pub const BYTES_PER_PIXEL: u64 = 4 * Self::PLANES as u64;
 
     /// z is stored as the range view stores it: an f32 offset from `z_origin` where a surface
     /// was hit, 0.0 elsewhere (draw.rs).

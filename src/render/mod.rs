@@ -108,7 +108,7 @@ pub(crate) fn plan_views(
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
 /// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel. In shadow
-/// mode `exact`, the CPU's casters and image (exact.rs) and their upload (20 bytes a pixel).
+/// mode `exact`, the CPU's casters and image (exact.rs) and their upload (host_view.rs).
 /// Measured before the range view gained its gradient: a 16384² render peaked at 47 bytes
 /// per pixel.
 fn render_memory(views: &Views, effects: &Effects, compute_raster: bool, exact_triangles: Option<u64>) -> u64 {
@@ -118,7 +118,8 @@ fn render_memory(views: &Views, effects: &Effects, compute_raster: bool, exact_t
     let visibility = if compute_raster { 8 } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
     let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow;
-    let exact = exact_triangles.map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + 20) * range);
+    let exact = exact_triangles
+        .map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + HostView::BYTES_PER_PIXEL) * range);
     (rendering + exact).max(60 * range)
 }
 

@@ -17,4 +17,6 @@ pub use hypothesis::{HypothesisEntry, HypothesisFile, DEFAULT_TOLERANCE};
 pub use report::{CountsRecord, Record, ScoresRecord};
 pub use scores::{score, BindingDetail, Scores};
 pub use sensed::SensedImage;
-pub use verifier::{Hypothesis, Model, Verification, Verifier, VerifySettings, CHUNK_COUNTS_BUDGET, MAX_CHUNK};
+pub use verifier::{
+    Hypothesis, Model, Verification, Verifier, VerifySettings, CHUNK_COUNTS_BUDGET, EXACT_CHUNK, MAX_CHUNK,
+};

@@ -6,7 +6,8 @@
 //! size comes from the device (a sixteenth of its device-local heap, at most
 //! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
 //! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
-//! image.
+//! image. In shadow mode `exact` a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose images
+//! are cast on the CPU before it is submitted.
 
 use super::area::unit_scale;
 use super::batch::{batch_slot_memory, count_batch, BatchItem, BatchSettings, SensedBuffers};
@@ -16,11 +17,13 @@ use super::scores::{score, Scores};
 use super::sensed::SensedImage;
 use crate::effects::Effects;
 use crate::error::{Error, Result};
+use crate::exact;
 use crate::mesh::Mesh;
+use crate::render::HostView;
 use crate::render::{GpuMesh, Renderer};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
-use crate::shadow::ShadowSettings;
+use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -28,6 +31,10 @@ use std::sync::{Arc, Mutex};
 
 /// Most hypotheses recorded into one command buffer.
 pub const MAX_CHUNK: usize = 1024;
+/// Most hypotheses in one chunk in shadow mode `exact`, whose images are cast on the CPU and
+/// held until the chunk's submission: it bounds their memory.
+pub const EXACT_CHUNK: usize = 16;
+
 /// Most bytes of counts one chunk may hold (less on a device with a small heap).
 pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
 
@@ -182,13 +189,24 @@ impl Verifier {
         let slots =
             batch_slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, hypotheses.len())?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
+        // Shadow mode `exact`: one chunk's images cast on the CPU, and the casters of one.
+        let exact_bytes = match settings.shadow.mode {
+            ShadowMode::Exact => {
+                let images = hypotheses.len().min(EXACT_CHUNK) as u64;
+                let triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
+                let pixels = u64::from(sensor.width) * u64::from(sensor.height);
+                images * (HostView::BYTES_PER_PIXEL + exact::BYTES_PER_PIXEL) * pixels
+                    + triangles * exact::BYTES_PER_TRIANGLE
+            }
+            _ => 0,
+        };
         // The sensed image on the host and the GPU, the slots, and the counts with their
         // readback.
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
         self.renderer.memory_budget().check(
             format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
-            sensed_bytes + slots + 2 * counts,
+            sensed_bytes + slots + 2 * counts + exact_bytes,
         )?;
         Ok(plan)
     }
@@ -222,13 +240,17 @@ impl Verifier {
             },
         };
         let mut results = Vec::with_capacity(hypotheses.len());
+        let chunk_cap = match settings.shadow.mode {
+            ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
+            _ => settings.chunk_size.clamp(1, MAX_CHUNK),
+        };
         let mut start = 0;
         while start < hypotheses.len() {
             // Grow the chunk while its counts fit the budget.
             let mut end = start;
             let mut bytes = 0;
             while end < hypotheses.len()
-                && end - start < settings.chunk_size.clamp(1, MAX_CHUNK)
+                && end - start < chunk_cap
                 && bytes + per_hypothesis(&hypotheses[end]) <= counts_budget
             {
                 bytes += per_hypothesis(&hypotheses[end]);
