@@ -124,6 +124,18 @@ fn the_quick_sweep_writes_a_csv_that_parses_and_a_plot() {
 }
 
 #[test]
+fn a_scene_without_objects_is_refused() {
+    let d = dir("empty");
+    let scene_path = d.join("empty.toml");
+    std::fs::write(&scene_path, &SCENE[..SCENE.find("[[object]]").unwrap()]).unwrap();
+    let out = accuracy(&["--quick", "--out", d.join("out").to_str().unwrap(), "--scene", scene_path.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("empty.toml") && stderr.contains("first object"), "{stderr}");
+    assert!(!d.join("out").exists(), "nothing is written");
+}
+
+#[test]
 fn an_output_that_names_an_input_is_refused() {
     let d = dir("refused");
     let scene_path = d.join("accuracy.csv");

@@ -5,7 +5,7 @@
 
 use super::settings::retessellated;
 use crate::effects::Effects;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::limits::MemoryBudget;
 use crate::mesh::builtin_mesh;
 use crate::scene::{Scene, SceneObject};
@@ -30,9 +30,13 @@ pub struct SweepScene {
 }
 
 impl SweepScene {
-    /// A scene file, named by its file name without extension; its effects are left out.
+    /// A scene file, named by its file name without extension; its effects are left out. Its
+    /// first object is the part whose correct hypothesis is scored, so it needs one.
     pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
         let scene = Scene { effects: Effects::default(), ..Scene::from_file(path, budget)? };
+        if scene.objects.is_empty() {
+            return Err(Error::file(path, "the accuracy sweep scores the scene's first object, and it has none"));
+        }
         let name = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
         // A comma would split the scene's CSV field.
         let name = name.replace(',', ";");
