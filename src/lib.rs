@@ -6,6 +6,7 @@ pub mod effects;
 pub mod error;
 pub mod exact;
 mod exact_array;
+pub mod experiment;
 pub mod gpu;
 pub mod io;
 pub mod limits;

@@ -1,9 +1,10 @@
 //! The `rangesynth` command line: `render` a scene file, run the `demo` on the embedded
-//! default scene, `verify` hypotheses against a sensed image, or measure what `accuracy`
-//! costs in time. Errors come back as values;
+//! default scene, `verify` hypotheses against a sensed image, measure what `accuracy` costs in
+//! time, or run the paper's `experiment`. Errors come back as values;
 //! `main` prints them and exits non-zero.
 
 mod accuracy;
+mod experiment;
 mod verify;
 
 use anyhow::{Context, Result};
@@ -61,6 +62,9 @@ enum Command {
     /// Measure what accuracy costs in time: every shadow setting on standard scenes against
     /// exact ray casting, into DIR/accuracy.csv and DIR/accuracy.png.
     Accuracy(accuracy::AccuracyArgs),
+    /// The paper's experiment on a synthetic benchmark: does shadowing separate correct from
+    /// incorrect hypotheses? Writes views, scores, table.md, summary.json and scores.png into DIR.
+    Experiment(experiment::ExperimentArgs),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -84,6 +88,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
         Command::Verify(args) => return verify::run(&options, budget, cli.raster, &args),
         Command::Accuracy(args) => return accuracy::run(&options, budget, &args),
+        Command::Experiment(args) => return experiment::run(&options, budget, &args),
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
