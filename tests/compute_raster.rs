@@ -22,11 +22,19 @@ static COMPUTE: LazyLock<Verifier> = LazyLock::new(|| {
     Verifier::new(renderer.with_raster(Raster::Compute)).expect("verifier")
 });
 
-fn render_compute(scene: &Scene) -> RenderOutput {
-    let out = COMPUTE.renderer().render(scene).unwrap_or_else(|e| panic!("compute render failed: {e}"));
-    let messages = COMPUTE.renderer().context().take_validation_messages();
+/// A third, choosing per view (the library's and the command line's default).
+static AUTO: LazyLock<Verifier> =
+    LazyLock::new(|| Verifier::new(test_renderer(None).with_raster(Raster::Auto)).expect("verifier"));
+
+fn render_with(verifier: &Verifier, scene: &Scene) -> RenderOutput {
+    let out = verifier.renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
+    let messages = verifier.renderer().context().take_validation_messages();
     assert!(messages.is_empty(), "validation: {}", messages.join("\n"));
     out
+}
+
+fn render_compute(scene: &Scene) -> RenderOutput {
+    render_with(&COMPUTE, scene)
 }
 
 fn turned() -> DMat4 {
@@ -70,6 +78,25 @@ fn a_view_of_several_objects_stays_on_the_graphics_path() {
 }
 
 #[test]
+fn auto_takes_the_compute_rasterizer_for_dense_models_only() {
+    assert_eq!(Raster::default(), Raster::Auto);
+    let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 45.0);
+    // Footprints with their 2-pixel margins: the sphere's about 33² pixels, so 3,968 triangles
+    // are 3.6 a pixel; the box's about 54² pixels, so 12 triangles are 0.004 a pixel. The
+    // crossover is 0.05.
+    for (objects, expected) in [
+        (vec![("builtin:sphere:64", DMat4::IDENTITY)], Raster::Compute),
+        (vec![("builtin:box", turned())], Raster::Graphics),
+        (vec![("builtin:sphere:64", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)], Raster::Graphics),
+    ] {
+        let sc = scene(s, ShadowMode::Depth, &objects);
+        let auto = render_with(&AUTO, &sc);
+        assert_eq!(auto.raster, expected, "{objects:?}");
+        assert!(auto.label == render(&sc).label, "{objects:?}: the same image as the graphics pipeline's");
+    }
+}
+
+#[test]
 fn verification_counts_are_the_same_bits_with_either_rasterizer() {
     let s = centred_sensor(96, 96, 0.045, [0.0, 0.0], 45.0);
     let step = DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44);
@@ -105,5 +132,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         assert!(messages.is_empty(), "validation: {}", messages.join("\n"));
         out.into_iter().map(|v| (v.counts, v.unshadowed.map(|(c, _)| c))).collect::<Vec<_>>()
     };
-    assert_eq!(counts(&COMPUTE), counts(&VERIFIER));
+    let graphics = counts(&VERIFIER);
+    assert_eq!(counts(&COMPUTE), graphics);
+    // Auto mixes both in one batch: the sphere by compute, the step and the box by graphics.
+    assert_eq!(counts(&AUTO), graphics);
 }

@@ -4,7 +4,10 @@
 //! submission) each, so the batching gain shows as a ratio.
 //!
 //! A third table compares the rasterizers (src/render/compute_raster.rs): the same batches
-//! verified with the graphics pipeline and with the compute rasterizer, in the same run.
+//! verified with the graphics pipeline and with the compute rasterizer, in the same run, for
+//! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
+//! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024².
+//! `-- --rasters` runs only these two.
 //!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
@@ -30,12 +33,17 @@ const SENSED: &str = include_str!("../docs/example/sensed.toml");
 
 fn main() -> anyhow::Result<()> {
     let quick = std::env::args().any(|a| a == "--quick");
-    let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?)?;
+    let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Graphics))?;
     let scene = Scene::from_toml(SENSED, Path::new("."), MemoryBudget::default())?;
     let image = RangeImage::from(&verifier.renderer().render(&scene)?);
     let sensed = SensedImage::new(&image, &scene.sensor)?;
     println!("device: {}", verifier.renderer().context().device_name());
     println!("sensed image: {}×{}, {} valid pixels", sensed.width, sensed.height, sensed.valid);
+    let compute = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute))?;
+    if std::env::args().any(|a| a == "--rasters") {
+        raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
+        return filling_costs(&[&verifier, &compute], quick);
+    }
     println!(
         "{:<22} {:>6} {:>6} {:>14} {:>16} {:>8}",
         "model (triangles)", "shadow", "batch", "batched hyp/s", "one-by-one hyp/s", "ratio"
@@ -78,18 +86,104 @@ fn main() -> anyhow::Result<()> {
         }
     }
     effect_costs(&verifier, &sensed, &scene)?;
-    let compute = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute))?;
-    raster_costs(&[&verifier, &compute], &sensed, &scene, quick)
+    raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
+    filling_costs(&[&verifier, &compute], quick)
+}
+
+/// Milliseconds per hypothesis with each rasterizer for a model filling the image: its own
+/// render as the sensed image, 16 poses about the true one, depth-mode shadows (the best of
+/// three batches).
+fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
+    println!("\nrasterizers, a model filling the image: depth-mode shadows, batches of 16, ms per hypothesis");
+    println!("{:<34} {:>12} {:>12} {:>10}", "model (triangles), image", "graphics ms", "compute ms", "speed-up");
+    // (model, image side, extent in model units): the box fills about 40% of the image.
+    let workloads: &[(&str, u32, f64)] = if quick {
+        &[("builtin:box", 256, 1.6), ("builtin:sphere:320", 256, 1.05)]
+    } else {
+        &[("builtin:box", 256, 1.6), ("builtin:sphere:320", 256, 1.05), ("builtin:sphere:320", 1024, 1.05)]
+    };
+    for &(model_name, side, extent) in workloads {
+        let pitch = extent / f64::from(side);
+        let half = (f64::from(side) - 1.0) / 2.0 * pitch;
+        let sensor = rangesynth::sensor::Sensor {
+            kind: rangesynth::sensor::SensorKind::Orthographic,
+            width: side,
+            height: side,
+            pitch: [pitch, pitch],
+            origin: [-half, half],
+            theta_deg: 45.0,
+        };
+        let settings = VerifySettings {
+            sensor,
+            shadow: ShadowSettings::of(ShadowMode::Depth),
+            effects: Effects::default(),
+            tolerance: 0.1,
+            compare_shadow: false,
+            chunk_size: 1024,
+        };
+        let mut millis = Vec::new();
+        let mut triangles = 0;
+        for verifier in verifiers {
+            let model = verifier.model(model_name, Path::new("."))?;
+            triangles = model.mesh.triangles.len();
+            let (centre, _) = model.mesh.bounding_sphere();
+            let at = DMat4::from_translation(DVec3::new(-centre.x, -centre.y, 0.0));
+            let scene = Scene {
+                sensor,
+                shadow: settings.shadow,
+                effects: Effects::default(),
+                objects: vec![rangesynth::scene::SceneObject {
+                    model_ref: model_name.into(),
+                    mesh: model.mesh.clone(),
+                    pose: at,
+                    reflectivity: None,
+                }],
+            };
+            let sensed = SensedImage::new(&RangeImage::from(&verifiers[0].renderer().render(&scene)?), &sensor)?;
+            let hypotheses: Vec<Hypothesis> = (0..16)
+                .map(|i| Hypothesis {
+                    id: format!("h{i}"),
+                    model: model.clone(),
+                    pose: DMat4::from_rotation_z(0.002 * i as f64) * at,
+                    bindings: vec![(1, 1)],
+                })
+                .collect();
+            verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+            let mut best = f64::INFINITY;
+            for _ in 0..3 {
+                let start = Instant::now();
+                verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})?;
+                best = best.min(start.elapsed().as_secs_f64() * 1e3 / hypotheses.len() as f64);
+            }
+            millis.push(best);
+        }
+        let name = format!("{model_name} ({triangles}), {side}²");
+        println!("{name:<34} {:>12.2} {:>12.2} {:>9.2}×", millis[0], millis[1], millis[0] / millis[1]);
+    }
+    Ok(())
 }
 
 /// Hypotheses per second with each rasterizer, depth-mode shadows, batches of 64.
 fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
     println!("\nrasterizers: depth-mode shadows, batches of 64 at {}×{}", sensed.width, sensed.height);
-    println!("{:<26} {:>14} {:>14} {:>10}", "model (triangles)", "graphics hyp/s", "compute hyp/s", "ratio");
+    println!(
+        "{:<26} {:>9} {:>14} {:>14} {:>10}",
+        "model (triangles)", "tri/px", "graphics hyp/s", "compute hyp/s", "ratio"
+    );
     let models: &[&str] = if quick {
         &["builtin:box", "builtin:sphere:100"]
     } else {
-        &["builtin:box", "builtin:sphere:100", "builtin:sphere:320"]
+        &[
+            "builtin:box",
+            "builtin:sphere:8",
+            "builtin:sphere:16",
+            "builtin:sphere:24",
+            "builtin:sphere:32",
+            "builtin:sphere:48",
+            "builtin:sphere:64",
+            "builtin:sphere:100",
+            "builtin:sphere:320",
+        ]
     };
     for model_name in models {
         let settings = VerifySettings {
@@ -102,9 +196,16 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         };
         let mut rates = Vec::new();
         let mut triangles = 0;
+        let mut density = 0.0;
         for verifier in verifiers {
             let model = verifier.model(model_name, Path::new("."))?;
             triangles = model.mesh.triangles.len();
+            // Triangles per pixel of the footprint each hypothesis renders (what `auto` reads).
+            let (centre, radius) = model.mesh.bounding_sphere();
+            let grid = scene.sensor.range_grid((0.0, 0.0));
+            let area =
+                grid.footprint(hypotheses(&model, 1)[0].pose.transform_point3(centre), radius, 2).expect("in view");
+            density = triangles as f64 / (f64::from(area.width) * f64::from(area.height));
             let hypotheses = hypotheses(&model, 64);
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             let mut best = 0.0f64;
@@ -116,7 +217,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             rates.push(best);
         }
         let name = format!("{model_name} ({triangles})");
-        println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
+        println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
 }

@@ -13,3 +13,8 @@ fi
 export VK_DRIVER_FILES="$icd" VK_ICD_FILENAMES="$icd" # the second for older loaders
 export RANGESYNTH_EXPECT_DEVICE=llvmpipe
 cargo test --locked "$@"
+# The compute rasterizer through the conformance, stability and analytic suites as well (the
+# graphics pipeline ran them above); only on a full run.
+if [ $# -eq 0 ]; then
+  RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic
+fi

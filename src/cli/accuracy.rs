@@ -1,5 +1,6 @@
 //! `rangesynth accuracy`: the sweep of src/accuracy/ with a progress bar; writes
-//! `DIR/accuracy.csv` and `DIR/accuracy.png` together and prints the table.
+//! `DIR/accuracy.csv` and `DIR/accuracy.png` together and prints the table. The rasterizer is
+//! one of the sweep's settings, so the global `--raster` does not apply.
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -44,7 +45,8 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) 
     for path in &args.scenes {
         scenes.push(SweepScene::from_file(path, budget)?);
     }
-    let renderer = Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget);
+    let renderer =
+        Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(Raster::Graphics);
     let ctx = renderer.context().clone();
     let graphics = Verifier::new(renderer)?;
     let compute = match ctx.supports_compute_raster() {

@@ -14,7 +14,7 @@ use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
-use rangesynth::render::Raster;
+use rangesynth::render::{Raster, COMPUTE_CROSSOVER};
 use rangesynth::shadow::ShadowMode;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
@@ -35,10 +35,11 @@ pub struct Cli {
     /// RANGESYNTH_MEMORY_BUDGET; default 4G).
     #[arg(long, global = true, value_name = "SIZE")]
     memory_budget: Option<String>,
-    /// Render with the graphics pipeline (default) or the compute rasterizer, which renders
-    /// views of one object (every verify hypothesis) and leaves the others to the graphics
-    /// pipeline.
-    #[arg(long, global = true, value_name = "graphics|compute", default_value = "graphics")]
+    /// Render with the graphics pipeline or the compute rasterizer, which renders views of one
+    /// object (every verify hypothesis) and leaves the others to the graphics pipeline; auto
+    /// (the default) takes the compute rasterizer for models of at least 0.05 triangles per
+    /// pixel of their footprint, where the device has it.
+    #[arg(long, global = true, value_name = "auto|graphics|compute", default_value = "auto")]
     raster: Raster,
     #[command(subcommand)]
     command: Command,
@@ -88,7 +89,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
         Command::Verify(args) => return verify::run(&options, budget, cli.raster, &args),
         Command::Accuracy(args) => return accuracy::run(&options, budget, &args),
-        Command::Experiment(args) => return experiment::run(&options, budget, &args),
+        Command::Experiment(args) => return experiment::run(&options, budget, cli.raster, &args),
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
@@ -128,8 +129,12 @@ fn check_validation(renderer: &Renderer) -> Result<()> {
 fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Result<()> {
     let s = &scene.sensor;
     println!("device: {}", renderer.context().device_name());
-    match scene.shadow.mode {
-        ShadowMode::Exact => println!("raster: none (shadow mode exact casts rays on the CPU)"),
+    match (scene.shadow.mode, renderer.raster()) {
+        (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
+        (_, Raster::Auto) => println!(
+            "raster: {} (auto: compute for one object of at least {COMPUTE_CROSSOVER} triangles per footprint pixel)",
+            out.raster.as_str()
+        ),
         _ => println!("raster: {}", out.raster.as_str()),
     }
     println!(

@@ -15,7 +15,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
-use rangesynth::render::Raster;
+use rangesynth::render::{Raster, COMPUTE_CROSSOVER};
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -203,7 +203,13 @@ impl From<&Verification> for SummaryRow {
 fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
     let s = &settings.sensor;
     println!("device: {}", renderer.context().device_name());
-    println!("raster: {}", renderer.raster().as_str());
+    match renderer.raster() {
+        Raster::Auto => println!(
+            "raster: auto (compute for models of at least {COMPUTE_CROSSOVER} triangles per footprint pixel, where the \
+             device has it; else graphics)"
+        ),
+        raster => println!("raster: {}", raster.as_str()),
+    }
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
     }

@@ -19,7 +19,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
-pub use compute_raster::Raster;
+pub use compute_raster::{Raster, COMPUTE_CROSSOVER};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -42,6 +42,10 @@ use pipelines::Pipelines;
 use std::sync::Arc;
 use std::time::Instant;
 use target_pool::TargetPool;
+
+/// Pixels added around a footprint: one for rounding, one more in the shadow view for the
+/// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
+pub(crate) const FOOTPRINT_MARGIN: u32 = 2;
 
 pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
@@ -159,10 +163,20 @@ impl Renderer {
         self.raster
     }
 
-    /// Whether the compute rasterizer renders a view of this many draws (it renders views of
-    /// one draw; compute_raster.rs).
-    pub(crate) fn computes(&self, draws: usize) -> bool {
-        self.raster == Raster::Compute && draws == 1
+    /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, over
+    /// `footprint_pixels` (compute_raster.rs).
+    pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64) -> bool {
+        self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
+    }
+
+    /// Whether the compute rasterizer may render any view: where this renderer's memory
+    /// estimates count its visibility words.
+    pub(crate) fn may_compute(&self) -> bool {
+        match self.raster {
+            Raster::Graphics => false,
+            Raster::Compute => true,
+            Raster::Auto => self.ctx.supports_compute_raster(),
+        }
     }
 
     /// The same renderer, refusing calls that would need more than `budget`.
@@ -185,15 +199,17 @@ impl Renderer {
         Slot::new(&self.ctx, &self.pipelines, effect_pipelines, raster_pipelines, &self.targets, shape, name)
     }
 
-    /// The pass list for jobs seen by this sensor with these shadow settings and effects.
+    /// The pass list for jobs seen by this sensor with these shadow settings and effects, some of
+    /// whose views the compute rasterizer renders where `compute`.
     pub(crate) fn passes<'a>(
         &'a self,
         sensor: &'a Sensor,
         shadow: ShadowSettings,
         effects: &'a Effects,
+        compute: bool,
     ) -> Result<Passes<'a>> {
         let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
-        let raster_pipelines = (self.raster == Raster::Compute).then(|| self.pipelines.compute_raster()).transpose()?;
+        let raster_pipelines = compute.then(|| self.pipelines.compute_raster()).transpose()?;
         Ok(Passes { pipelines: &self.pipelines, raster_pipelines, effect_pipelines, sensor, shadow, effects })
     }
 
@@ -222,16 +238,24 @@ impl Renderer {
             })
             .collect();
         let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.limits.max_image_dimension2_d)?;
-        let exact_triangles = (scene.shadow.mode == ShadowMode::Exact)
-            .then(|| scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum());
+        let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
+        let exact_triangles = (scene.shadow.mode == ShadowMode::Exact).then_some(triangles);
+        // The compute rasterizer's choice reads the pixels the objects can cover.
+        let footprint: u64 = spheres
+            .iter()
+            .filter_map(|&(centre, radius)| views.range.footprint(centre, radius, FOOTPRINT_MARGIN))
+            .map(|area| u64::from(area.width) * u64::from(area.height))
+            .sum();
+        let compute = exact_triangles.is_none() && self.computes(draws.len(), triangles, footprint);
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, self.computes(draws.len()), exact_triangles),
+            render_memory(&views, &scene.effects, compute, exact_triangles),
         )?;
-        self.render_views(scene, &views, &draws)
+        self.render_views(scene, &views, &draws, compute)
     }
 
-    fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw]) -> Result<RenderOutput> {
+    /// Renders the planned views, with the compute rasterizer where `compute`.
+    fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw], compute: bool) -> Result<RenderOutput> {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
@@ -257,9 +281,9 @@ impl Renderer {
             shadow_area: views.shadow.map(|g| g.full()),
             reflectivity_offset: 0,
             host_view: host_view.as_ref(),
+            compute,
         };
         let shadow_table = draw_table(ctx, ViewKind::Shadow, &scene.sensor, [(views, draws)])?;
-        let compute = self.computes(draws.len()) && host_view.is_none();
         let range_table =
             compute.then(|| draw_table(ctx, ViewKind::Range, &scene.sensor, [(views, draws)])).transpose()?.flatten();
         let effects = &scene.effects;
@@ -284,7 +308,7 @@ impl Renderer {
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
-        let passes = self.passes(&scene.sensor, scene.shadow, effects)?;
+        let passes = self.passes(&scene.sensor, scene.shadow, effects, compute)?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };

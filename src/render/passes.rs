@@ -180,6 +180,8 @@ pub(crate) struct Job<'a> {
     pub reflectivity_offset: u32,
     /// The range view cast on the host, in shadow mode `exact`: copied in, not rendered.
     pub host_view: Option<&'a HostView>,
+    /// The compute rasterizer renders its views (the slot holds its state).
+    pub compute: bool,
 }
 
 /// Where a job's images go.
@@ -258,7 +260,7 @@ impl Passes<'_> {
         let views = job.views;
         // The compute rasterizer renders views of one draw (compute_raster.rs).
         let compute = match (&slot.compute, self.raster_pipelines, job.draws) {
-            (Some(state), Some(rp), [draw]) => Some((state, rp, (job.first_draw_index, draw))),
+            (Some(state), Some(rp), [draw]) if job.compute => Some((state, rp, (job.first_draw_index, draw))),
             _ => None,
         };
         if let Some(host_view) = job.host_view {

@@ -21,7 +21,7 @@ use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
     draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views,
+    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -30,9 +30,6 @@ use glam::DMat4;
 
 /// Render-target slots in flight within one submission.
 pub const SLOTS: usize = 4;
-/// Pixels added around a footprint: one for rounding, one more in the shadow view for the
-/// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
-const FOOTPRINT_MARGIN: u32 = 2;
 
 /// The sensed image as the score pass reads it (uploaded once per `SensedImage`).
 pub struct SensedBuffers<'a> {
@@ -96,7 +93,7 @@ pub(crate) fn batch_slot_memory(
     let rows = u64::from(sensor.height);
     let effect_bytes = if effects.is_empty() { 0 } else { 8 };
     // The compute rasterizer's visibility words, per pixel of each view.
-    let visibility = if renderer.computes(1) { 8 } else { 0 };
+    let visibility = if renderer.may_compute() { 8 } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
     let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
     let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width));
@@ -163,6 +160,8 @@ pub(crate) fn count_batch(
                 // Rows are the range view's (a rotation about y keeps y).
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
+            let footprint = u64::from(area.width) * u64::from(area.height);
+            let triangles = u64::from(item.mesh.index_count / 3);
             Some(Job {
                 draws: draws.as_slice(),
                 first_draw_index: index,
@@ -171,14 +170,16 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
+                compute: host_views.is_empty() && renderer.computes(1, triangles, footprint),
             })
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
     let groups = || views.iter().zip(draws.iter().map(|d| d.as_slice()));
     let shadow_table = draw_table(ctx, ViewKind::Shadow, sensor, groups())?;
-    // Every hypothesis is a view of one draw.
-    let range_table = match renderer.computes(1) && host_views.is_empty() {
+    // Every hypothesis is a view of one draw; the table is needed where any renders by compute.
+    let compute = jobs.iter().flatten().any(|job| job.compute);
+    let range_table = match compute {
         true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
         false => None,
     };
@@ -218,7 +219,7 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(sensor, settings.shadow, settings.effects)?;
+    let passes = renderer.passes(sensor, settings.shadow, settings.effects, compute)?;
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
         enc.access(&[], &[(&counts, Access::TransferWrite)]);

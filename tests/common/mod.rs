@@ -12,6 +12,7 @@ use glam::DMat4;
 pub use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::mesh::builtin_mesh;
+use rangesynth::render::Raster;
 use rangesynth::scene::SceneObject;
 use rangesynth::sensor::{Sensor, SensorKind};
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
@@ -23,7 +24,9 @@ use std::sync::{Arc, LazyLock};
 pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_renderer(None)).expect("verifier"));
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan
-/// version. Panics (fails the test) without a device.
+/// version, with the rasterizer `RANGESYNTH_TEST_RASTER` names (`graphics` unless it is set:
+/// tools/test.sh runs the conformance, stability and analytic suites again with `compute`).
+/// Panics (fails the test) without a device.
 pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
     let options =
         ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok(), max_vulkan_version };
@@ -34,7 +37,8 @@ pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
         assert!(name.contains(&expected), "tests ran on {name:?}, expected a device named {expected:?}");
     }
     assert!(renderer.context().validation_enabled());
-    renderer
+    let raster = std::env::var("RANGESYNTH_TEST_RASTER").map_or(Ok(Raster::Graphics), |name| name.parse());
+    renderer.with_raster(raster.expect("RANGESYNTH_TEST_RASTER names a rasterizer"))
 }
 
 pub fn renderer() -> &'static Renderer {
@@ -50,6 +54,11 @@ pub fn assert_no_validation_messages() {
 pub fn render(scene: &Scene) -> RenderOutput {
     let out = renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
     assert_no_validation_messages();
+    // A suite run with the compute rasterizer renders every view of one object with it.
+    let one_object = scene.objects.len() == 1 && scene.shadow.mode != rangesynth::shadow::ShadowMode::Exact;
+    if renderer().raster() == Raster::Compute && one_object {
+        assert_eq!(out.raster, Raster::Compute, "the compute rasterizer rendered the view");
+    }
     out
 }
 
