@@ -73,6 +73,21 @@ impl Sensor {
         Ok(())
     }
 
+    /// A `size`×`size` orthographic image over `extent` model units, centred on the range frame's
+    /// origin, at θ = `theta_deg`.
+    pub fn square(size: u32, extent: f64, theta_deg: f64) -> Self {
+        let pitch = extent / f64::from(size);
+        let half = (f64::from(size) - 1.0) / 2.0 * pitch;
+        Self {
+            kind: SensorKind::Orthographic,
+            width: size,
+            height: size,
+            pitch: [pitch, pitch],
+            origin: [-half, half],
+            theta_deg,
+        }
+    }
+
     pub fn theta(&self) -> f64 {
         self.theta_deg.to_radians()
     }

@@ -103,16 +103,7 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
         &[("builtin:box", 256, 1.6), ("builtin:sphere:320", 256, 1.05), ("builtin:sphere:320", 1024, 1.05)]
     };
     for &(model_name, side, extent) in workloads {
-        let pitch = extent / f64::from(side);
-        let half = (f64::from(side) - 1.0) / 2.0 * pitch;
-        let sensor = rangesynth::sensor::Sensor {
-            kind: rangesynth::sensor::SensorKind::Orthographic,
-            width: side,
-            height: side,
-            pitch: [pitch, pitch],
-            origin: [-half, half],
-            theta_deg: 45.0,
-        };
+        let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
         let settings = VerifySettings {
             sensor,
             shadow: ShadowSettings::of(ShadowMode::Depth),

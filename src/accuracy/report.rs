@@ -177,14 +177,7 @@ pub fn write_plot(path: &Path, rows: &[Row]) -> Result<()> {
             let dy = if i % 2 == 0 { -18 } else { 6 };
             EmptyElement::at((s.ms_per_pose, y(s))) + Text::new(s.setting.clone(), (8, dy), (FONT, 13))
         }))?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 14))
-            .border_style(BLACK)
-            .background_style(WHITE)
-            .draw()?;
-        Ok(())
+        plot::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     })
 }
 

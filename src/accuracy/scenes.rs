@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::limits::MemoryBudget;
 use crate::mesh::builtin_mesh;
 use crate::scene::{Scene, SceneObject};
-use crate::sensor::{Sensor, SensorKind};
+use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
 use glam::{DMat4, DVec3};
 use std::path::{Path, PathBuf};
@@ -52,17 +52,9 @@ fn object(model: &str, pose: DMat4) -> Result<SceneObject> {
     Ok(SceneObject { model_ref: model.to_string(), mesh: Arc::new(builtin_mesh(model)?), pose, reflectivity: None })
 }
 
-fn sensor(size: u32, extent: f64, centre: [f64; 2]) -> Sensor {
-    let pitch = extent / f64::from(size);
-    let half = (f64::from(size) - 1.0) / 2.0 * pitch;
-    Sensor {
-        kind: SensorKind::Orthographic,
-        width: size,
-        height: size,
-        pitch: [pitch, pitch],
-        origin: [centre[0] - half, centre[1] + half],
-        theta_deg: 45.0,
-    }
+/// The sweep's sensor: `size`² pixels over `extent` units, at the paper's θ = 45°.
+fn sensor(size: u32, extent: f64) -> Sensor {
+    Sensor::square(size, extent, 45.0)
 }
 
 /// The standard scenes on `size`² images; the first object of each is the part whose correct
@@ -75,7 +67,7 @@ pub fn standard_scenes(size: u32, dense_segments: u32) -> Result<Vec<SweepScene>
         Ok(SweepScene::builtin(
             name,
             Scene {
-                sensor: sensor(size, 4.0, [0.0, 0.0]),
+                sensor: sensor(size, 4.0),
                 shadow: ShadowSettings::default(),
                 effects: Effects::default(),
                 objects: vec![object(model, pose)?, table()?],
@@ -91,7 +83,7 @@ pub fn standard_scenes(size: u32, dense_segments: u32) -> Result<Vec<SweepScene>
         SweepScene::builtin(
             "cluttered",
             Scene {
-                sensor: sensor(size, 5.0, [0.0, 0.0]),
+                sensor: sensor(size, 5.0),
                 shadow: ShadowSettings::default(),
                 effects: Effects::default(),
                 objects: vec![
@@ -106,7 +98,7 @@ pub fn standard_scenes(size: u32, dense_segments: u32) -> Result<Vec<SweepScene>
         SweepScene::builtin(
             "dense part",
             Scene {
-                sensor: sensor(size, 1.1, [0.0, 0.0]),
+                sensor: sensor(size, 1.1),
                 shadow: ShadowSettings::default(),
                 effects: Effects::default(),
                 objects: vec![object(&dense, turned(0.3, 0.0, 0.0))?],

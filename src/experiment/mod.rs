@@ -27,7 +27,7 @@ use crate::limits::MemoryBudget;
 use crate::mesh::{builtin_mesh, load_obj, Mesh};
 use crate::pose::pose_rows;
 use crate::scene::{Scene, SceneObject};
-use crate::sensor::{Sensor, SensorKind};
+use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
 use crate::verify::{Hypothesis, HypothesisFile, Record, SensedImage, Verifier, VerifySettings, MAX_CHUNK};
 use glam::{DMat4, DVec3};
@@ -109,20 +109,6 @@ fn model_order(out: &Path, budget: MemoryBudget) -> Result<Vec<Model>> {
     Ok(order)
 }
 
-/// The sensor: `size`² pixels over 5 model units, centred on the table, at θ = 45°.
-fn sensor(size: u32) -> Sensor {
-    let pitch = 5.0 / f64::from(size);
-    let half = (f64::from(size) - 1.0) / 2.0 * pitch;
-    Sensor {
-        kind: SensorKind::Orthographic,
-        width: size,
-        height: size,
-        pitch: [pitch, pitch],
-        origin: [-half, half],
-        theta_deg: THETA_DEG,
-    }
-}
-
 /// The sensed image's sensor effects: axial noise, grazing losses beyond 80°, mixed pixels at
 /// depth jumps over 0.05 units, and a working volume that starts 0.01 units above the table, so
 /// the table is not measured (the scores' N_i counts every valid sensed pixel: with the table
@@ -179,7 +165,8 @@ pub fn run_experiment(
     let candidates: Vec<Candidate> =
         models.iter().map(|m| Candidate { reference: &m.reference, mesh: &m.mesh }).collect();
     let table = Arc::new(builtin_mesh("builtin:plane:6")?);
-    let sensor = sensor(config.size);
+    // `size`² pixels over 5 model units, centred on the table.
+    let sensor = Sensor::square(config.size, 5.0, THETA_DEG);
     let total = models.len() * config.views_per_model;
     let mut scored = Vec::new();
     for (index, (truth, view)) in

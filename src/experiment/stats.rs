@@ -277,13 +277,7 @@ pub fn write_plot(path: &Path, scored: &[Scored]) -> Result<()> {
                     .label(name)
                     .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.mix(0.45).filled()));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .label_font((FONT, 14))
-                .border_style(BLACK)
-                .background_style(WHITE)
-                .draw()?;
+            plot::draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         }
         Ok(())
     })

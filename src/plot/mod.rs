@@ -5,7 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::write_rgb;
-use plotters::coord::Shift;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 use plotters::style::register_font;
 use std::path::Path;
@@ -18,6 +18,21 @@ static FONT_BYTES: &[u8] = include_bytes!("DejaVuSansMono.ttf");
 
 /// The area a plot draws on.
 pub(crate) type PlotArea<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// Draws the series' legend at `position`, in the plots' one style.
+pub(crate) fn draw_legend<'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font((FONT, 14))
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .draw()?;
+    Ok(())
+}
 
 /// Draws a `width`×`height` plot with `draw` and writes it to `path` as a PNG.
 pub(crate) fn write_plot(
