@@ -25,12 +25,14 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
-    uint mode;          // ShadowSettings::shader_code
 } m;
 
-// The codes of the label test, nearest pixel and 2x2, given by the host (src/render/pipelines.rs).
-layout(constant_id = 0) const uint MODE_LABEL = 0xffffffffu;
-layout(constant_id = 1) const uint MODE_LABEL_SQUARE = 0xffffffffu;
+// The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
+// other is the depth test. All given by the host (ShadowTest, src/shadow.rs): one pipeline a
+// test, so that only its code is compiled (src/render/shadow_pass.rs).
+layout(constant_id = 0) const uint TEST = 0xffffffffu;
+layout(constant_id = 1) const uint TEST_LABEL = 0xffffffffu;
+layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
 
 // Whether shadow pixel q exists and carries `label`.
 bool shadow_label_is(ivec2 q, uint label) {
@@ -153,10 +155,10 @@ bool shadowed(ivec2 pixel, uint label) {
     // The shadow grid covers every point the range view can see (sensor.rs); a point
     // outside it can only come from rounding at its border and is treated as lit.
     bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
-    if (m.mode == MODE_LABEL) {
+    if (TEST == TEST_LABEL) {
         return in_grid && imageLoad(shadow_visibility, s).r != label;
     }
-    if (m.mode == MODE_LABEL_SQUARE) {
+    if (TEST == TEST_LABEL_SQUARE) {
         // The four shadow pixels whose centres surround p'; outside the grid it is lit, as above.
         ivec2 corner = ivec2(floor(vec2(column, row)));
         bool outside = any(lessThan(corner, ivec2(-1))) || any(greaterThanEqual(corner, m.sizes.zw));

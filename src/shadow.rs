@@ -116,17 +116,30 @@ impl ShadowSettings {
         Ok(())
     }
 
-    /// The code the shadow-mask shader switches on.
-    pub(crate) fn shader_code(&self) -> u32 {
+    /// The test the shadow mask runs, where a shadow pass runs (modes `label` and `depth`).
+    pub(crate) fn test(&self) -> Option<ShadowTest> {
         match (self.mode, self.neighbourhood) {
-            (ShadowMode::Label, Neighbourhood::Square2) => SQUARE_LABEL_CODE,
-            (mode, _) => mode.shader_code(),
+            (ShadowMode::Label, Neighbourhood::Nearest) => Some(ShadowTest::Label),
+            (ShadowMode::Label, Neighbourhood::Square2) => Some(ShadowTest::LabelSquare),
+            (ShadowMode::Depth, _) => Some(ShadowTest::Depth),
+            (ShadowMode::None | ShadowMode::Exact, _) => None,
         }
     }
 }
 
-/// The mask shader's code for the label test over a 2×2 neighbourhood.
-pub(crate) const SQUARE_LABEL_CODE: u32 = 3;
+/// The tests of shaders/shadow_mask.comp. Each has a pipeline of its own, the test a
+/// specialization constant, so that a software rasterizer, which runs both sides of a branch
+/// on a uniform value, runs only its test's code (src/render/shadow_pass.rs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u32)]
+pub(crate) enum ShadowTest {
+    /// The paper's: the shadow pixel nearest p' carries the pixel's label.
+    Label = 1,
+    /// Any of the four shadow pixels around p' carries it.
+    LabelSquare = 2,
+    /// Nothing seen near p' in the shadow view rises above it.
+    Depth = 3,
+}
 
 /// Constant part of the depth test's bias, as a fraction of the pixel pitch dx.
 pub const DEPTH_BIAS_PIXELS: f64 = 1e-3;
@@ -153,14 +166,5 @@ impl ShadowMode {
     /// the CPU cast the shadow rays.
     pub fn shadows(self, theta_deg: f64) -> bool {
         self == ShadowMode::Exact || self.needs_shadow_pass(theta_deg)
-    }
-
-    /// The code the shadow-mask shader switches on (modes with a shadow pass).
-    pub(crate) fn shader_code(self) -> u32 {
-        match self {
-            ShadowMode::None | ShadowMode::Exact => 0,
-            ShadowMode::Label => 1,
-            ShadowMode::Depth => 2,
-        }
     }
 }

@@ -6,7 +6,8 @@
 //! A third table compares the rasterizers (src/render/compute_raster.rs): the same batches
 //! verified with the graphics pipeline and with the compute rasterizer, in the same run, for
 //! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
-//! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024².
+//! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024², with
+//! label-mode and depth-mode shadows.
 //! `-- --rasters` runs only these two.
 //!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
@@ -94,8 +95,11 @@ fn main() -> anyhow::Result<()> {
 /// render as the sensed image, 16 poses about the true one, depth-mode shadows (the best of
 /// three batches).
 fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
-    println!("\nrasterizers, a model filling the image: depth-mode shadows, batches of 16, ms per hypothesis");
-    println!("{:<34} {:>12} {:>12} {:>10}", "model (triangles), image", "graphics ms", "compute ms", "speed-up");
+    println!("\nrasterizers, a model filling the image: batches of 16, ms per hypothesis");
+    println!(
+        "{:<34} {:>6} {:>12} {:>12} {:>10}",
+        "model (triangles), image", "shadow", "graphics ms", "compute ms", "speed-up"
+    );
     // (model, image side, extent in model units): the box fills about 40% of the image.
     let workloads: &[(&str, u32, f64)] = if quick {
         &[("builtin:box", 256, 1.6), ("builtin:sphere:320", 256, 1.05)]
@@ -103,53 +107,61 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
         &[("builtin:box", 256, 1.6), ("builtin:sphere:320", 256, 1.05), ("builtin:sphere:320", 1024, 1.05)]
     };
     for &(model_name, side, extent) in workloads {
-        let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
-        let settings = VerifySettings {
-            sensor,
-            shadow: ShadowSettings::of(ShadowMode::Depth),
-            effects: Effects::default(),
-            tolerance: 0.1,
-            compare_shadow: false,
-            chunk_size: 1024,
-        };
-        let mut millis = Vec::new();
-        let mut triangles = 0;
-        for verifier in verifiers {
-            let model = verifier.model(model_name, Path::new("."))?;
-            triangles = model.mesh.triangles.len();
-            let (centre, _) = model.mesh.bounding_sphere();
-            let at = DMat4::from_translation(DVec3::new(-centre.x, -centre.y, 0.0));
-            let scene = Scene {
+        for mode in [ShadowMode::Label, ShadowMode::Depth] {
+            let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
+            let settings = VerifySettings {
                 sensor,
-                shadow: settings.shadow,
+                shadow: ShadowSettings::of(mode),
                 effects: Effects::default(),
-                objects: vec![rangesynth::scene::SceneObject {
-                    model_ref: model_name.into(),
-                    mesh: model.mesh.clone(),
-                    pose: at,
-                    reflectivity: None,
-                }],
+                tolerance: 0.1,
+                compare_shadow: false,
+                chunk_size: 1024,
             };
-            let sensed = SensedImage::new(&RangeImage::from(&verifiers[0].renderer().render(&scene)?), &sensor)?;
-            let hypotheses: Vec<Hypothesis> = (0..16)
-                .map(|i| Hypothesis {
-                    id: format!("h{i}"),
-                    model: model.clone(),
-                    pose: DMat4::from_rotation_z(0.002 * i as f64) * at,
-                    bindings: vec![(1, 1)],
-                })
-                .collect();
-            verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
-            let mut best = f64::INFINITY;
-            for _ in 0..3 {
-                let start = Instant::now();
-                verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})?;
-                best = best.min(start.elapsed().as_secs_f64() * 1e3 / hypotheses.len() as f64);
+            let mut millis = Vec::new();
+            let mut triangles = 0;
+            for verifier in verifiers {
+                let model = verifier.model(model_name, Path::new("."))?;
+                triangles = model.mesh.triangles.len();
+                let (centre, _) = model.mesh.bounding_sphere();
+                let at = DMat4::from_translation(DVec3::new(-centre.x, -centre.y, 0.0));
+                let scene = Scene {
+                    sensor,
+                    shadow: settings.shadow,
+                    effects: Effects::default(),
+                    objects: vec![rangesynth::scene::SceneObject {
+                        model_ref: model_name.into(),
+                        mesh: model.mesh.clone(),
+                        pose: at,
+                        reflectivity: None,
+                    }],
+                };
+                let sensed = SensedImage::new(&RangeImage::from(&verifiers[0].renderer().render(&scene)?), &sensor)?;
+                let hypotheses: Vec<Hypothesis> = (0..16)
+                    .map(|i| Hypothesis {
+                        id: format!("h{i}"),
+                        model: model.clone(),
+                        pose: DMat4::from_rotation_z(0.002 * i as f64) * at,
+                        bindings: vec![(1, 1)],
+                    })
+                    .collect();
+                verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+                let mut best = f64::INFINITY;
+                for _ in 0..3 {
+                    let start = Instant::now();
+                    verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})?;
+                    best = best.min(start.elapsed().as_secs_f64() * 1e3 / hypotheses.len() as f64);
+                }
+                millis.push(best);
             }
-            millis.push(best);
+            let name = format!("{model_name} ({triangles}), {side}²");
+            println!(
+                "{name:<34} {:>6} {:>12.2} {:>12.2} {:>9.2}×",
+                mode.as_str(),
+                millis[0],
+                millis[1],
+                millis[0] / millis[1]
+            );
         }
-        let name = format!("{model_name} ({triangles}), {side}²");
-        println!("{name:<34} {:>12.2} {:>12.2} {:>9.2}×", millis[0], millis[1], millis[0] / millis[1]);
     }
     Ok(())
 }

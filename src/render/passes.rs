@@ -297,8 +297,8 @@ impl Passes<'_> {
             c.lap(cmd, "range");
         }
         let mut shadowed_labels = None;
-        if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings)) =
-            (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings)
+        if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings), Some(test)) =
+            (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings, self.shadow.test())
         {
             let shadow_pass = ViewPass {
                 pipelines: &p.shadow,
@@ -319,7 +319,7 @@ impl Passes<'_> {
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
-            bindings.record(cmd, p, &MaskConstants::new(sensor, &self.shadow, views, grid, job.area));
+            bindings.record(cmd, p, test, &MaskConstants::new(sensor, views, grid, job.area));
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
             }

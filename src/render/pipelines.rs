@@ -1,17 +1,16 @@
 //! The compiled pipelines one `Renderer` owns and reuses: the range-view and shadow-view
 //! rasterization pipelines (dynamic rendering into each view's attachments, targets.rs) and
-//! the shadow-mask compute pipeline; and the effect and compute-raster pipelines, built the
+//! the shadow-mask compute pipelines; and the effect and compute-raster pipelines, built the
 //! first time a call needs them.
 
 use super::compute_raster::ComputeRasterPipelines;
 use super::draw::DrawConstants;
 use super::effect_pass::EffectPipelines;
-use super::shadow_pass::{MaskBindings, MaskConstants};
+use super::shadow_pass::MaskPipelines;
 use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
-use crate::gpu::{ComputePipeline, GpuContext, DEPTH_FORMAT};
-use crate::shadow::{ShadowMode, SQUARE_LABEL_CODE};
+use crate::gpu::{GpuContext, DEPTH_FORMAT};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -35,7 +34,7 @@ pub struct Pipelines {
     pub raster_layout: vk::PipelineLayout,
     pub range: ViewPipelines,
     pub shadow: ViewPipelines,
-    pub mask: ComputePipeline,
+    pub mask: MaskPipelines,
     effects: OnceLock<EffectPipelines>,
     compute_raster: OnceLock<ComputeRasterPipelines>,
 }
@@ -44,14 +43,7 @@ impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
-        let mask = ComputePipeline::new(
-            ctx,
-            (MaskBindings::IMAGES, MaskBindings::BUFFERS),
-            size_of::<MaskConstants>(),
-            shaders::SHADOW_MASK_COMP,
-            &[ShadowMode::Label.shader_code(), SQUARE_LABEL_CODE],
-            "shadow mask",
-        )?;
+        let mask = MaskPipelines::new(ctx)?;
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),
