@@ -138,6 +138,11 @@ void main() {
         return;
     }
     DrawData d = draws[r.draw];
+    // A solid's triangles facing away from the camera are never the first hit
+    // (src/mesh/solid.rs); skipped before their corners are read.
+    if (float(r.cull) * triangle_normal(d, t).z < 0.0) {
+        return;
+    }
     Setup s = set_up(d, t);
     ivec2 box = s.last - s.first + 1;
     if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t)) {

@@ -18,6 +18,7 @@ layout(push_constant, std430) uniform Raster {
     uint stride;       // pixels per row of the visibility words (the attachments' width)
     uint triangles;    // the mesh's triangle count
     uint large_capacity; // room in the queue of large triangles (raster.comp)
+    int cull;          // skip triangles whose view-frame normal z has the opposite sign; 0: none
 } r;
 
 // No triangle at this pixel (the words are filled with ones before the raster pass).

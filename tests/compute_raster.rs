@@ -7,13 +7,14 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DVec3};
+use rangesynth::mesh::{Mesh, Solidity};
 use rangesynth::render::Raster;
-use rangesynth::scene::Scene;
+use rangesynth::scene::{Scene, SceneObject};
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use rangesynth::RenderOutput;
 use std::path::Path;
-use std::sync::LazyLock;
+use std::sync::{Arc, LazyLock};
 
 /// A second renderer, with the compute rasterizer, beside the tests' graphics one.
 static COMPUTE: LazyLock<Verifier> = LazyLock::new(|| {
@@ -136,4 +137,45 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
     assert_eq!(counts(&COMPUTE), graphics);
     // Auto mixes both in one batch: the sphere by compute, the step and the box by graphics.
     assert_eq!(counts(&AUTO), graphics);
+}
+
+#[test]
+fn an_open_mesh_shows_its_inside_to_the_compute_rasterizer() {
+    // A unit box without its top, seen from above: the floor's normal points down, away from
+    // the camera, yet the camera sees it through the opening. Only a solid's triangles facing
+    // away may be skipped (src/mesh/solid.rs); this mesh is open, so none are.
+    let positions =
+        (0..8).map(|i| [(i & 1) as f32 - 0.5, ((i >> 1) & 1) as f32 - 0.5, ((i >> 2) & 1) as f32]).collect();
+    let (floor, walls) = ([[0, 2, 3, 1]], [[0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]);
+    let quads = floor.iter().map(|q| (1, q)).chain(walls.iter().map(|q| (2, q)));
+    let (mut triangles, mut surfaces) = (Vec::new(), Vec::new());
+    for (surface, &[a, b, c, d]) in quads {
+        triangles.extend([[a, b, c], [a, c, d]]);
+        surfaces.extend([surface; 2]);
+    }
+    let mesh = Mesh::new("open box", positions, triangles, surfaces, vec!["floor".into(), "walls".into()]).unwrap();
+    assert_eq!(mesh.solidity(&mesh.triangle_neighbours()), Solidity::Open);
+    let mut sc = scene(centred_sensor(48, 48, 0.05, [0.0, 0.0], 0.0), ShadowMode::None, &[]);
+    sc.objects.push(SceneObject {
+        model_ref: "open box".into(),
+        mesh: Arc::new(mesh),
+        pose: DMat4::from_translation(DVec3::new(0.0, 0.0, 0.25)),
+        reflectivity: None,
+    });
+    let out = render_compute(&sc);
+    assert_eq!(out.raster, Raster::Compute);
+    let s = sc.sensor;
+    let mut inside = 0;
+    for row in 0..s.height {
+        for col in 0..s.width {
+            let (x, y) = s.pixel_centre(col, row);
+            if x.abs() < 0.45 && y.abs() < 0.45 {
+                let i = (row * s.width + col) as usize;
+                assert_eq!((out.label[i], out.z[i]), (1, 0.25), "pixel ({col}, {row}) sees the floor at z = 0.25");
+                inside += 1;
+            }
+        }
+    }
+    assert!(inside > 300, "{inside} pixels inside the walls");
+    assert_eq!(out.label, render(&sc).label, "the graphics pipeline's image");
 }

@@ -195,7 +195,9 @@ impl Builder {
         let point = |ring: u32, seg: u32| {
             let polar = std::f64::consts::PI * f64::from(ring) / f64::from(rings);
             let azimuth = TAU * f64::from(seg % segments) / f64::from(segments);
-            DVec3::new(r * polar.sin() * azimuth.cos(), r * polar.sin() * azimuth.sin(), 0.5 + r * polar.cos())
+            // sin π is 1.2e-16, not 0: each pole is one point, so that the surface is closed.
+            let across = if ring == rings { 0.0 } else { r * polar.sin() };
+            DVec3::new(across * azimuth.cos(), across * azimuth.sin(), 0.5 + r * polar.cos())
         };
         for ring in 0..rings {
             for seg in 0..segments {

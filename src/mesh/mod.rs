@@ -11,11 +11,13 @@
 mod adjacency;
 mod builtin;
 mod obj;
+mod solid;
 mod surfaces;
 
 pub use adjacency::NO_NEIGHBOUR;
 pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
 pub use obj::{load_obj, parse_obj};
+pub use solid::Solidity;
 pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
 
 use crate::error::{Error, Result};

@@ -6,7 +6,9 @@
 //!   covers (1/256-pixel snapped corners, the top-left rule, exact integer edge functions) and
 //!   keeps the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle).
 //!   A triangle whose bounding box holds more than 256 pixels is queued instead, and a second,
-//!   indirect dispatch gives each queued triangle a workgroup of 64 invocations.
+//!   indirect dispatch gives each queued triangle a workgroup of 64 invocations. Where the
+//!   mesh bounds a solid (src/mesh/solid.rs), the triangles facing away from the camera are
+//!   skipped before their corners are read.
 //! - Resolve (shaders/raster_resolve.comp): one invocation per pixel writes what the graphics
 //!   path's fragment shader would have written for that triangle.
 //!
@@ -24,6 +26,7 @@ use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, StorageSet};
+use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
 use ash::vk;
 use std::sync::Arc;
@@ -94,9 +97,22 @@ struct RasterConstants {
     stride: u32,
     triangles: u32,
     large_capacity: u32,
+    cull: i32,
 }
 
 const _: () = assert!(std::mem::offset_of!(RasterConstants, triangles) == 24);
+const _: () = assert!(std::mem::offset_of!(RasterConstants, cull) == 32);
+
+/// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
+/// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
+fn cull_sign(solidity: Solidity) -> i32 {
+    match solidity {
+        // Facing away: normal z < 0.
+        Solidity::Outward => 1,
+        Solidity::Inward => -1,
+        Solidity::Open => 0,
+    }
+}
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
 const COVERAGE_GROUP: u32 = 64;
@@ -246,6 +262,7 @@ impl ComputeView {
             stride: self.stride,
             triangles,
             large_capacity: self.large_capacity,
+            cull: cull_sign(draw.mesh.solidity),
         };
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];

@@ -1,5 +1,6 @@
 //! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
-//! per-triangle surface ids, unit normals and neighbours.
+//! per-triangle surface ids, unit normals and neighbours; and whether the mesh bounds a
+//! solid, found once here, so that the compute rasterizer may skip the triangles facing away.
 //! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
 //! to label the pixel and evaluate its triangle's plane exactly.
 //!
@@ -9,7 +10,7 @@
 
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Solidity};
 use ash::vk;
 use std::sync::Arc;
 
@@ -22,12 +23,15 @@ pub struct GpuMesh {
     /// The triangles across each triangle's three edges (`Mesh::triangle_neighbours`).
     pub(crate) neighbours: Buffer,
     pub(crate) index_count: u32,
+    /// Whether the mesh bounds a solid, and which way its normals point.
+    pub(crate) solidity: Solidity,
 }
 
 impl GpuMesh {
     pub fn upload(ctx: &Arc<GpuContext>, mesh: &Mesh) -> Result<Self> {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        let neighbours = mesh.triangle_neighbours();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
                 ctx,
@@ -56,10 +60,11 @@ impl GpuMesh {
             neighbours: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
-                &mesh.triangle_neighbours(),
+                &neighbours,
                 &format!("{name} triangle neighbours"),
             )?,
             index_count: indices.len() as u32,
+            solidity: mesh.solidity(&neighbours),
         })
     }
 }
