@@ -132,12 +132,14 @@ bool queue_large(uint t) {
 }
 
 void main() {
+    // Read while every invocation is still active: a software rasterizer then reads it once
+    // for all of them instead of gathering it per invocation.
+    DrawData d = draws[r.draw];
     // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
     uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     if (t >= r.triangles) {
         return;
     }
-    DrawData d = draws[r.draw];
     // A solid's triangles facing away from the camera are never the first hit
     // (src/mesh/solid.rs); skipped before their corners are read.
     if (float(r.cull) * triangle_normal(d, t).z < 0.0) {
