@@ -142,7 +142,7 @@ void main() {
     }
     // A solid's triangles facing away from the camera are never the first hit
     // (src/mesh/solid.rs); skipped before their corners are read.
-    if (float(r.cull) * triangle_normal(d, t).z < 0.0) {
+    if (r.cull != 0 && float(r.cull) * triangle_normal(d, t).z < 0.0) {
         return;
     }
     Setup s = set_up(d, t);

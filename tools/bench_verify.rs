@@ -92,8 +92,8 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// Milliseconds per hypothesis with each rasterizer for a model filling the image: its own
-/// render as the sensed image, 16 poses about the true one, depth-mode shadows (the best of
-/// three batches).
+/// render as the sensed image, 16 poses about the true one, with label-mode and depth-mode
+/// shadows (the best of three batches).
 fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
     println!("\nrasterizers, a model filling the image: batches of 16, ms per hypothesis");
     println!(

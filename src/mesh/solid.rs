@@ -9,7 +9,9 @@
 //! The test is strict: every edge shared by exactly two triangles that run it in opposite
 //! directions (vertices matched by position, as adjacency.rs matches them), and every
 //! connected shell enclosing a volume of the same, clearly non-zero sign. Anything else is
-//! [`Solidity::Open`] and is never culled.
+//! [`Solidity::Open`] and is never culled. (A shell that passes through itself, turning part
+//! of itself inside out, passes this test and would lose the inside-out part; such a surface
+//! bounds no solid, and finding it would cost a triangle-triangle intersection test.)
 
 use super::adjacency::weld_vertices;
 use super::{Mesh, NO_NEIGHBOUR};
@@ -33,8 +35,15 @@ pub enum Solidity {
 const MIN_RELATIVE_VOLUME: f64 = 1e-9;
 
 impl Mesh {
-    /// Whether this mesh bounds a solid, given its [`Mesh::triangle_neighbours`].
-    pub fn solidity(&self, neighbours: &[[u32; 3]]) -> Solidity {
+    /// Whether this mesh bounds a solid.
+    pub fn solidity(&self) -> Solidity {
+        self.solidity_with(&self.triangle_neighbours())
+    }
+
+    /// As [`Mesh::solidity`], given the mesh's [`Mesh::triangle_neighbours`] (the upload has
+    /// them already).
+    pub(crate) fn solidity_with(&self, neighbours: &[[u32; 3]]) -> Solidity {
+        debug_assert_eq!(neighbours.len(), self.triangles.len());
         if !self.is_closed_and_consistent() {
             return Solidity::Open;
         }
@@ -64,16 +73,18 @@ impl Mesh {
         }
     }
 
-    /// Every edge (welded) is run once in each direction, by two different triangles.
+    /// Every edge (welded) joins two points and is run once in each direction, so by two
+    /// different triangles.
     fn is_closed_and_consistent(&self) -> bool {
         let welded = weld_vertices(&self.positions);
         let directed = |a: u32, b: u32| (u64::from(welded[a as usize]) << 32) | u64::from(welded[b as usize]);
         let mut edges: Vec<u64> =
             self.triangles.iter().flat_map(|&[a, b, c]| [directed(a, b), directed(b, c), directed(c, a)]).collect();
         edges.sort_unstable();
-        let unique = edges.windows(2).all(|pair| pair[0] != pair[1]);
         let reversed = |edge: u64| edge.rotate_left(32);
-        unique && edges.iter().all(|&edge| edges.binary_search(&reversed(edge)).is_ok())
+        let joins_two_points = edges.iter().all(|&edge| reversed(edge) != edge);
+        let unique = edges.windows(2).all(|pair| pair[0] != pair[1]);
+        joins_two_points && unique && edges.iter().all(|&edge| edges.binary_search(&reversed(edge)).is_ok())
     }
 }
 
@@ -108,7 +119,31 @@ mod tests {
     use crate::mesh::builtin_mesh;
 
     fn solidity(mesh: &Mesh) -> Solidity {
-        mesh.solidity(&mesh.triangle_neighbours())
+        mesh.solidity()
+    }
+
+    /// Both meshes' triangles in one mesh.
+    fn join(a: &Mesh, b: &Mesh) -> Mesh {
+        let offset = a.positions.len() as u32;
+        let positions = a.positions.iter().chain(&b.positions).copied().collect();
+        let triangles: Vec<[u32; 3]> =
+            a.triangles.iter().copied().chain(b.triangles.iter().map(|t| t.map(|v| v + offset))).collect();
+        let surfaces = vec![1; triangles.len()];
+        Mesh::new("joined", positions, triangles, surfaces, vec!["s".into()]).unwrap()
+    }
+
+    fn moved(mut mesh: Mesh, by: [f32; 3], scale: f32) -> Mesh {
+        for p in &mut mesh.positions {
+            *p = [0, 1, 2].map(|k| p[k] * scale + by[k]);
+        }
+        mesh
+    }
+
+    fn inside_out(mut mesh: Mesh) -> Mesh {
+        for tri in &mut mesh.triangles {
+            tri.swap(1, 2);
+        }
+        mesh
     }
 
     /// The unit cube's 12 triangles, counter-clockwise seen from outside.
@@ -121,12 +156,8 @@ mod tests {
 
     #[test]
     fn a_cube_wound_outward_or_inward_bounds_a_solid() {
-        let mut mesh = cube();
-        assert_eq!(solidity(&mesh), Solidity::Outward);
-        for tri in &mut mesh.triangles {
-            tri.swap(1, 2);
-        }
-        assert_eq!(solidity(&mesh), Solidity::Inward);
+        assert_eq!(solidity(&cube()), Solidity::Outward);
+        assert_eq!(solidity(&inside_out(cube())), Solidity::Inward);
     }
 
     #[test]
@@ -141,19 +172,14 @@ mod tests {
     }
 
     #[test]
-    fn two_shells_wound_against_each_other_are_open() {
-        let (a, mut b) = (cube(), cube());
-        for p in &mut b.positions {
-            p[0] += 3.0;
-        }
-        for tri in &mut b.triangles {
-            tri.swap(1, 2);
-        }
-        let offset = a.positions.len() as u32;
-        let positions = a.positions.iter().chain(&b.positions).copied().collect();
-        let triangles = a.triangles.iter().copied().chain(b.triangles.iter().map(|t| t.map(|v| v + offset))).collect();
-        let both = Mesh::new("pair", positions, triangles, vec![1; 24], vec!["s".into()]).unwrap();
-        assert_eq!(solidity(&both), Solidity::Open);
+    fn shells_count_only_when_all_wound_the_same_way() {
+        let apart = moved(cube(), [3.0, 0.0, 0.0], 1.0);
+        assert_eq!(solidity(&join(&cube(), &apart)), Solidity::Outward);
+        assert_eq!(solidity(&join(&cube(), &inside_out(apart))), Solidity::Open);
+        // A hollow cube, its cavity wound inward: the camera never sees the cavity, but the
+        // shells' volumes differ in sign, and the rule keeps it whole.
+        let cavity = inside_out(moved(cube(), [0.25, 0.25, 0.25], 0.5));
+        assert_eq!(solidity(&join(&cube(), &cavity)), Solidity::Open);
     }
 
     #[test]

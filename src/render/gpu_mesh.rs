@@ -64,7 +64,7 @@ impl GpuMesh {
                 &format!("{name} triangle neighbours"),
             )?,
             index_count: indices.len() as u32,
-            solidity: mesh.solidity(&neighbours),
+            solidity: mesh.solidity_with(&neighbours),
         })
     }
 }
