@@ -67,8 +67,9 @@ const uint WALK_TOO_LONG = 0xfffffffeu;
 // from the camera (its silhouette) — or WALK_TOO_LONG.
 uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
     // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
+    // Each step's corners are the ones the step before read for its fold test.
+    vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
     for (int step = 0; step < MAX_WALK_STEPS; step++) {
-        vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
         float winding = edge_function(a, b, c) >= 0.0 ? -1.0 : 1.0;
         // How far p lies outside each edge's line (a–b, b–c, c–a).
         vec3 outside = winding * vec3(edge_function(a, b, p), edge_function(b, c, p), edge_function(c, a, p))
@@ -88,9 +89,10 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
         vec2 to = exit == 0u ? b : (exit == 1u ? c : a);
         vec2 opposite = exit == 0u ? c : (exit == 1u ? a : b);
         float here = edge_function(from, to, opposite);
-        vec3 beyond = vec3(edge_function(from, to, triangle_corner(d, next, 0u).xy),
-                           edge_function(from, to, triangle_corner(d, next, 1u).xy),
-                           edge_function(from, to, triangle_corner(d, next, 2u).xy));
+        vec2 next_a = triangle_corner(d, next, 0u).xy, next_b = triangle_corner(d, next, 1u).xy,
+             next_c = triangle_corner(d, next, 2u).xy;
+        vec3 beyond = vec3(edge_function(from, to, next_a), edge_function(from, to, next_b),
+                           edge_function(from, to, next_c));
         // The neighbour's corner off the shared edge is the one farthest from its line.
         vec3 distance = abs(beyond);
         float there = distance.x >= max(distance.y, distance.z) ? beyond.x
@@ -99,6 +101,9 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
             return NO_NEIGHBOUR;
         }
         t = next;
+        a = next_a;
+        b = next_b;
+        c = next_c;
     }
     return WALK_TOO_LONG;
 }
@@ -125,9 +130,7 @@ vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 g
 // then the plane of the pixel's triangle, extrapolated to p', must rise above it by more than
 // a crease between them could explain (each edge bends a polyhedral surface's gradient by at
 // most their difference, over at most p''s distance from the triangle).
-bool hides(uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias) {
-    DrawData d = draws[seen_at.x];
-    uint seen = seen_at.y;
+bool hides(DrawData d, uint seen, vec3 ps, vec2 own, float scale, float bias) {
     uint t = walk_to(d, seen, ps.xy, m.bias_relative * scale);
     if (t == NO_NEIGHBOUR) {
         return false;
@@ -190,22 +193,29 @@ bool shadowed(ivec2 pixel, uint label) {
     uvec4 at_centre = imageLoad(shadow_visibility, s);
     // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
     uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
-    if (at_centre.x != 0u && hides(centre, ps, own, scale, bias)) {
-        return true;
-    }
     uvec2 previous = centre;
-    for (int i = 0; i < 9; i++) {
+    // The draw last read from the table, read again only for a pixel that saw another (a view
+    // of one object has one): a software rasterizer gathers it word by word.
+    uint loaded = 0xffffffffu;
+    DrawData d;
+    for (int k = 0; k < 9; k++) {
+        // The centre first, then its eight neighbours in rows.
+        int i = k == 0 ? 4 : k - int(k <= 4);
         ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
-        if (i == 4 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
             continue;
         }
         uvec4 at = imageLoad(shadow_visibility, q);
         uvec2 seen = at.yz;
-        if (at.x == 0u || seen == centre || seen == previous) {
+        if (at.x == 0u || (k > 0 && (seen == centre || seen == previous))) {
             continue;
         }
         previous = seen;
-        if (hides(seen, ps, own, scale, bias)) {
+        if (seen.x != loaded) {
+            d = draws[seen.x];
+            loaded = seen.x;
+        }
+        if (hides(d, seen.y, ps, own, scale, bias)) {
             return true;
         }
     }
