@@ -130,9 +130,12 @@ vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 g
 // then the plane of the pixel's triangle, extrapolated to p', must rise above it by more than
 // a crease between them could explain (each edge bends a polyhedral surface's gradient by at
 // most their difference, over at most p''s distance from the triangle).
-bool hides(DrawData d, uint seen, vec3 ps, vec2 own, float scale, float bias) {
+// `lower` is the (draw, triangle) over p' last found not to hide it: walks from the pixels
+// around p' mostly end on the same triangle, whose plane is then not evaluated again.
+bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias, inout uvec2 lower) {
+    uint seen = seen_at.y;
     uint t = walk_to(d, seen, ps.xy, m.bias_relative * scale);
-    if (t == NO_NEIGHBOUR) {
+    if (t == NO_NEIGHBOUR || uvec2(seen_at.x, t) == lower) {
         return false;
     }
     float beyond = 0.0; // how far the plane is extrapolated beyond its triangle
@@ -143,7 +146,13 @@ bool hides(DrawData d, uint seen, vec3 ps, vec2 own, float scale, float bias) {
     }
     vec2 gradient;
     vec2 rise = plane_rise(d, t, ps, scale, bias, gradient);
-    return rise.x > rise.y + l1_length(gradient - own) * beyond;
+    if (rise.x > rise.y + l1_length(gradient - own) * beyond) {
+        return true;
+    }
+    if (beyond == 0.0) {
+        lower = uvec2(seen_at.x, t);
+    }
+    return false;
 }
 
 bool shadowed(ivec2 pixel, uint label) {
@@ -198,6 +207,7 @@ bool shadowed(ivec2 pixel, uint label) {
     // of one object has one): a software rasterizer gathers it word by word.
     uint loaded = 0xffffffffu;
     DrawData d;
+    uvec2 lower = uvec2(0xffffffffu);
     for (int k = 0; k < 9; k++) {
         // The centre first, then its eight neighbours in rows.
         int i = k == 0 ? 4 : k - int(k <= 4);
@@ -215,7 +225,7 @@ bool shadowed(ivec2 pixel, uint label) {
             d = draws[seen.x];
             loaded = seen.x;
         }
-        if (hides(d, seen.y, ps, own, scale, bias)) {
+        if (hides(d, seen, ps, own, scale, bias, lower)) {
             return true;
         }
     }
