@@ -15,10 +15,10 @@ struct DrawData {
     uvec2 normals;           // and its per-triangle unit normals (model frame, f64-derived)
     uint label_base;         // label = label_base + surface id
     uint draw_index;         // this draw's entry in the draw table (shadow view)
-    uvec2 neighbours;        // device address of the triangles across each triangle's edges
+    uvec2 links;             // device address of what lies across each triangle's edges
 };
 
-// A neighbour entry that links no triangle (mesh::NO_NEIGHBOUR).
+// An edge link that names no triangle (mesh::NO_NEIGHBOUR).
 const uint NO_NEIGHBOUR = 0xffffffffu;
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words {
@@ -63,9 +63,10 @@ vec3 triangle_normal(DrawData d, uint triangle) {
     return rotate_to_view(d, vec3(n.value[3u * triangle], n.value[3u * triangle + 1u], n.value[3u * triangle + 2u]));
 }
 
-// The triangle across edge k (corners k, k + 1) of a triangle, or NO_NEIGHBOUR.
-uint triangle_neighbour(DrawData d, uint triangle, uint k) {
-    return Words(d.neighbours).word[3u * triangle + k];
+// What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that
+// shaders/shadow_mask.comp decodes (src/mesh/adjacency.rs, Mesh::edge_links).
+uint triangle_link(DrawData d, uint triangle, uint k) {
+    return Words(d.links).word[3u * triangle + k];
 }
 
 uint triangle_label(DrawData d, uint triangle) {

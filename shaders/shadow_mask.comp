@@ -33,6 +33,10 @@ layout(push_constant, std430) uniform Mask {
 layout(constant_id = 0) const uint TEST = 0xffffffffu;
 layout(constant_id = 1) const uint TEST_LABEL = 0xffffffffu;
 layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
+// How an edge link packs the neighbour (src/mesh/adjacency.rs, given by the host).
+layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
+layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
+layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 
 // Whether shadow pixel q exists and carries `label`.
 bool shadow_label_is(ivec2 q, uint label) {
@@ -67,7 +71,7 @@ const uint WALK_TOO_LONG = 0xfffffffeu;
 // from the camera (its silhouette) — or WALK_TOO_LONG.
 uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
     // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
-    // Each step's corners are the ones the step before read for its fold test.
+    // Each step's corners are the ones the step before had.
     vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
     for (int step = 0; step < MAX_WALK_STEPS; step++) {
         float winding = edge_function(a, b, c) >= 0.0 ? -1.0 : 1.0;
@@ -79,8 +83,8 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
             return t;
         }
         uint exit = outside.x == farthest ? 0u : (outside.y == farthest ? 1u : 2u);
-        uint next = triangle_neighbour(d, t, exit);
-        if (next == NO_NEIGHBOUR) {
+        uint link = triangle_link(d, t, exit);
+        if (link == NO_NEIGHBOUR) {
             return NO_NEIGHBOUR;
         }
         // Across the edge the surface goes on only if the neighbour lies on the other side of
@@ -88,22 +92,20 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
         vec2 from = exit == 0u ? a : (exit == 1u ? b : c);
         vec2 to = exit == 0u ? b : (exit == 1u ? c : a);
         vec2 opposite = exit == 0u ? c : (exit == 1u ? a : b);
-        float here = edge_function(from, to, opposite);
-        vec2 next_a = triangle_corner(d, next, 0u).xy, next_b = triangle_corner(d, next, 1u).xy,
-             next_c = triangle_corner(d, next, 2u).xy;
-        vec3 beyond = vec3(edge_function(from, to, next_a), edge_function(from, to, next_b),
-                           edge_function(from, to, next_c));
-        // The neighbour's corner off the shared edge is the one farthest from its line.
-        vec3 distance = abs(beyond);
-        float there = distance.x >= max(distance.y, distance.z) ? beyond.x
-                    : (distance.y >= distance.z ? beyond.y : beyond.z);
-        if (here * there >= 0.0) {
+        // The neighbour shares from and to (the same points: vertices are matched by
+        // position), so only its third corner is read.
+        uint next = link >> LINK_INDEX_SHIFT, edge = link & LINK_EDGE_MASK;
+        vec2 third = triangle_corner(d, next, (edge + 2u) % 3u).xy;
+        if (edge_function(from, to, opposite) * edge_function(from, to, third) >= 0.0) {
             return NO_NEIGHBOUR;
         }
+        // Its corners in order: its edge number `edge` runs from → to, or back.
+        bool same_way = (link & LINK_SAME_WAY) != 0u;
+        vec2 first = same_way ? from : to, second = same_way ? to : from;
+        a = edge == 0u ? first : (edge == 1u ? third : second);
+        b = edge == 0u ? second : (edge == 1u ? first : third);
+        c = edge == 0u ? third : (edge == 1u ? second : first);
         t = next;
-        a = next_a;
-        b = next_b;
-        c = next_c;
     }
     return WALK_TOO_LONG;
 }

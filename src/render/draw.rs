@@ -26,7 +26,7 @@ pub struct DrawConstants {
     normals: [u32; 2],
     label_base: u32,
     draw_index: u32,
-    neighbours: [u32; 2],
+    links: [u32; 2],
 }
 
 // The struct's std430 size; also the push-constant size every Vulkan device supports.
@@ -61,7 +61,7 @@ impl DrawConstants {
             normals: draw.mesh.normals.address_words(),
             label_base: draw.label_base,
             draw_index,
-            neighbours: draw.mesh.neighbours.address_words(),
+            links: draw.mesh.links.address_words(),
         }
     }
 }

@@ -1,5 +1,5 @@
 //! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
-//! per-triangle surface ids, unit normals and neighbours; and whether the mesh bounds a
+//! per-triangle surface ids, unit normals and edge links; and whether the mesh bounds a
 //! solid, found once here, so that the compute rasterizer may skip the triangles facing away.
 //! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
 //! to label the pixel and evaluate its triangle's plane exactly.
@@ -8,9 +8,9 @@
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its
 //! digits (a box cut into aspect-1000 strips showed shadow on a face nothing can shadow).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
-use crate::mesh::{Mesh, Solidity};
+use crate::mesh::{linked_triangle, Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
 use std::sync::Arc;
 
@@ -20,8 +20,8 @@ pub struct GpuMesh {
     pub(crate) surface_ids: Buffer,
     /// xyz of each triangle's unit normal (model frame), three floats a triangle.
     pub(crate) normals: Buffer,
-    /// The triangles across each triangle's three edges (`Mesh::triangle_neighbours`).
-    pub(crate) neighbours: Buffer,
+    /// What lies across each triangle's three edges (`Mesh::edge_links`).
+    pub(crate) links: Buffer,
     pub(crate) index_count: u32,
     /// Whether the mesh bounds a solid, and which way its normals point.
     pub(crate) solidity: Solidity,
@@ -31,7 +31,17 @@ impl GpuMesh {
     pub fn upload(ctx: &Arc<GpuContext>, mesh: &Mesh) -> Result<Self> {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-        let neighbours = mesh.triangle_neighbours();
+        if mesh.triangles.len() > MAX_LINKED_TRIANGLES {
+            return Err(Error::Mesh {
+                name: name.clone(),
+                reason: format!(
+                    "it has {} triangles; at most {MAX_LINKED_TRIANGLES} can be rendered",
+                    mesh.triangles.len()
+                ),
+            });
+        }
+        let links = mesh.edge_links();
+        let neighbours: Vec<[u32; 3]> = links.iter().map(|l| l.map(linked_triangle)).collect();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
                 ctx,
@@ -57,11 +67,11 @@ impl GpuMesh {
                 &unit_normals(mesh),
                 &format!("{name} normals"),
             )?,
-            neighbours: Buffer::device_local_with_data(
+            links: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
-                &neighbours,
-                &format!("{name} triangle neighbours"),
+                &links,
+                &format!("{name} edge links"),
             )?,
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&neighbours),

@@ -6,6 +6,7 @@ use super::targets::{ViewKind, ViewTargets};
 use super::Views;
 use crate::error::Result;
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowTest, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
@@ -70,7 +71,14 @@ impl MaskPipelines {
                 (MaskBindings::IMAGES, MaskBindings::BUFFERS),
                 size_of::<MaskConstants>(),
                 shaders::SHADOW_MASK_COMP,
-                &[test as u32, ShadowTest::Label as u32, ShadowTest::LabelSquare as u32],
+                &[
+                    test as u32,
+                    ShadowTest::Label as u32,
+                    ShadowTest::LabelSquare as u32,
+                    LINK_INDEX_SHIFT,
+                    LINK_SAME_WAY,
+                    LINK_EDGE_MASK,
+                ],
                 name,
             )
         };
