@@ -85,13 +85,19 @@ Setup set_up(DrawData d, uint t) {
     return s;
 }
 
-// Tests one pixel and keeps the triangle there if it is the nearest so far.
-void cover(DrawData d, uint t, Setup s, ivec2 pixel) {
+// The edge functions of b–c, c–a and a–b at the centre of a pixel.
+i64vec3 edges_at(Setup s, ivec2 pixel) {
     i64vec2 p = i64vec2(pixel) * 256 + 128;
-    int64_t e0 = edge(s.b, s.c, p), e1 = edge(s.c, s.a, p), e2 = edge(s.a, s.b, p);
-    if (!((e0 > 0 || (e0 == 0 && s.bc)) && (e1 > 0 || (e1 == 0 && s.ca)) && (e2 > 0 || (e2 == 0 && s.ab)))) {
-        return;
-    }
+    return i64vec3(edge(s.b, s.c, p), edge(s.c, s.a, p), edge(s.a, s.b, p));
+}
+
+// Whether a pixel centre with edge functions e is covered.
+bool inside(Setup s, i64vec3 e) {
+    return (e.x > 0 || (e.x == 0 && s.bc)) && (e.y > 0 || (e.y == 0 && s.ca)) && (e.z > 0 || (e.z == 0 && s.ab));
+}
+
+// Keeps the triangle at a covered pixel if it is the nearest there so far.
+void keep(DrawData d, uint t, Setup s, ivec2 pixel) {
     float z = plane_z(d, s.corner, s.normal, pixel);
     precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
@@ -112,7 +118,10 @@ void main() {
     Setup s = set_up(d, t);
     ivec2 box = s.last - s.first + 1;
     for (int i = int(gl_LocalInvocationIndex); i < box.x * box.y; i += int(gl_WorkGroupSize.x)) {
-        cover(d, t, s, s.first + ivec2(i % box.x, i / box.x));
+        ivec2 pixel = s.first + ivec2(i % box.x, i / box.x);
+        if (inside(s, edges_at(s, pixel))) {
+            keep(d, t, s, pixel);
+        }
     }
 }
 #else
@@ -150,10 +159,20 @@ void main() {
     if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t)) {
         return;
     }
+    // From pixel to pixel the edge functions change by constants: exact integer steps, where
+    // evaluating them afresh takes 64-bit products.
+    i64vec3 step_right = -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
+    i64vec3 step_down = 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
+    i64vec3 row_start = edges_at(s, s.first);
     for (int row = s.first.y; row <= s.last.y; row++) {
+        i64vec3 e = row_start;
         for (int col = s.first.x; col <= s.last.x; col++) {
-            cover(d, t, s, ivec2(col, row));
+            if (inside(s, e)) {
+                keep(d, t, s, ivec2(col, row));
+            }
+            e += step_right;
         }
+        row_start += step_down;
     }
 }
 #endif
