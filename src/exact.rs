@@ -5,7 +5,7 @@
 //! The first ray travels down −z from the pixel centre; the nearest surface it meets gives the
 //! pixel's label, z and plane. The second travels from that point p toward the camera, along
 //! d_cam; rotated by R_y(−θ) it travels down −z too, so both rays ask one question of a
-//! [`VerticalCaster`]: which triangles lie over (x, y), and at what heights. Each caster
+//! `VerticalCaster`: which triangles lie over (x, y), and at what heights. Each caster
 //! answers it from a bounding-volume hierarchy (parry3d-f64's) over the triangles' extents,
 //! with an exact f64 point-in-triangle test, edges included.
 //!

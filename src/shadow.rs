@@ -12,7 +12,7 @@
 //!   2. a surface lies above p' on the camera ray through it. The shadow view is a visibility
 //!      buffer (which triangle of which draw is nearest at each pixel); for each surface seen
 //!      at the 3×3 shadow pixels around p', the test walks over that surface's edges (its
-//!      triangle neighbours, `Mesh::triangle_neighbours`) from the triangle the pixel saw to
+//!      edge links, `Mesh::edge_links`) from the triangle the pixel saw to
 //!      the one over p', stopping where the surface ends or folds away (a silhouette), and
 //!      compares that triangle's plane at p' with p'.z. Triangles much smaller than a pixel,
 //!      missing from the buffer, are found this way.

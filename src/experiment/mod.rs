@@ -45,7 +45,7 @@ pub const THETA_DEG: f64 = 45.0;
 /// How big an experiment is.
 #[derive(Debug, Clone, Copy)]
 pub struct ExperimentConfig {
-    /// How many of the models, in [`model_order`]'s order (2 to 14).
+    /// How many of the models, in `model_order`'s order (2 to 14).
     pub models: usize,
     pub views_per_model: usize,
     /// Image side, pixels (the image spans 5 model units).

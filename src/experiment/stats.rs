@@ -229,7 +229,7 @@ const SMALLEST_PLOTTED: f64 = 1e-5;
 
 /// `scores.png`: histograms of log10 s, correct against incorrect (each as a fraction of its
 /// class), without and with shadowing side by side. Scores of 0 (rejected hypotheses) and
-/// below [`SMALLEST_PLOTTED`] sit in the leftmost bin.
+/// below `SMALLEST_PLOTTED` sit in the leftmost bin.
 pub fn write_plot(path: &Path, scored: &[Scored]) -> Result<()> {
     const BINS: usize = 30;
     let positive = scored.iter().flat_map(|s| [s.plain, s.shadow]).filter(|&s| s > 0.0);

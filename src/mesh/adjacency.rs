@@ -5,7 +5,9 @@
 //! Vertices are matched by position, not index: OBJ files often repeat a vertex for each
 //! normal or texture coordinate it carries, and the surface is still one surface. An edge
 //! shared by exactly two triangles links them; a border edge, or one shared by three or more
-//! triangles (where "across" means nothing), links nothing.
+//! triangles (where "across" means nothing), links nothing. The walk reads links that also
+//! say which edge of the neighbour is the shared one and which way it runs
+//! ([`Mesh::edge_links`]): it then reads only the neighbour's third corner.
 
 use super::Mesh;
 use std::collections::HashMap;
