@@ -8,7 +8,8 @@
 //! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
 //! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024², with
 //! label-mode and depth-mode shadows.
-//! `-- --rasters` runs only these two.
+//! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
+//! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these three.
 //!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
@@ -41,6 +42,8 @@ fn main() -> anyhow::Result<()> {
     println!("device: {}", verifier.renderer().context().device_name());
     println!("sensed image: {}×{}, {} valid pixels", sensed.width, sensed.height, sensed.valid);
     let compute = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute))?;
+    // First, before other tables leave freed memory resident.
+    memory_by_batch(&[&verifier, &compute], &sensed, &scene, quick)?;
     if std::env::args().any(|a| a == "--rasters") {
         raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
         return filling_costs(&[&verifier, &compute], quick);
@@ -89,6 +92,45 @@ fn main() -> anyhow::Result<()> {
     effect_costs(&verifier, &sensed, &scene)?;
     raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
     filling_costs(&[&verifier, &compute], quick)
+}
+
+/// Peak resident memory of this process while each rasterizer verifies batches of growing
+/// size: it may grow up to one chunk (the submission's commands and per-hypothesis tables),
+/// and not beyond (slots are reused, and a chunk's buffers freed before the next). On lavapipe GPU memory is host memory, so this counts both; on a discrete GPU
+/// only the host's. Linux only: the peak is reset through /proc/self/clear_refs.
+fn memory_by_batch(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
+    let model_name = "builtin:sphere:100";
+    println!("memory by batch size: {model_name}, depth-mode shadows, 256², peak resident MiB while verifying");
+    println!("{:>6} {:>12} {:>12}", "batch", "graphics MiB", "compute MiB");
+    let settings = VerifySettings {
+        sensor: scene.sensor,
+        shadow: ShadowSettings::of(ShadowMode::Depth),
+        effects: Effects::default(),
+        tolerance: 0.1,
+        compare_shadow: false,
+        chunk_size: 1024,
+    };
+    let batches: &[usize] = if quick { &[16, 256] } else { &[16, 1024, 4096] };
+    for &n in batches {
+        let mut peaks = Vec::new();
+        for verifier in verifiers {
+            let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, n);
+            verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+            std::fs::write("/proc/self/clear_refs", "5")?;
+            verifier.verify(sensed, &settings, &hypotheses, &mut |_| {})?;
+            peaks.push(peak_resident_mib()?);
+        }
+        println!("{n:>6} {:>12.1} {:>12.1}", peaks[0], peaks[1]);
+    }
+    Ok(())
+}
+
+/// VmHWM of /proc/self/status, in MiB.
+fn peak_resident_mib() -> anyhow::Result<f64> {
+    let status = std::fs::read_to_string("/proc/self/status")?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).ok_or_else(|| anyhow::anyhow!("no VmHWM"))?;
+    let kib: f64 = line.split_whitespace().nth(1).ok_or_else(|| anyhow::anyhow!("bad VmHWM"))?.parse()?;
+    Ok(kib / 1024.0)
 }
 
 /// Milliseconds per hypothesis with each rasterizer for a model filling the image: its own
