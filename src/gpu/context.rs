@@ -8,9 +8,9 @@
 //! Resources hold an `Arc<GpuContext>`, so the context (allocator, then device, then
 //! instance) is torn down only after the last of them.
 //!
-//! Dynamic rendering and synchronization2 are core in Vulkan 1.3; on a 1.2 device they come
-//! from VK_KHR_dynamic_rendering and VK_KHR_synchronization2, whose entry points differ but
-//! whose semantics do not. The context picks one set at creation and every caller goes
+//! Dynamic rendering, synchronization2 and a dynamic cull mode are core in Vulkan 1.3; on a
+//! 1.2 device they come from VK_KHR_dynamic_rendering, VK_KHR_synchronization2 and
+//! VK_EXT_extended_dynamic_state, whose entry points differ but whose semantics do not. The context picks one set at creation and every caller goes
 //! through it ([`GpuContext::cmd_pipeline_barrier2`] and its siblings).
 
 use crate::error::{Error, Result, VkResultExt};
@@ -89,7 +89,11 @@ struct Recorder {
 /// Where the Vulkan 1.3 commands rangesynth uses come from.
 enum Vulkan13Commands {
     Core,
-    Extensions { rendering: khr::dynamic_rendering::Device, sync2: khr::synchronization2::Device },
+    Extensions {
+        rendering: khr::dynamic_rendering::Device,
+        sync2: khr::synchronization2::Device,
+        dynamic_state: ext::extended_dynamic_state::Device,
+    },
 }
 
 struct DebugMessenger {
@@ -159,6 +163,8 @@ impl GpuContext {
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
         let mut rendering = vk::PhysicalDeviceDynamicRenderingFeatures::default().dynamic_rendering(true);
         let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
+        let mut dynamic_state =
+            vk::PhysicalDeviceExtendedDynamicStateFeaturesEXT::default().extended_dynamic_state(true);
         // gl_PrimitiveID in a fragment shader needs geometryShader.
         let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true).shader_int64(int64_atomics);
         let extensions = if core_1_3 { vec![] } else { EXTENSIONS_1_2.iter().map(|e| e.as_ptr()).collect() };
@@ -170,7 +176,7 @@ impl GpuContext {
         device_info = if core_1_3 {
             device_info.push_next(&mut v13)
         } else {
-            device_info.push_next(&mut rendering).push_next(&mut sync2)
+            device_info.push_next(&mut rendering).push_next(&mut sync2).push_next(&mut dynamic_state)
         };
         // SAFETY: the features were checked by choose_device; pointers outlive the call.
         let device =
@@ -195,6 +201,7 @@ impl GpuContext {
             false => Vulkan13Commands::Extensions {
                 rendering: khr::dynamic_rendering::Device::new(&instance, &device),
                 sync2: khr::synchronization2::Device::new(&instance, &device),
+                dynamic_state: ext::extended_dynamic_state::Device::new(&instance, &device),
             },
         };
         Ok(Arc::new(Self {
@@ -250,6 +257,20 @@ impl GpuContext {
             match &self.commands {
                 Vulkan13Commands::Core => self.device.cmd_end_rendering(cmd),
                 Vulkan13Commands::Extensions { rendering, .. } => rendering.cmd_end_rendering(cmd),
+            }
+        }
+    }
+
+    /// `vkCmdSetCullMode`, core or EXT.
+    ///
+    /// # Safety
+    /// `cmd` is recording with a pipeline bound whose cull mode is dynamic.
+    pub(crate) unsafe fn cmd_set_cull_mode(&self, cmd: vk::CommandBuffer, mode: vk::CullModeFlags) {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            match &self.commands {
+                Vulkan13Commands::Core => self.device.cmd_set_cull_mode(cmd, mode),
+                Vulkan13Commands::Extensions { dynamic_state, .. } => dynamic_state.cmd_set_cull_mode(cmd, mode),
             }
         }
     }
@@ -527,7 +548,8 @@ unsafe extern "system" fn collect_message(
 }
 
 /// Device extensions that stand in for Vulkan 1.3 on a 1.2 device.
-const EXTENSIONS_1_2: [&CStr; 2] = [khr::dynamic_rendering::NAME, khr::synchronization2::NAME];
+const EXTENSIONS_1_2: [&CStr; 3] =
+    [khr::dynamic_rendering::NAME, khr::synchronization2::NAME, ext::extended_dynamic_state::NAME];
 
 /// The requested, else first discrete, else first device that has what rangesynth needs,
 /// with a queue family doing graphics and compute; and whether it takes the core 1.3 path
@@ -591,15 +613,23 @@ fn suitability(
     // answers for either path.
     let mut rendering = vk::PhysicalDeviceDynamicRenderingFeatures::default();
     let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default();
+    // Core in 1.3 without a feature to ask for; the 1.2 path needs the extension's.
+    let mut dynamic_state = vk::PhysicalDeviceExtendedDynamicStateFeaturesEXT::default();
     let mut features =
         vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut rendering).push_next(&mut sync2);
+    if !core_1_3 {
+        features = features.push_next(&mut dynamic_state);
+    }
     // SAFETY: valid physical device; the chain outlives the call.
     unsafe { instance.get_physical_device_features2(pd, &mut features) };
+    let geometry_shader = features.features.geometry_shader;
+    let dynamic_cull_mode = if core_1_3 { vk::TRUE } else { dynamic_state.extended_dynamic_state };
     let missing: Vec<&str> = [
-        (features.features.geometry_shader, "geometryShader"),
+        (geometry_shader, "geometryShader"),
         (v12.buffer_device_address, "bufferDeviceAddress"),
         (rendering.dynamic_rendering, "dynamicRendering"),
         (sync2.synchronization2, "synchronization2"),
+        (dynamic_cull_mode, "extendedDynamicState"),
     ]
     .iter()
     .filter(|(on, _)| *on == vk::FALSE)

@@ -6,6 +6,7 @@ use super::gpu_mesh::GpuMesh;
 use super::pipelines::ViewPipelines;
 use super::targets::ViewTargets;
 use crate::gpu::GpuContext;
+use crate::mesh::Solidity;
 use crate::sensor::{PixelRect, ViewGrid};
 use ash::vk;
 use glam::{DMat4, DVec3};
@@ -148,15 +149,27 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
     }
 }
 
-/// Records the draws, each with its constants and its number in the draw table, into the
-/// bound pipeline.
+/// Which of a mesh's triangles the graphics pipeline culls: a solid's facing away from the
+/// camera, which are never the first hit (src/mesh/solid.rs), and none of an open mesh's. The
+/// compute rasterizer skips the same ones (compute_raster.rs).
+fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
+    match solidity {
+        Solidity::Outward => vk::CullModeFlags::BACK,
+        Solidity::Inward => vk::CullModeFlags::FRONT,
+        Solidity::Open => vk::CullModeFlags::NONE,
+    }
+}
+
+/// Records the draws, each with its constants, its number in the draw table and its cull
+/// mode, into the bound pipeline.
 fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
     let d = &ctx.device;
     for &(index, draw) in draws {
         let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index);
         // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
-        // bound; the meshes outlive the submission.
+        // bound, its cull mode dynamic; the meshes outlive the submission.
         unsafe {
+            ctx.cmd_set_cull_mode(cmd, cull_mode(draw.mesh.solidity));
             d.cmd_push_constants(
                 cmd,
                 pass.layout,
