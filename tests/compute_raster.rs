@@ -1,9 +1,9 @@
 //! The compute rasterizer (src/render/compute_raster.rs) against the graphics pipeline: the
 //! same coverage rule (top-left), the same sub-pixel precision (1/256) and the same plane z
 //! should give the same images. The allowance is stated here: none. Measured on lavapipe:
-//! every label, shadowed label and z bit identical on every case below. (The compute path
-//! skips a solid's triangles facing away, the graphics path draws them: they could differ
-//! only where such a triangle ties in depth with one facing the camera, on a silhouette.)
+//! every label, shadowed label and z bit identical on every case below. (Both skip a solid's
+//! triangles facing away, the graphics pipeline judging by the snapped corners, the compute
+//! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on.)
 
 mod common;
 

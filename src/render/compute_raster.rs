@@ -46,8 +46,8 @@ pub enum Raster {
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
 /// compute against graphics in the same run): spheres of 0.015 triangles per footprint pixel
-/// ran 0.85× as fast, 0.071 1.13×, 0.17 1.24×, 0.31 1.33×, 1.3 2.01×, 3.1 3.79×, 32 8.38×;
-/// the box, 0.001, 0.63×. Compute starts to win between the first two (earlier runs put the
+/// ran 0.84× as fast, 0.071 1.15×, 0.17 1.37×, 0.31 1.23×, 1.3 1.97×, 3.1 3.70×, 32 8.26×;
+/// the box, 0.001, 0.85×. Compute starts to win between the first two (earlier runs put the
 /// two within noise of each other up to 0.3). No other device has been measured yet; they use
 /// the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.05;

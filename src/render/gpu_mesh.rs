@@ -1,6 +1,6 @@
 //! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
 //! per-triangle surface ids, unit normals and edge links; and whether the mesh bounds a
-//! solid, found once here, so that the compute rasterizer may skip the triangles facing away.
+//! solid, found once here, so that both rasterizers may skip the triangles facing away.
 //! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
 //! to label the pixel and evaluate its triangle's plane exactly.
 //!
