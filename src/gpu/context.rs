@@ -10,8 +10,9 @@
 //!
 //! Dynamic rendering, synchronization2 and a dynamic cull mode are core in Vulkan 1.3; on a
 //! 1.2 device they come from VK_KHR_dynamic_rendering, VK_KHR_synchronization2 and
-//! VK_EXT_extended_dynamic_state, whose entry points differ but whose semantics do not. The context picks one set at creation and every caller goes
-//! through it ([`GpuContext::cmd_pipeline_barrier2`] and its siblings).
+//! VK_EXT_extended_dynamic_state, whose entry points differ but whose semantics do not. The
+//! context picks one set at creation and every caller goes through it
+//! ([`GpuContext::cmd_pipeline_barrier2`] and its siblings).
 
 use crate::error::{Error, Result, VkResultExt};
 use ash::{ext, khr, vk};
