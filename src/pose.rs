@@ -1,6 +1,8 @@
 //! Rigid poses (model → range frame), given as row-major 4×4 matrices in files and kept in
 //! f64 on the host (DESIGN.md "Coordinates"). A pose that is not rigid would silently scale
-//! or shear the model, so it is refused.
+//! or shear the model, and a mirroring one would turn its solids inside out for culling
+//! (src/mesh/solid.rs), so either is refused: when read from a file, and again where the
+//! library takes a pose (`Renderer::render`, `Verifier::verify`).
 
 use crate::error::{Error, Result};
 use glam::{DMat3, DMat4};
@@ -8,23 +10,32 @@ use glam::{DMat3, DMat4};
 /// How far the rotation part may stray from orthonormal (per entry of RᵀR − I).
 pub const RIGIDITY_TOLERANCE: f64 = 1e-6;
 
-/// Builds a pose from row-major rows, checking that it is a finite rigid transform.
-pub fn pose_from_rows(rows: [[f64; 4]; 4]) -> Result<DMat4> {
-    let bad = |why: &str| Err(Error::Scene(format!("pose {rows:?} {why}")));
+/// Builds a pose from row-major rows, checking that it is a finite rigid transform; `owner`
+/// ("object 2 (part.obj)", "hypothesis \"h7\"") starts the message of a refusal.
+pub fn pose_from_rows(rows: [[f64; 4]; 4], owner: &str) -> Result<DMat4> {
+    let pose = DMat4::from_cols_array_2d(&rows).transpose();
+    check_rigid(&pose, owner)?;
+    Ok(pose)
+}
+
+/// Checks that a pose is a finite rigid transform: a rotation (no scale, shear or mirror)
+/// and a translation. `owner` starts the message of a refusal.
+pub fn check_rigid(pose: &DMat4, owner: &str) -> Result<()> {
+    let rows = pose_rows(pose);
+    let bad = |why: &str| Err(Error::Scene(format!("{owner}: pose {rows:?} {why}")));
     if rows.iter().flatten().any(|v| !v.is_finite()) {
         return bad("has a non-finite entry");
     }
     if rows[3] != [0.0, 0.0, 0.0, 1.0] {
         return bad("must have [0, 0, 0, 1] as its last row");
     }
-    let pose = DMat4::from_cols_array_2d(&rows).transpose();
-    let rotation = DMat3::from_mat4(pose);
+    let rotation = DMat3::from_mat4(*pose);
     let error =
         (rotation.transpose() * rotation - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if error > RIGIDITY_TOLERANCE || rotation.determinant() < 0.0 {
         return bad("is not a rigid transform (its 3×3 part must be a rotation)");
     }
-    Ok(pose)
+    Ok(())
 }
 
 /// Row-major rows of a pose, as files write them.

@@ -99,7 +99,7 @@ impl Scene {
                     entry.model
                 )));
             }
-            let pose = pose_from_rows(entry.pose)?;
+            let pose = pose_from_rows(entry.pose, &format!("object {} ({})", objects.len() + 1, entry.model))?;
             objects.push(SceneObject { model_ref: entry.model, mesh, pose, reflectivity: entry.reflectivity });
         }
         let scene = Scene { sensor: file.sensor, shadow: file.shadow, effects: file.effects, objects };

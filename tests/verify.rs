@@ -269,6 +269,19 @@ fn bad_verification_input_is_refused() {
     assert!(err.to_string().contains("pitch"), "{err}");
     let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
     assert!(VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).is_err());
+    // A pose given through the library is checked as one read from a file: a mirror would turn
+    // the box's solid inside out for culling, a scale would stretch it.
+    for pose in [DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)), DMat4::from_scale(DVec3::splat(2.0))] {
+        let bad = [hypothesis("mirrored", "builtin:box", pose, &[(1, 1)])];
+        let err = VERIFIER.verify(&sensed, &settings(sensor, ShadowMode::Depth), &bad, &mut |_| {}).unwrap_err();
+        assert!(err.to_string().contains("hypothesis \"mirrored\": pose"), "{err}");
+        assert!(err.to_string().contains("not a rigid transform"), "{err}");
+        let mut scene = scene(sensor, ShadowMode::Depth, &[("builtin:box", pose)]);
+        let err = renderer().render(&scene).unwrap_err();
+        assert!(err.to_string().contains("object 1 (builtin:box): pose"), "{err}");
+        scene.objects[0].pose = DMat4::IDENTITY;
+        assert!(renderer().render(&scene).is_ok());
+    }
 }
 
 #[test]

@@ -32,6 +32,7 @@ use crate::error::{Error, Result};
 use crate::exact::{self, render_scene_exact};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::MemoryBudget;
+use crate::pose::check_rigid;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -220,6 +221,9 @@ impl Renderer {
         scene.effects.validate()?;
         scene.shadow.validate()?;
         let label_bases = scene.label_bases()?;
+        for (i, object) in scene.objects.iter().enumerate() {
+            check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
+        }
         // Each model once, however many objects share it, and kept for the next render.
         let uploaded: Vec<Arc<GpuMesh>> =
             scene.objects.iter().map(|object| self.meshes.get(&self.ctx, &object.mesh)).collect::<Result<_>>()?;

@@ -97,7 +97,7 @@ impl HypothesisFile {
             .hypotheses
             .into_iter()
             .map(|h| {
-                let pose = pose_from_rows(h.pose).map_err(|e| Error::Scene(format!("hypothesis {:?}: {e}", h.id)))?;
+                let pose = pose_from_rows(h.pose, &format!("hypothesis {:?}", h.id))?;
                 if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0) {
                     return Err(Error::Scene(format!(
                         "hypothesis {:?}: binding ({scene}, {surface}) uses label 0, which means \"no data\"",

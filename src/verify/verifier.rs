@@ -19,6 +19,7 @@ use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::exact;
 use crate::mesh::Mesh;
+use crate::pose::check_rigid;
 use crate::render::HostView;
 use crate::render::{GpuMesh, Renderer};
 use crate::scene::{load_model, model_key};
@@ -159,6 +160,7 @@ impl Verifier {
             return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", settings.tolerance)));
         }
         for h in hypotheses {
+            check_rigid(&h.pose, &format!("hypothesis {:?}", h.id))?;
             let surfaces = h.model.mesh.surface_count();
             if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0 || m > surfaces) {
                 return Err(Error::Scene(format!(
