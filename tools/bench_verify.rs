@@ -56,14 +56,7 @@ fn main() -> anyhow::Result<()> {
     for model_name in ["builtin:box", "builtin:sphere:100"] {
         let model = verifier.model(model_name, Path::new("."))?;
         for shadow in [ShadowMode::Depth, ShadowMode::None] {
-            let settings = VerifySettings {
-                sensor: scene.sensor,
-                shadow: ShadowSettings::of(shadow),
-                effects: Default::default(),
-                tolerance: 0.1,
-                compare_shadow: false,
-                chunk_size: 1024,
-            };
+            let settings = settings(scene.sensor, shadow);
             for &n in batches {
                 let hypotheses = hypotheses(&model, n);
                 // Warm up (pipelines, shader compilation in software drivers).
@@ -106,14 +99,7 @@ fn memory_by_batch(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene,
         "memory by batch size: {model_name}, depth-mode shadows, 256², resident MiB before → peak while verifying"
     );
     println!("{:>6} {:>16} {:>16}", "batch", "graphics MiB", "compute MiB");
-    let settings = VerifySettings {
-        sensor: scene.sensor,
-        shadow: ShadowSettings::of(ShadowMode::Depth),
-        effects: Effects::default(),
-        tolerance: 0.1,
-        compare_shadow: false,
-        chunk_size: 1024,
-    };
+    let settings = settings(scene.sensor, ShadowMode::Depth);
     let batches: &[usize] = if quick { &[16, 256] } else { &[16, 1024, 4096] };
     for &n in batches {
         let mut cells = Vec::new();
@@ -165,14 +151,7 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
     for &(model_name, side, extent) in workloads {
         for mode in [ShadowMode::Label, ShadowMode::Depth] {
             let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
-            let settings = VerifySettings {
-                sensor,
-                shadow: ShadowSettings::of(mode),
-                effects: Effects::default(),
-                tolerance: 0.1,
-                compare_shadow: false,
-                chunk_size: 1024,
-            };
+            let settings = settings(sensor, mode);
             let mut millis = Vec::new();
             let mut triangles = 0;
             for verifier in verifiers {
@@ -245,14 +224,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         ]
     };
     for model_name in models {
-        let settings = VerifySettings {
-            sensor: scene.sensor,
-            shadow: ShadowSettings::of(ShadowMode::Depth),
-            effects: Effects::default(),
-            tolerance: 0.1,
-            compare_shadow: false,
-            chunk_size: 1024,
-        };
+        let settings = settings(scene.sensor, ShadowMode::Depth);
         let mut rates = Vec::new();
         let mut triangles = 0;
         let mut density = 0.0;
@@ -279,6 +251,18 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
+}
+
+/// Verification in shadow mode `mode` without effects, τ = 0.1, in chunks of 1,024.
+fn settings(sensor: rangesynth::sensor::Sensor, mode: ShadowMode) -> VerifySettings {
+    VerifySettings {
+        sensor,
+        shadow: ShadowSettings::of(mode),
+        effects: Effects::default(),
+        tolerance: 0.1,
+        compare_shadow: false,
+        chunk_size: 1024,
+    }
 }
 
 /// `n` poses of `model` about the sensed step's, turning by 0.002 rad each.
@@ -315,14 +299,7 @@ fn effect_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> any
     let mut baseline = None;
     for (name, text) in cases.iter().copied().chain([("all", all.as_str())]) {
         let effects: Effects = toml::from_str(text)?;
-        let settings = VerifySettings {
-            sensor: scene.sensor,
-            shadow: ShadowSettings::of(ShadowMode::Depth),
-            effects,
-            tolerance: 0.1,
-            compare_shadow: false,
-            chunk_size: 1024,
-        };
+        let settings = VerifySettings { effects, ..settings(scene.sensor, ShadowMode::Depth) };
         verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
         let mut best = f64::INFINITY;
         for _ in 0..5 {
