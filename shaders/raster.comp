@@ -9,7 +9,7 @@
 // Small triangles: one invocation per triangle walks its bounding box. A triangle whose box
 // holds more than LARGE_PIXELS pixels is queued instead (up to the queue's capacity), and
 // LARGE_TRIANGLES, dispatched indirectly, gives each queued triangle a workgroup whose 64
-// invocations share its pixels: one invocation never serialises thousands of pixels.
+// invocations share its rows: one invocation never serialises thousands of pixels.
 layout(local_size_x = 64) in;
 #define FIRST_BUFFER 0
 #include "raster_compute.glsl"
@@ -108,6 +108,19 @@ void keep(DrawData d, uint t, Setup s, ivec2 pixel) {
     atomicMin(nearest[uint(pixel.y) * r.stride + uint(pixel.x)], word);
 }
 
+// Tests the pixels of one row of the box, `e` the edge functions at its first: from pixel to
+// pixel they change by constants, exact integer steps where evaluating them afresh takes
+// 64-bit products.
+void cover_row(DrawData d, uint t, Setup s, int row, i64vec3 e) {
+    i64vec3 step_right = -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
+    for (int col = s.first.x; col <= s.last.x; col++) {
+        if (inside(s, e)) {
+            keep(d, t, s, ivec2(col, row));
+        }
+        e += step_right;
+    }
+}
+
 #ifdef LARGE_TRIANGLES
 void main() {
     if (gl_WorkGroupID.x >= large_count) {
@@ -116,12 +129,9 @@ void main() {
     DrawData d = draws[r.draw];
     uint t = large[gl_WorkGroupID.x];
     Setup s = set_up(d, t);
-    ivec2 box = s.last - s.first + 1;
-    for (int i = int(gl_LocalInvocationIndex); i < box.x * box.y; i += int(gl_WorkGroupSize.x)) {
-        ivec2 pixel = s.first + ivec2(i % box.x, i / box.x);
-        if (inside(s, edges_at(s, pixel))) {
-            keep(d, t, s, pixel);
-        }
+    // The workgroup's invocations share the box's rows.
+    for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
+        cover_row(d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
     }
 }
 #else
@@ -159,19 +169,11 @@ void main() {
     if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t)) {
         return;
     }
-    // From pixel to pixel the edge functions change by constants: exact integer steps, where
-    // evaluating them afresh takes 64-bit products.
-    i64vec3 step_right = -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
+    // One pixel down, the edge functions change by a constant too.
     i64vec3 step_down = 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
     i64vec3 row_start = edges_at(s, s.first);
     for (int row = s.first.y; row <= s.last.y; row++) {
-        i64vec3 e = row_start;
-        for (int col = s.first.x; col <= s.last.x; col++) {
-            if (inside(s, e)) {
-                keep(d, t, s, ivec2(col, row));
-            }
-            e += step_right;
-        }
+        cover_row(d, t, s, row, row_start);
         row_start += step_down;
     }
 }
