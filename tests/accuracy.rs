@@ -4,12 +4,12 @@
 
 mod common;
 
+use common::cli::{fresh_dir, rangesynth_command};
 use common::reference::reference_render;
 use rangesynth::limits::MemoryBudget;
 use rangesynth::Scene;
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::process::Command;
 
 const HEADER: &str = "setting,scene,pixels,wrong_pixels,wrong_pct,max_abs_dz,score_abs_error,ms_per_pose";
 
@@ -33,19 +33,11 @@ model = "builtin:plane:4"
 "#;
 
 fn dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("accuracy").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    fresh_dir("accuracy", name)
 }
 
 fn accuracy(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rangesynth"))
-        .arg("accuracy")
-        .args(args)
-        .env("RANGESYNTH_VALIDATION", "1")
-        .output()
-        .expect("the binary runs")
+    rangesynth_command().arg("accuracy").args(args).output().expect("the binary runs")
 }
 
 struct CsvRow {

@@ -2,22 +2,18 @@
 //! clear message and a non-zero exit code, never a panic. Validation is on throughout (the
 //! CLI exits non-zero when validation reports anything).
 
+mod common;
+
+use common::cli::{fresh_dir, rangesynth_command};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn rangesynth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rangesynth"))
-        .args(args)
-        .env("RANGESYNTH_VALIDATION", "1")
-        .output()
-        .expect("the binary runs")
+    rangesynth_command().args(args).output().expect("the binary runs")
 }
 
 fn dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    fresh_dir("cli", name)
 }
 
 fn text(bytes: &[u8]) -> String {

@@ -3,24 +3,18 @@
 //! reproducing a view's `scores.jsonl` byte for byte from its `hypotheses.json` and
 //! `range.exr`; and the sizes the issue asks of a quick run.
 
+mod common;
+
+use common::cli::{fresh_dir, rangesynth_command};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn rangesynth(args: &[&str], dir: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rangesynth"))
-        .args(args)
-        .current_dir(dir)
-        .env("RANGESYNTH_VALIDATION", "1")
-        .output()
-        .expect("the binary runs")
+    rangesynth_command().args(args).current_dir(dir).output().expect("the binary runs")
 }
 
 fn out_dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("experiment").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    fresh_dir("experiment", name)
 }
 
 /// One hypothesis as scores.jsonl records it.

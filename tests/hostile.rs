@@ -3,6 +3,9 @@
 //! code 1, a message naming the problem, no panic, no abort, no hang) and that earlier output
 //! files survive whole. Each case failed before the fix it names.
 
+mod common;
+
+use common::cli::{fresh_dir, rangesynth_command};
 use rangesynth::io::{parse_range_image, read_range_image};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::load_obj;
@@ -14,8 +17,8 @@ use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
 
 fn rangesynth() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_rangesynth"));
-    c.env("RANGESYNTH_VALIDATION", "1").env_remove("RANGESYNTH_MEMORY_BUDGET");
+    let mut c = rangesynth_command();
+    c.env_remove("RANGESYNTH_MEMORY_BUDGET");
     c
 }
 
@@ -42,10 +45,7 @@ fn finish_within(mut child: Child, limit: Duration, what: &str) -> (ExitStatus, 
 }
 
 fn dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hostile").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    fresh_dir("hostile", name)
 }
 
 fn text(bytes: &[u8]) -> String {

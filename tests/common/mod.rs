@@ -4,6 +4,7 @@
 //! When `RANGESYNTH_EXPECT_DEVICE` is set (CI sets "llvmpipe"), the device must match it.
 #![allow(dead_code)]
 
+pub mod cli;
 pub mod compare;
 pub mod reference;
 pub mod scorer;
