@@ -50,17 +50,28 @@ float tie_depth(DrawData d) {
     return TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x);
 }
 
-// Corner k (0, 1, 2) of a triangle, in the view's frame.
-vec3 triangle_corner(DrawData d, uint triangle, uint k) {
+// Corner k (0, 1, 2) of a triangle as the mesh stores it (model frame): one read that views
+// of the same mesh can share (shaders/raster.comp renders both views from it).
+vec3 mesh_corner(DrawData d, uint triangle, uint k) {
     uint v = Words(d.indices).word[3u * triangle + k];
     Floats p = Floats(d.positions);
-    return to_view(d, vec3(p.value[3u * v], p.value[3u * v + 1u], p.value[3u * v + 2u]));
+    return vec3(p.value[3u * v], p.value[3u * v + 1u], p.value[3u * v + 2u]);
+}
+
+// A triangle's unit normal as the mesh stores it (model frame).
+vec3 mesh_normal(DrawData d, uint triangle) {
+    Floats n = Floats(d.normals);
+    return vec3(n.value[3u * triangle], n.value[3u * triangle + 1u], n.value[3u * triangle + 2u]);
+}
+
+// Corner k (0, 1, 2) of a triangle, in the view's frame.
+vec3 triangle_corner(DrawData d, uint triangle, uint k) {
+    return to_view(d, mesh_corner(d, triangle, k));
 }
 
 // A triangle's unit normal in the view's frame.
 vec3 triangle_normal(DrawData d, uint triangle) {
-    Floats n = Floats(d.normals);
-    return rotate_to_view(d, vec3(n.value[3u * triangle], n.value[3u * triangle + 1u], n.value[3u * triangle + 2u]));
+    return rotate_to_view(d, mesh_normal(d, triangle));
 }
 
 // What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that

@@ -1,22 +1,43 @@
 #version 460
-// The compute rasterizer's coverage passes (src/render/compute_raster.rs). Corners go to
-// window coordinates as raster.vert and the viewport transform put them, are snapped to 1/256
-// pixel (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside
-// every edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact
-// 64-bit integer arithmetic. Each covered pixel keeps the nearest triangle by atomicMin on its
-// visibility word.
+// The compute rasterizer's coverage passes (src/render/compute_raster.rs), over the range
+// view and, where there is one, the shadow view at once: a triangle's corners and normal are
+// read once for both (the reads are most of a small triangle's cost). Corners go to window
+// coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
+// (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
+// edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit
+// integer arithmetic. Each covered pixel keeps the nearest triangle by atomicMin on its
+// view's visibility word.
 //
-// Small triangles: one invocation per triangle walks its bounding box. A triangle whose box
-// holds more than LARGE_PIXELS pixels is queued instead (up to the queue's capacity), and
-// LARGE_TRIANGLES, dispatched indirectly, gives each queued triangle a workgroup whose 64
-// invocations share its rows: one invocation never serialises thousands of pixels.
+// Small triangles: one invocation per triangle walks its bounding box in each view. A
+// triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
+// instead (up to the queue's capacity), and LARGE_TRIANGLES, dispatched indirectly, gives each
+// queued (triangle, view) a workgroup whose 64 invocations share its rows: one invocation
+// never serialises thousands of pixels.
 layout(local_size_x = 64) in;
-#define FIRST_BUFFER 0
 #include "raster_compute.glsl"
 
-// The queue of large triangles, and the indirect dispatch's (x, y, z), x its length.
-layout(set = 0, binding = 2, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 3, std430) buffer LargeCount { uint large_count; uint large_y; uint large_z; };
+// Each view's draw table and visibility words: views[0] is the range view, views[1] the
+// shadow view (where there is none, the range view's are bound again and never used).
+layout(set = 0, binding = 0, std430) readonly buffer RangeDraws { DrawData range_draws[]; };
+layout(set = 0, binding = 1, std430) readonly buffer ShadowDraws { DrawData shadow_draws[]; };
+layout(set = 0, binding = 2, std430) buffer RangeWords { uint64_t range_words[]; };
+layout(set = 0, binding = 3, std430) buffer ShadowWords { uint64_t shadow_words[]; };
+// The queue of large (triangle, view) pairs, a view's bit above the triangle's index (meshes
+// have fewer than 2^29 triangles: src/mesh/adjacency.rs), and the indirect dispatch's
+// (x, y, z), x its length.
+layout(set = 0, binding = 4, std430) buffer Large { uint large[]; };
+layout(set = 0, binding = 5, std430) buffer LargeCount { uint large_count; uint large_y; uint large_z; };
+
+// Matches `CoverageConstants` in src/render/compute_raster.rs.
+layout(push_constant, std430) uniform Coverage {
+    RasterView views[2];
+    uint view_count;     // 1: the range view alone; 2: and the shadow view
+    uint triangles;      // the mesh's triangle count
+    uint large_capacity; // room in the queue of large triangles
+    int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
+} r;
+
+const uint VIEW_BIT = 31u;
 
 // A triangle with more pixels in its bounding box than this is queued.
 const int LARGE_PIXELS = 256;
@@ -47,8 +68,31 @@ bool top_left(i64vec2 a, i64vec2 b) {
     return e.y < 0 || (e.y == 0 && e.x > 0);
 }
 
-// A triangle set up for coverage tests: snapped corners with positive area, which edges are
-// top or left, and the pixels of its bounding box within the area (empty when degenerate).
+// A triangle as the mesh stores it: read once, rendered in each view.
+struct MeshTriangle {
+    vec3 corner[3];
+    vec3 normal;
+};
+
+// Its corners, the normal already read.
+MeshTriangle read_triangle(DrawData d, uint t, vec3 normal) {
+    MeshTriangle m;
+    for (uint k = 0u; k < 3u; k++) {
+        m.corner[k] = mesh_corner(d, t, k);
+    }
+    m.normal = normal;
+    return m;
+}
+
+// A solid's triangles facing away from the camera are never the first hit
+// (src/mesh/solid.rs).
+bool culled(DrawData d, vec3 model_normal) {
+    return r.cull != 0 && float(r.cull) * rotate_to_view(d, model_normal).z < 0.0;
+}
+
+// A triangle set up for coverage tests in one view: snapped corners with positive area,
+// which edges are top or left, and the pixels of its bounding box within the view's area
+// (empty when degenerate).
 struct Setup {
     vec3 corner, normal;    // the plane: corner 0 and the unit normal, view frame
     i64vec2 a, b, c;
@@ -56,13 +100,13 @@ struct Setup {
     ivec2 first, last;
 };
 
-Setup set_up(DrawData d, uint t) {
+Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     Setup s;
-    s.corner = triangle_corner(d, t, 0u);
-    s.normal = triangle_normal(d, t);
+    s.corner = to_view(d, m.corner[0]);
+    s.normal = rotate_to_view(d, m.normal);
     precise vec3 v0 = window(d, s.corner);
-    precise vec3 v1 = window(d, triangle_corner(d, t, 1u));
-    precise vec3 v2 = window(d, triangle_corner(d, t, 2u));
+    precise vec3 v1 = window(d, to_view(d, m.corner[1]));
+    precise vec3 v2 = window(d, to_view(d, m.corner[2]));
     s.a = snap(v0.xy);
     s.b = snap(v1.xy);
     s.c = snap(v2.xy);
@@ -77,8 +121,8 @@ Setup set_up(DrawData d, uint t) {
     s.ca = top_left(s.c, s.a);
     // Pixel centres (col + ½, row + ½) inside the bounding box and the area.
     vec2 lo = min(min(v0.xy, v1.xy), v2.xy), hi = max(max(v0.xy, v1.xy), v2.xy);
-    s.first = max(ivec2(floor(lo - 0.5)), ivec2(r.area.xy));
-    s.last = min(ivec2(ceil(hi - 0.5)), ivec2(r.area.xy + r.area.zw) - 1);
+    s.first = max(ivec2(floor(lo - 0.5)), ivec2(view.area.xy));
+    s.last = min(ivec2(ceil(hi - 0.5)), ivec2(view.area.xy + view.area.zw) - 1);
     if (area == 0) {
         s.last = s.first - 1;
     }
@@ -96,8 +140,8 @@ bool inside(Setup s, i64vec3 e) {
     return (e.x > 0 || (e.x == 0 && s.bc)) && (e.y > 0 || (e.y == 0 && s.ca)) && (e.z > 0 || (e.z == 0 && s.ab));
 }
 
-// Keeps the triangle at a covered pixel if it is the nearest there so far.
-void keep(DrawData d, uint t, Setup s, ivec2 pixel) {
+// Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
+void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
     float z = plane_z(d, s.corner, s.normal, pixel);
     precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
@@ -105,17 +149,22 @@ void keep(DrawData d, uint t, Setup s, ivec2 pixel) {
         return;
     }
     uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-    atomicMin(nearest[uint(pixel.y) * r.stride + uint(pixel.x)], word);
+    uint at = word_index(r.views[v], pixel);
+    if (v == 0u) {
+        atomicMin(range_words[at], word);
+    } else {
+        atomicMin(shadow_words[at], word);
+    }
 }
 
 // Tests the pixels of one row of the box, `e` the edge functions at its first: from pixel to
 // pixel they change by constants, exact integer steps where evaluating them afresh takes
 // 64-bit products.
-void cover_row(DrawData d, uint t, Setup s, int row, i64vec3 e) {
+void cover_row(uint v, DrawData d, uint t, Setup s, int row, i64vec3 e) {
     i64vec3 step_right = -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
     for (int col = s.first.x; col <= s.last.x; col++) {
         if (inside(s, e)) {
-            keep(d, t, s, ivec2(col, row));
+            keep(v, d, t, s, ivec2(col, row));
         }
         e += step_right;
     }
@@ -126,23 +175,29 @@ void main() {
     if (gl_WorkGroupID.x >= large_count) {
         return;
     }
-    DrawData d = draws[r.draw];
-    uint t = large[gl_WorkGroupID.x];
-    Setup s = set_up(d, t);
+    uint entry = large[gl_WorkGroupID.x];
+    uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
+    DrawData d;
+    if (v == 0u) {
+        d = range_draws[r.views[0].draw];
+    } else {
+        d = shadow_draws[r.views[1].draw];
+    }
+    Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal(d, t)));
     // The workgroup's invocations share the box's rows.
     for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
-        cover_row(d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
+        cover_row(v, d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
     }
 }
 #else
-// Queues t unless the queue is full; the queue's length never exceeds its capacity, so the
-// indirect dispatch stays within the device's limits.
-bool queue_large(uint t) {
+// Queues (t, v) unless the queue is full; the queue's length never exceeds its capacity, so
+// the indirect dispatch stays within the device's limits.
+bool queue_large(uint t, uint v) {
     uint length = large_count;
     while (length < r.large_capacity) {
         uint before = atomicCompSwap(large_count, length, length + 1u);
         if (before == length) {
-            large[length] = t;
+            large[length] = t | (v << VIEW_BIT);
             return true;
         }
         length = before;
@@ -150,31 +205,45 @@ bool queue_large(uint t) {
     return false;
 }
 
-void main() {
-    // Read while every invocation is still active: a software rasterizer then reads it once
-    // for all of them instead of gathering it per invocation.
-    DrawData d = draws[r.draw];
-    // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
-    uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    if (t >= r.triangles) {
-        return;
-    }
-    // A solid's triangles facing away from the camera are never the first hit
-    // (src/mesh/solid.rs); skipped before their corners are read.
-    if (r.cull != 0 && float(r.cull) * triangle_normal(d, t).z < 0.0) {
-        return;
-    }
-    Setup s = set_up(d, t);
+// Covers a triangle's pixels in view v, or queues it there if its box is large.
+void cover(uint v, DrawData d, uint t, MeshTriangle m) {
+    Setup s = set_up(d, r.views[v], m);
     ivec2 box = s.last - s.first + 1;
-    if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t)) {
+    if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t, v)) {
         return;
     }
     // One pixel down, the edge functions change by a constant too.
     i64vec3 step_down = 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
     i64vec3 row_start = edges_at(s, s.first);
     for (int row = s.first.y; row <= s.last.y; row++) {
-        cover_row(d, t, s, row, row_start);
+        cover_row(v, d, t, s, row, row_start);
         row_start += step_down;
+    }
+}
+
+void main() {
+    // Read while every invocation is still active: a software rasterizer then reads them
+    // once for all of them instead of gathering them per invocation.
+    DrawData range_draw = range_draws[r.views[0].draw];
+    DrawData shadow_draw = shadow_draws[r.views[1].draw];
+    // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
+    uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    if (t >= r.triangles) {
+        return;
+    }
+    // The normal first: a triangle culled in every view needs no corners.
+    vec3 normal = mesh_normal(range_draw, t);
+    bool in_range = !culled(range_draw, normal);
+    bool in_shadow = r.view_count > 1u && !culled(shadow_draw, normal);
+    if (!in_range && !in_shadow) {
+        return;
+    }
+    MeshTriangle m = read_triangle(range_draw, t, normal);
+    if (in_range) {
+        cover(0u, range_draw, t, m);
+    }
+    if (in_shadow) {
+        cover(1u, shadow_draw, t, m);
     }
 }
 #endif

@@ -5,27 +5,35 @@
 // clears to 0).
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// The view's colour attachments, in src/render/targets.rs order.
+#include "raster_compute.glsl"
+
+// The view's colour attachments, in src/render/targets.rs order, then its draw table and
+// words (src/gpu/descriptors.rs binds images first).
 #ifdef SHADOW_VIEW
-#define FIRST_BUFFER 1
 layout(set = 0, binding = 0, rgba32ui) uniform writeonly uimage2D visibility;
+#define FIRST_BUFFER 1
 #else
-#define FIRST_BUFFER 4
 layout(set = 0, binding = 0, r32ui) uniform writeonly uimage2D label;
 layout(set = 0, binding = 1, r32f) uniform writeonly image2D z;
 layout(set = 0, binding = 2, r32f) uniform writeonly image2D dz_dx;
 layout(set = 0, binding = 3, r32f) uniform writeonly image2D dz_dy;
+#define FIRST_BUFFER 4
 #endif
-#include "raster_compute.glsl"
+layout(set = 0, binding = FIRST_BUFFER, std430) readonly buffer DrawTable { DrawData draws[]; };
+layout(set = 0, binding = FIRST_BUFFER + 1, std430) readonly buffer Nearest { uint64_t nearest[]; };
+
+layout(push_constant, std430) uniform Resolve { RasterView view; } r;
 
 void main() {
-    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, r.area.zw))) {
+    // Read while every invocation is still active: a software rasterizer then reads it once
+    // for all of them instead of gathering it per invocation.
+    DrawData d = draws[r.view.draw];
+    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, r.view.area.zw))) {
         return;
     }
-    ivec2 pixel = ivec2(r.area.xy + gl_GlobalInvocationID.xy);
-    uint64_t word = nearest[uint(pixel.y) * r.stride + uint(pixel.x)];
+    ivec2 pixel = ivec2(r.view.area.xy + gl_GlobalInvocationID.xy);
+    uint64_t word = nearest[word_index(r.view, pixel)];
     bool hit = word != EMPTY;
-    DrawData d = draws[r.draw];
     uint t = uint(word & 0xffffffffUL);
 #ifdef SHADOW_VIEW
     imageStore(visibility, pixel, hit ? uvec4(triangle_label(d, t), d.draw_index, t, 0u) : uvec4(0u));

@@ -72,6 +72,18 @@ fn both_rasterizers_render_identical_images_of_one_object() {
 }
 
 #[test]
+fn the_compute_rasterizer_renders_both_views_in_one_pass() {
+    let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 45.0);
+    let names = |mode| {
+        let out = render_compute(&scene(s, mode, &[("builtin:sphere:64", DMat4::IDENTITY)]));
+        assert_eq!(out.raster, Raster::Compute);
+        out.timings.iter().map(|t| t.name).collect::<Vec<_>>()
+    };
+    assert_eq!(names(ShadowMode::Depth), ["range and shadow", "shadow mask"]);
+    assert_eq!(names(ShadowMode::None), ["range"]);
+}
+
+#[test]
 fn a_view_of_several_objects_stays_on_the_graphics_path() {
     let s = centred_sensor(64, 64, 0.06, [0.0, 0.0], 45.0);
     let sc = scene(s, ShadowMode::Depth, &[("builtin:box", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)]);

@@ -1,16 +1,19 @@
-//! The compute rasterizer (DESIGN.md "Raster paths"): a view rendered by two compute passes
+//! The compute rasterizer (DESIGN.md "Raster paths"): a job's views rendered by compute passes
 //! instead of the graphics pipeline, into the same attachments, so every pass after it is
 //! unchanged.
 //!
-//! - Coverage (shaders/raster.comp): one invocation per triangle finds the pixel centres it
-//!   covers (1/256-pixel snapped corners, the top-left rule, exact integer edge functions) and
-//!   keeps the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle).
-//!   A triangle whose bounding box holds more than 256 pixels is queued instead, and a second,
-//!   indirect dispatch gives each queued triangle a workgroup of 64 invocations. Where the
-//!   mesh bounds a solid (src/mesh/solid.rs), the triangles facing away from the camera are
-//!   skipped before their corners are read.
-//! - Resolve (shaders/raster_resolve.comp): one invocation per pixel writes what the graphics
-//!   path's fragment shader would have written for that triangle.
+//! - Coverage (shaders/raster.comp), over the range view and the shadow view at once: one
+//!   invocation per triangle reads its corners and normal once (the reads are most of a small
+//!   triangle's cost) and, in each view, finds the pixel centres it covers (1/256-pixel
+//!   snapped corners, the top-left rule, exact integer edge functions) and keeps the nearest
+//!   triangle per pixel with a 64-bit atomicMin of (depth bits, triangle) on that view's
+//!   words. A triangle whose bounding box in a view holds more than 256 pixels is queued for
+//!   that view instead, and a second, indirect dispatch gives each queued (triangle, view) a
+//!   workgroup of 64 invocations. Where the mesh bounds a solid (src/mesh/solid.rs), a
+//!   triangle facing away from the camera in a view is skipped there, and one facing away in
+//!   both is skipped before its corners are read.
+//! - Resolve (shaders/raster_resolve.comp), per view: one invocation per pixel writes what the
+//!   graphics path's fragment shader would have written for that triangle.
 //!
 //! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
 //! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
@@ -89,20 +92,30 @@ impl std::str::FromStr for Raster {
     }
 }
 
-/// Push constants of both passes; matches `Raster` in shaders/raster_compute.glsl.
+/// One view as both passes see it; matches `RasterView` in shaders/raster_compute.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RasterConstants {
+struct RasterView {
     area: [u32; 4],
     draw: u32,
     stride: u32,
+    _pad: [u32; 2],
+}
+
+/// Push constants of the coverage passes; matches `Coverage` in shaders/raster.comp.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CoverageConstants {
+    views: [RasterView; 2],
+    view_count: u32,
     triangles: u32,
     large_capacity: u32,
     cull: i32,
 }
 
-const _: () = assert!(std::mem::offset_of!(RasterConstants, triangles) == 24);
-const _: () = assert!(std::mem::offset_of!(RasterConstants, cull) == 32);
+const _: () = assert!(size_of::<RasterView>() == 32);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, view_count) == 64);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 76);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -129,17 +142,25 @@ pub struct ComputeRasterPipelines {
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        // Coverage binds the draw table, the visibility words, the large-triangle queue and its
-        // dispatch arguments; resolve the view's attachments, the draw table and the words.
-        let coverage = (0, 4);
+        // Coverage binds both views' draw tables and visibility words, the large-triangle
+        // queue and its dispatch arguments; resolve one view's attachments, table and words.
+        let coverage = (0, 6);
+        let coverage_push = size_of::<CoverageConstants>();
         let resolve = |kind: ViewKind| (kind.colour_attachments().len(), 2);
-        let push = size_of::<RasterConstants>();
+        let resolve_push = size_of::<RasterView>();
         Ok(Self {
-            coverage: ComputePipeline::new(ctx, coverage, push, shaders::RASTER_COMP, &[], "compute raster coverage")?,
+            coverage: ComputePipeline::new(
+                ctx,
+                coverage,
+                coverage_push,
+                shaders::RASTER_COMP,
+                &[],
+                "compute raster coverage",
+            )?,
             large: ComputePipeline::new(
                 ctx,
                 coverage,
-                push,
+                coverage_push,
                 shaders::RASTER_LARGE_COMP,
                 &[],
                 "compute raster coverage (large triangles)",
@@ -147,7 +168,7 @@ impl ComputeRasterPipelines {
             resolve_range: ComputePipeline::new(
                 ctx,
                 resolve(ViewKind::Range),
-                push,
+                resolve_push,
                 shaders::RASTER_RESOLVE_RANGE_COMP,
                 &[],
                 "compute raster resolve (range view)",
@@ -155,7 +176,7 @@ impl ComputeRasterPipelines {
             resolve_shadow: ComputePipeline::new(
                 ctx,
                 resolve(ViewKind::Shadow),
-                push,
+                resolve_push,
                 shaders::RASTER_RESOLVE_SHADOW_COMP,
                 &[],
                 "compute raster resolve (shadow view)",
@@ -171,37 +192,64 @@ impl ComputeRasterPipelines {
     }
 }
 
-/// A view's per-pixel visibility words and the bindings of both passes over them.
-pub(crate) struct ComputeView {
+/// A view the compute rasterizer renders: its attachments, their size, and its draw table.
+pub(crate) struct ComputeTarget<'t, 'a> {
+    pub targets: &'t ViewTargets,
+    pub size: (u32, u32),
+    pub draw_table: &'a Buffer,
+}
+
+/// One view's visibility words and the bindings of its resolve pass.
+struct ViewWords<'a> {
     kind: ViewKind,
     nearest: Buffer,
     /// Pixels per row of `nearest` (the attachments' width).
     stride: u32,
+    draw_table: &'a Buffer,
+    resolve: StorageSet,
+}
+
+/// The range view's and (where a shadow pass runs) the shadow view's visibility words, the
+/// queue of large triangles the coverage pass fills for both, and the passes' bindings.
+pub(crate) struct ComputeViews<'a> {
+    range: ViewWords<'a>,
+    shadow: Option<ViewWords<'a>>,
     /// The queue of large triangles, and its length as an indirect dispatch's (x, 1, 1).
     large: Buffer,
     large_args: Buffer,
     large_capacity: u32,
     coverage: StorageSet,
-    resolve: StorageSet,
 }
 
-impl ComputeView {
-    /// Visibility words for `targets` (`size` pixels), rendering the draws of `draw_table`,
-    /// none of more than `max_triangles`.
-    #[allow(clippy::too_many_arguments)]
+impl<'a> ComputeViews<'a> {
+    /// Visibility words for the views, rendering draws of no more than `max_triangles`.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
-        kind: ViewKind,
-        targets: &ViewTargets,
-        (width, height): (u32, u32),
-        draw_table: &Buffer,
+        range: ComputeTarget<'_, 'a>,
+        shadow: Option<ComputeTarget<'_, 'a>>,
         max_triangles: u32,
         name: &str,
     ) -> Result<Self> {
-        let bytes = u64::from(width) * u64::from(height) * 8;
-        let nearest = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} visibility words"))?;
-        let large_capacity = max_triangles.clamp(1, MAX_GROUPS);
+        let words = |kind: ViewKind, view: ComputeTarget<'_, 'a>| -> Result<ViewWords<'a>> {
+            let (width, height) = view.size;
+            let bytes = u64::from(width) * u64::from(height) * 8;
+            let nearest =
+                Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
+            let images: Vec<&Image> = view.targets.colour.iter().collect();
+            let resolve = StorageSet::new(
+                ctx,
+                pipelines.resolve(kind).set_layout,
+                &images,
+                &[view.draw_table, &nearest],
+                &format!("{name} {kind:?} view resolve bindings"),
+            )?;
+            Ok(ViewWords { kind, nearest, stride: width, draw_table: view.draw_table, resolve })
+        };
+        let range = words(ViewKind::Range, range)?;
+        let shadow = shadow.map(|view| words(ViewKind::Shadow, view)).transpose()?;
+        let views = if shadow.is_some() { 2 } else { 1 };
+        let large_capacity = max_triangles.saturating_mul(views).clamp(1, MAX_GROUPS);
         let large_bytes = u64::from(large_capacity) * 4;
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
         let args = BufferDesc {
@@ -209,78 +257,85 @@ impl ComputeView {
             ..BufferDesc::gpu_storage(12)
         };
         let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
+        // Without a shadow view, the range view's table and words fill its bindings too.
+        let second = shadow.as_ref().unwrap_or(&range);
         let coverage = StorageSet::new(
             ctx,
             pipelines.coverage.set_layout,
             &[],
-            &[draw_table, &nearest, &large, &large_args],
+            &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
             &format!("{name} coverage bindings"),
         )?;
-        let buffers = [draw_table, &nearest];
-        let images: Vec<&Image> = targets.colour.iter().collect();
-        let resolve = StorageSet::new(
-            ctx,
-            pipelines.resolve(kind).set_layout,
-            &images,
-            &buffers,
-            &format!("{name} resolve bindings"),
-        )?;
-        Ok(Self { kind, nearest, stride: width, large, large_args, large_capacity, coverage, resolve })
+        Ok(Self { range, shadow, large, large_args, large_capacity, coverage })
     }
 
-    /// Records both passes of one draw (number `index` in `draw_table`) over `area`: the
-    /// attachments' colour images end written in GENERAL layout, as a compute pass leaves them.
+    fn views(&self) -> impl Iterator<Item = &ViewWords<'a>> {
+        std::iter::once(&self.range).chain(&self.shadow)
+    }
+
+    /// Records the passes of one draw (number `index` in the draw tables) over the range
+    /// view's `range_area` and, where these words include the shadow view's, over its
+    /// `shadow_targets` and `shadow_area`: the attachments' colour images end written in
+    /// GENERAL layout, as a compute pass leaves them.
     pub fn record(
         &self,
         enc: &mut Encoder,
         pipelines: &ComputeRasterPipelines,
-        targets: &ViewTargets,
-        draw_table: &Buffer,
+        (range_targets, range_area): (&ViewTargets, PixelRect),
+        shadow: Option<(&ViewTargets, PixelRect)>,
         (index, draw): (u32, &Draw),
-        area: PixelRect,
     ) {
         let cmd = enc.cmd;
-        enc.access(&[], &[(&self.nearest, Access::TransferWrite), (&self.large_args, Access::TransferWrite)]);
+        let mut cleared: Vec<_> = self.views().map(|v| (&v.nearest, Access::TransferWrite)).collect();
+        cleared.push((&self.large_args, Access::TransferWrite));
+        enc.access(&[], &cleared);
         // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers.
         unsafe {
             let d = &enc.ctx().device;
-            d.cmd_fill_buffer(cmd, self.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX);
+            for view in self.views() {
+                d.cmd_fill_buffer(cmd, view.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX);
+            }
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
         }
-        enc.access(
-            &[],
-            &[
-                (&self.nearest, Access::ComputeWrite),
-                (draw_table, Access::ComputeRead),
-                (&self.large, Access::ComputeWrite),
-                (&self.large_args, Access::ComputeWrite),
-            ],
-        );
-        let triangles = draw.mesh.index_count / 3;
-        let constants = RasterConstants {
+        let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
             area: [area.col, area.row, area.width, area.height],
             draw: index,
-            stride: self.stride,
+            stride: view.stride,
+            _pad: [0; 2],
+        };
+        let range = raster_view(&self.range, range_area);
+        let shadow_view = self.shadow.as_ref().zip(shadow).map(|(view, (_, area))| raster_view(view, area));
+        let triangles = draw.mesh.index_count / 3;
+        let constants = CoverageConstants {
+            views: [range, shadow_view.unwrap_or(range)],
+            view_count: 1 + u32::from(shadow_view.is_some()),
             triangles,
             large_capacity: self.large_capacity,
             cull: cull_sign(draw.mesh.solidity),
         };
+        let coverage_uses = |queue: Access, args: Access| {
+            let mut uses: Vec<_> = self
+                .views()
+                .flat_map(|v| [(&v.nearest, Access::ComputeWrite), (v.draw_table, Access::ComputeRead)])
+                .collect();
+            uses.extend([(&self.large, queue), (&self.large_args, args)]);
+            uses
+        };
+        enc.access(&[], &coverage_uses(Access::ComputeWrite, Access::ComputeWrite));
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
-        enc.access(
-            &[],
-            &[
-                (&self.nearest, Access::ComputeWrite),
-                (draw_table, Access::ComputeRead),
-                (&self.large, Access::ComputeRead),
-                (&self.large_args, Access::IndirectAndComputeRead),
-            ],
-        );
+        enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
-        let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
-        enc.access(&writes, &[(&self.nearest, Access::ComputeRead), (draw_table, Access::ComputeRead)]);
-        let pixels = [area.width, area.height].map(|n| n.div_ceil(8));
-        self.resolve.dispatch(cmd, pipelines.resolve(self.kind), bytemuck::bytes_of(&constants), pixels);
+        let resolved = std::iter::once((&self.range, range_targets, range)).chain(
+            self.shadow.as_ref().zip(shadow).zip(shadow_view).map(|((view, (targets, _)), rv)| (view, targets, rv)),
+        );
+        for (view, targets, raster_view) in resolved {
+            let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
+            enc.access(&writes, &[(&view.nearest, Access::ComputeRead), (view.draw_table, Access::ComputeRead)]);
+            let area = raster_view.area;
+            let pixels = [area[2], area[3]].map(|n| n.div_ceil(8));
+            view.resolve.dispatch(cmd, pipelines.resolve(view.kind), bytemuck::bytes_of(&raster_view), pixels);
+        }
     }
 }

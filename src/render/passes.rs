@@ -11,7 +11,7 @@
 //! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
 //! resource and the [`Encoder`] derives the barriers.
 
-use super::compute_raster::{ComputeRasterPipelines, ComputeView};
+use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::host_view::HostView;
@@ -41,14 +41,9 @@ pub(crate) struct Slot<'a> {
     effects: Option<EffectBuffers>,
     /// The reflectivity table the effect passes read, where the reflectivity effect is named.
     reflectivities: Option<&'a Buffer>,
-    /// The compute rasterizer's state for the range view and the shadow view, with the draw
-    /// tables it reads, where it renders.
-    compute: Option<ComputeSlot<'a>>,
-}
-
-struct ComputeSlot<'a> {
-    range: (ComputeView, &'a Buffer),
-    shadow: Option<(ComputeView, &'a Buffer)>,
+    /// The compute rasterizer's state for the range view and the shadow view, where it
+    /// renders.
+    compute: Option<ComputeViews<'a>>,
 }
 
 /// What a slot must hold.
@@ -120,26 +115,11 @@ impl<'a> Slot<'a> {
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
         let compute = match (shape.compute_raster, raster_pipelines) {
             (Some((range_table, max_triangles)), Some(rp)) => {
-                let view = |kind, targets, size, table| {
-                    ComputeView::new(
-                        ctx,
-                        rp,
-                        kind,
-                        targets,
-                        size,
-                        table,
-                        max_triangles,
-                        &format!("{name} {kind:?} view"),
-                    )
-                };
-                let range_view = view(ViewKind::Range, &range, (w, h), range_table)?;
-                let shadow_view = match (&shadow, shape.shadow) {
-                    (Some(targets), Some((shadow_width, table))) => {
-                        Some((view(ViewKind::Shadow, targets, (shadow_width, h), table)?, table))
-                    }
-                    _ => None,
-                };
-                Some(ComputeSlot { range: (range_view, range_table), shadow: shadow_view })
+                let range_view = ComputeTarget { targets: &range, size: (w, h), draw_table: range_table };
+                let shadow_view = shadow.as_ref().zip(shape.shadow).map(|(targets, (shadow_width, table))| {
+                    ComputeTarget { targets, size: (shadow_width, h), draw_table: table }
+                });
+                Some(ComputeViews::new(ctx, rp, range_view, shadow_view, max_triangles, name)?)
             }
             _ => None,
         };
@@ -277,45 +257,55 @@ impl Passes<'_> {
         if let Some(c) = &mut clock {
             c.start(cmd);
         }
-        let range_pass = ViewPass {
-            pipelines: &p.range,
-            layout: p.raster_layout,
-            targets: &slot.range,
-            grid: &views.range,
-            view_from_range: DMat4::IDENTITY,
-            origin: views.origin,
-            area: job.area,
+        // The shadow view, where the mode and θ ask for one and the job's rows reach it.
+        let shadow = match (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings) {
+            (Some(targets), Some(grid), Some(area), Some(masked), Some(bindings)) => {
+                self.shadow.test().map(|test| (&**targets, grid, area, masked, bindings, test))
+            }
+            _ => None,
         };
         match compute {
+            // Both views in one coverage pass (compute_raster.rs).
             Some((state, rp, draw)) => {
-                let (view, table) = &state.range;
-                view.record(enc, rp, &slot.range, table, draw, job.area);
+                let shadow_view = shadow.map(|(targets, _, area, ..)| (targets, area));
+                state.record(enc, rp, (&slot.range, job.area), shadow_view, draw);
+                if let Some(c) = &mut clock {
+                    c.lap(cmd, if shadow_view.is_some() { "range and shadow" } else { "range" });
+                }
             }
-            None => record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index),
-        }
-        if let Some(c) = &mut clock {
-            c.lap(cmd, "range");
+            None => {
+                let range_pass = ViewPass {
+                    pipelines: &p.range,
+                    layout: p.raster_layout,
+                    targets: &slot.range,
+                    grid: &views.range,
+                    view_from_range: DMat4::IDENTITY,
+                    origin: views.origin,
+                    area: job.area,
+                };
+                record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
+                if let Some(c) = &mut clock {
+                    c.lap(cmd, "range");
+                }
+                if let Some((targets, grid, area, ..)) = shadow {
+                    let shadow_pass = ViewPass {
+                        pipelines: &p.shadow,
+                        layout: p.raster_layout,
+                        targets,
+                        grid,
+                        view_from_range: sensor.to_shadow_frame(),
+                        origin: views.origin,
+                        area,
+                    };
+                    record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
+                    if let Some(c) = &mut clock {
+                        c.lap(cmd, "shadow");
+                    }
+                }
+            }
         }
         let mut shadowed_labels = None;
-        if let (Some(targets), Some(grid), Some(shadow_area), Some(masked), Some(bindings), Some(test)) =
-            (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings, self.shadow.test())
-        {
-            let shadow_pass = ViewPass {
-                pipelines: &p.shadow,
-                layout: p.raster_layout,
-                targets,
-                grid,
-                view_from_range: sensor.to_shadow_frame(),
-                origin: views.origin,
-                area: shadow_area,
-            };
-            match compute.and_then(|(state, rp, draw)| Some((state.shadow.as_ref()?, rp, draw))) {
-                Some(((view, table), rp, draw)) => view.record(enc, rp, targets, table, draw, shadow_area),
-                None => record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index),
-            }
-            if let Some(c) = &mut clock {
-                c.lap(cmd, "shadow");
-            }
+        if let Some((targets, grid, _, masked, bindings, test)) = shadow {
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             enc.access(&reads, &[(masked, Access::ComputeWrite)]);
