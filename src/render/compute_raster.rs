@@ -49,10 +49,10 @@ pub enum Raster {
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
 /// compute against graphics in the same run): spheres of 0.015 triangles per footprint pixel
-/// ran 0.84× as fast, 0.071 1.15×, 0.17 1.37×, 0.31 1.23×, 1.3 1.97×, 3.1 3.70×, 32 8.26×;
-/// the box, 0.001, 0.85×. Compute starts to win between the first two (earlier runs put the
-/// two within noise of each other up to 0.3). No other device has been measured yet; they use
-/// the same rule.
+/// ran 0.95× as fast, 0.071 0.93× (1.14× in a second run), 0.17 1.23×, 0.31 1.24×, 1.3
+/// 1.72×, 3.1 1.92×, 32 6.97×; the box, 0.001, 0.91×. Compute starts to win between 0.015 and
+/// 0.17, the two within noise of each other at 0.071. No other device has been measured yet;
+/// they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.05;
 
 impl Raster {
