@@ -84,6 +84,18 @@ fn the_compute_rasterizer_renders_both_views_in_one_pass() {
 }
 
 #[test]
+fn views_too_large_for_their_visibility_words_stay_on_the_graphics_path() {
+    let range = COMPUTE.renderer().context().max_storage_buffer_range();
+    // The smallest square range view whose 8-byte words exceed what the device binds as one
+    // buffer: 4,097² on lavapipe (128 MiB).
+    let side = ((range / 8) as f64).sqrt().floor() as u32 + 1;
+    let s = centred_sensor(side, side, 1.2 / f64::from(side), [0.0, 0.0], 45.0);
+    let out = render_compute(&scene(s, ShadowMode::Label, &[("builtin:sphere:64", DMat4::IDENTITY)]));
+    assert_eq!(out.raster, Raster::Graphics);
+    assert!(out.label.iter().any(|&l| l != 0), "in view");
+}
+
+#[test]
 fn a_view_of_several_objects_stays_on_the_graphics_path() {
     let s = centred_sensor(64, 64, 0.06, [0.0, 0.0], 45.0);
     let sc = scene(s, ShadowMode::Depth, &[("builtin:box", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)]);

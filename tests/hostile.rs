@@ -6,9 +6,11 @@
 mod common;
 
 use common::cli::{fresh_dir, rangesynth_command};
+use glam::DMat4;
 use rangesynth::io::{parse_range_image, read_range_image};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::load_obj;
+use rangesynth::shadow::ShadowMode;
 use rangesynth::Scene;
 use std::io::Read;
 use std::os::unix::process::ExitStatusExt;
@@ -182,7 +184,10 @@ fn builtin_names_are_capped_and_spellings_of_one_model_load_it_once() {
 #[test]
 fn work_beyond_the_memory_budget_is_refused_with_its_figure() {
     let d = dir("budget");
+    // Without shadows: with them, the device's storage buffers would refuse the image first
+    // (see below).
     let big = SENSOR.replace("width = 32", "width = 16384").replace("height = 24", "height = 16384");
+    let big = big.replace("mode = \"depth\"", "mode = \"none\"");
     let scene = write_scene(&d, "big.toml", &format!("{big}[[object]]\nmodel = \"builtin:box\"\n"));
     let out = run(&["render", scene.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]);
     // 48 bytes a pixel for the range view alone: at least 12 GiB.
@@ -205,6 +210,23 @@ fn work_beyond_the_memory_budget_is_refused_with_its_figure() {
     // 21 KiB) does not.
     let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--memory-budget", "16K"]);
     refused(&out, "verify", "preparing the 32×24 sensed image");
+}
+
+#[test]
+fn images_beyond_the_devices_storage_buffers_are_refused_by_name() {
+    let renderer = common::renderer();
+    let range = renderer.context().max_storage_buffer_range();
+    // The smallest square image whose buffers of a word a pixel (the shadowed labels) exceed
+    // what the device binds: 5,793² on lavapipe (128 MiB), within the default memory budget.
+    let side = ((range / 4) as f64).sqrt().floor() as u32 + 1;
+    let sensor = common::centred_sensor(side, side, 1.0 / f64::from(side), [0.0, 0.0], 45.0);
+    for mode in [ShadowMode::Label, ShadowMode::Depth] {
+        let scene = common::scene(sensor, mode, &[("builtin:box", DMat4::IDENTITY)]);
+        let e = renderer.render(&scene).expect_err("refused").to_string();
+        assert!(e.contains(&format!("a {side}×{side} image needs")), "{e}");
+        assert!(e.contains(&format!("({range} bytes, its maxStorageBufferRange)")), "{e}");
+    }
+    common::assert_no_validation_messages();
 }
 
 // 5. verify's output.

@@ -229,6 +229,12 @@ impl GpuContext {
         self.int64_atomics
     }
 
+    /// The most bytes the device binds as one storage buffer (maxStorageBufferRange): it bounds
+    /// the pixels of an image (a word a pixel) and of a compute-rasterized view (8 bytes).
+    pub fn max_storage_buffer_range(&self) -> u64 {
+        u64::from(self.limits.max_storage_buffer_range)
+    }
+
     /// Whether the device runs the core Vulkan 1.3 path (else the 1.2 extensions).
     pub fn core_vulkan_1_3(&self) -> bool {
         matches!(self.commands, Vulkan13Commands::Core)

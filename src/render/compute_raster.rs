@@ -19,7 +19,8 @@
 //! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
 //! a compute pass spreads the triangles over every core. So far it renders views of one draw
 //! (every `verify` hypothesis, a scene of one object); a view of several draws keeps the
-//! graphics path, whose tie rule the compute path does not implement yet.
+//! graphics path, whose tie rule the compute path does not implement yet, and so does a view
+//! whose visibility words the device cannot bind as one storage buffer (Renderer::computes).
 //!
 //! [`Raster::Auto`], the default, picks per view: the compute rasterizer where the device has
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
@@ -42,7 +43,8 @@ pub enum Raster {
     Auto,
     /// The graphics pipeline (the prescribed path).
     Graphics,
-    /// The compute rasterizer, for views of one draw; needs 64-bit buffer atomics.
+    /// The compute rasterizer, for views of one draw whose visibility words the device can
+    /// bind; needs 64-bit buffer atomics.
     Compute,
 }
 
@@ -127,6 +129,9 @@ fn cull_sign(solidity: Solidity) -> i32 {
         Solidity::Open => 0,
     }
 }
+
+/// Bytes of a pixel's visibility word (shaders/raster_compute.glsl), in each view.
+pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
 const COVERAGE_GROUP: u32 = 64;
@@ -233,7 +238,7 @@ impl<'a> ComputeViews<'a> {
     ) -> Result<Self> {
         let words = |kind: ViewKind, view: ComputeTarget<'_, 'a>| -> Result<ViewWords<'a>> {
             let (width, height) = view.size;
-            let bytes = u64::from(width) * u64::from(height) * 8;
+            let bytes = u64::from(width) * u64::from(height) * VISIBILITY_WORD_BYTES;
             let nearest =
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
             let images: Vec<&Image> = view.targets.colour.iter().collect();

@@ -19,6 +19,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
+pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
@@ -120,7 +121,7 @@ fn render_memory(views: &Views, effects: &Effects, compute_raster: bool, exact_t
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
     let effect_bytes = if effects.is_empty() { 0 } else { 16 };
-    let visibility = if compute_raster { 8 } else { 0 };
+    let visibility = if compute_raster { VISIBILITY_WORD_BYTES } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
     let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow;
     let exact = exact_triangles
@@ -165,9 +166,28 @@ impl Renderer {
     }
 
     /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, over
-    /// `footprint_pixels` (compute_raster.rs).
-    pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64) -> bool {
-        self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
+    /// `footprint_pixels` (compute_raster.rs), into visibility words for views of at most
+    /// `view_pixels`. Words this device cannot bind as one storage buffer (its
+    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe) leave the view to the
+    /// graphics pipeline.
+    pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64, view_pixels: u64) -> bool {
+        let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= self.ctx.max_storage_buffer_range();
+        words_fit && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
+    }
+
+    /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the
+    /// shadowed labels, the effects' outputs, the sensed image) this device cannot bind.
+    pub(crate) fn check_pixel_buffers(&self, (width, height): (u32, u32)) -> Result<()> {
+        let bytes = u64::from(width) * u64::from(height) * 4;
+        let range = self.ctx.max_storage_buffer_range();
+        match bytes <= range {
+            true => Ok(()),
+            false => Err(Error::Scene(format!(
+                "a {width}×{height} image needs {bytes}-byte per-pixel buffers, more than this device binds \
+                 ({range} bytes, its maxStorageBufferRange): use at most {} pixels",
+                range / 4
+            ))),
+        }
     }
 
     /// Whether the compute rasterizer may render any view: where this renderer's memory
@@ -250,7 +270,13 @@ impl Renderer {
             .filter_map(|&(centre, radius)| views.range.footprint(centre, radius, FOOTPRINT_MARGIN))
             .map(|area| u64::from(area.width) * u64::from(area.height))
             .sum();
-        let compute = exact_triangles.is_none() && self.computes(draws.len(), triangles, footprint);
+        // Buffers of a word a range pixel hold the shadowed labels and the effects' outputs.
+        if views.shadow.is_some() || exact_triangles.is_some() || !scene.effects.is_empty() {
+            self.check_pixel_buffers((views.range.width, views.range.height))?;
+        }
+        let pixels = |g: &ViewGrid| u64::from(g.width) * u64::from(g.height);
+        let view_pixels = pixels(&views.range).max(views.shadow.as_ref().map_or(0, pixels));
+        let compute = exact_triangles.is_none() && self.computes(draws.len(), triangles, footprint, view_pixels);
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             render_memory(&views, &scene.effects, compute, exact_triangles),

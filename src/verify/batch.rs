@@ -21,7 +21,7 @@ use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
     draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
+    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -93,7 +93,7 @@ pub(crate) fn batch_slot_memory(
     let rows = u64::from(sensor.height);
     let effect_bytes = if effects.is_empty() { 0 } else { 8 };
     // The compute rasterizer's visibility words, per pixel of each view.
-    let visibility = if renderer.may_compute() { 8 } else { 0 };
+    let visibility = if renderer.may_compute() { VISIBILITY_WORD_BYTES } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
     let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
     let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width));
@@ -147,6 +147,10 @@ pub(crate) fn count_batch(
         .reflectivity
         .map(|_| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &reflectivity_table, "reflectivities"))
         .transpose()?;
+    // The slots' views are the sensor's and the widest shadow view; the compute rasterizer's
+    // words cover them.
+    let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
+    let slot_view_pixels = u64::from(sensor.height) * u64::from(sensor.width.max(shadow_width.unwrap_or(0)));
     // Each hypothesis' footprint in both views; one that misses the image records nothing.
     let jobs: Vec<Option<Job>> = (0..)
         .zip(items.iter().zip(&views).zip(&draws).zip(&reflectivity_offsets))
@@ -170,7 +174,7 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
-                compute: host_views.is_empty() && renderer.computes(1, triangles, footprint),
+                compute: host_views.is_empty() && renderer.computes(1, triangles, footprint, slot_view_pixels),
             })
         })
         .collect();
@@ -183,7 +187,6 @@ pub(crate) fn count_batch(
         true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
         false => None,
     };
-    let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
     let shape = SlotShape {
         size: (sensor.width, sensor.height),
         shadow: shadow_width.zip(shadow_table.as_ref()),

@@ -150,6 +150,8 @@ impl Verifier {
                 sensed.width, sensed.height, sensor.width, sensor.height
             )));
         }
+        // The sensed image and the shadowed labels are buffers of a word a pixel.
+        self.renderer.check_pixel_buffers((sensor.width, sensor.height))?;
         if sensed.pitch != sensor.pitch {
             return Err(Error::Scene(format!(
                 "the sensed image was measured at pitch {:?} but the sensor has pitch {:?}",
