@@ -1,26 +1,19 @@
 #version 460
 // The compute rasterizer's resolve pass (src/render/compute_raster.rs): one invocation per
-// pixel of the area writes what raster.frag would have written for the nearest triangle into
-// the view's attachments, or zeros where no triangle covers the pixel (the graphics pass
-// clears to 0).
+// pixel of the range view's area writes what raster.frag would have written for the nearest
+// triangle into the view's attachments, or zeros where no triangle covers the pixel (the
+// graphics pass clears to 0). The shadow view needs none: the shadow mask reads its words.
 layout(local_size_x = 8, local_size_y = 8) in;
-
 #include "raster_compute.glsl"
 
-// The view's colour attachments, in src/render/targets.rs order, then its draw table and
+// The range view's colour attachments, in src/render/targets.rs order, then its draw table and
 // words (src/gpu/descriptors.rs binds images first).
-#ifdef SHADOW_VIEW
-layout(set = 0, binding = 0, rgba32ui) uniform writeonly uimage2D visibility;
-#define FIRST_BUFFER 1
-#else
 layout(set = 0, binding = 0, r32ui) uniform writeonly uimage2D label;
 layout(set = 0, binding = 1, r32f) uniform writeonly image2D z;
 layout(set = 0, binding = 2, r32f) uniform writeonly image2D dz_dx;
 layout(set = 0, binding = 3, r32f) uniform writeonly image2D dz_dy;
-#define FIRST_BUFFER 4
-#endif
-layout(set = 0, binding = FIRST_BUFFER, std430) readonly buffer DrawTable { DrawData draws[]; };
-layout(set = 0, binding = FIRST_BUFFER + 1, std430) readonly buffer Nearest { uint64_t nearest[]; };
+layout(set = 0, binding = 4, std430) readonly buffer DrawTable { DrawData draws[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Nearest { uint64_t nearest[]; };
 
 layout(push_constant, std430) uniform Resolve { RasterView view; } r;
 
@@ -35,9 +28,6 @@ void main() {
     uint64_t word = nearest[word_index(r.view, pixel)];
     bool hit = word != EMPTY;
     uint t = uint(word & 0xffffffffUL);
-#ifdef SHADOW_VIEW
-    imageStore(visibility, pixel, hit ? uvec4(triangle_label(d, t), d.draw_index, t, 0u) : uvec4(0u));
-#else
     if (!hit) {
         imageStore(label, pixel, uvec4(0u));
         imageStore(z, pixel, vec4(0.0));
@@ -50,5 +40,4 @@ void main() {
     imageStore(z, pixel, vec4(plane_z(d, triangle_corner(d, t, 0u), n, pixel)));
     imageStore(dz_dx, pixel, vec4(-n.x / n.z));
     imageStore(dz_dy, pixel, vec4(-n.y / n.z));
-#endif
 }

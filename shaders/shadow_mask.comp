@@ -15,6 +15,10 @@ layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D shadow_visibili
 layout(set = 0, binding = 5, std430) writeonly buffer Masked { uint masked_label[]; };
 // The shadow view's draws, indexed by the draw index the shadow view stored per pixel.
 layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[]; };
+// Where the compute rasterizer rendered the shadow view (FROM_WORDS): its visibility words
+// (shaders/raster_compute.glsl), read as two 32-bit halves, triangle low, in place of the
+// resolved visibility image it never writes.
+layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -25,6 +29,8 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
+    uint words_draw;    // FROM_WORDS: the one draw the shadow view rendered
+    uint words_stride;  // FROM_WORDS: pixels per row of the words
 } m;
 
 // The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
@@ -37,10 +43,28 @@ layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
 layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
+// Whether the shadow view is read from the compute rasterizer's words (src/render/shadow_pass.rs).
+layout(constant_id = 6) const bool FROM_WORDS = false;
+
+// What shadow pixel q (in the grid) saw: its label, draw index and triangle, or all zeros.
+// From the words, the label is read only for the label tests; the depth test needs only
+// whether a triangle was seen there, and gets 1.
+uvec4 shadow_seen(ivec2 q) {
+    if (!FROM_WORDS) {
+        return imageLoad(shadow_visibility, q);
+    }
+    uint at = 2u * (uint(q.y) * m.words_stride + uint(q.x));
+    uint triangle = shadow_words[at], depth_bits = shadow_words[at + 1u];
+    if ((triangle & depth_bits) == 0xffffffffu) {
+        return uvec4(0u);
+    }
+    uint label = TEST == TEST_LABEL || TEST == TEST_LABEL_SQUARE ? triangle_label(draws[m.words_draw], triangle) : 1u;
+    return uvec4(label, m.words_draw, triangle, 0u);
+}
 
 // Whether shadow pixel q exists and carries `label`.
 bool shadow_label_is(ivec2 q, uint label) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw)) && imageLoad(shadow_visibility, q).r == label;
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw)) && shadow_seen(q).r == label;
 }
 
 // Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
@@ -170,7 +194,7 @@ bool shadowed(ivec2 pixel, uint label) {
     // outside it can only come from rounding at its border and is treated as lit.
     bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
     if (TEST == TEST_LABEL) {
-        return in_grid && imageLoad(shadow_visibility, s).r != label;
+        return in_grid && shadow_seen(s).r != label;
     }
     if (TEST == TEST_LABEL_SQUARE) {
         // The four shadow pixels whose centres surround p'; outside the grid it is lit, as above.
@@ -201,7 +225,7 @@ bool shadowed(ivec2 pixel, uint label) {
     // nine pixel centres, or is joined by its edges to a triangle that is.
     // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
     // are not walked again (a large triangle fills the whole neighbourhood).
-    uvec4 at_centre = imageLoad(shadow_visibility, s);
+    uvec4 at_centre = shadow_seen(s);
     // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
     uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
     uvec2 previous = centre;
@@ -217,7 +241,7 @@ bool shadowed(ivec2 pixel, uint label) {
         if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
             continue;
         }
-        uvec4 at = imageLoad(shadow_visibility, q);
+        uvec4 at = shadow_seen(q);
         uvec2 seen = at.yz;
         if (at.x == 0u || (k > 0 && (seen == centre || seen == previous))) {
             continue;

@@ -12,7 +12,7 @@ use glam::{DMat4, DVec3};
 use rangesynth::mesh::{builtin_mesh, Mesh, Solidity};
 use rangesynth::render::Raster;
 use rangesynth::scene::{Scene, SceneObject};
-use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use rangesynth::RenderOutput;
 use std::path::Path;
@@ -51,13 +51,20 @@ fn turned() -> DMat4 {
 fn both_rasterizers_render_identical_images_of_one_object() {
     let models = ["builtin:box", "builtin:step", "builtin:cylinder:48", "builtin:sphere:64", "builtin:sphere:320"];
     for model in models {
-        for (theta, mode) in [(45.0, ShadowMode::Depth), (-30.0, ShadowMode::Label), (20.0, ShadowMode::None)] {
+        let settings = [
+            (45.0, ShadowMode::Depth, Neighbourhood::Nearest),
+            (-30.0, ShadowMode::Label, Neighbourhood::Nearest),
+            (-30.0, ShadowMode::Label, Neighbourhood::Square2),
+            (20.0, ShadowMode::None, Neighbourhood::Nearest),
+        ];
+        for (theta, mode, neighbourhood) in settings {
             for (pose_name, pose) in [("identity", DMat4::IDENTITY), ("turned", turned())] {
                 let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], theta);
-                let sc = scene(s, mode, &[(model, pose)]);
+                let mut sc = scene(s, mode, &[(model, pose)]);
+                sc.shadow.neighbourhood = neighbourhood;
                 let graphics = render(&sc);
                 let compute = render_compute(&sc);
-                let name = format!("{model} {pose_name} θ = {theta} {mode:?}");
+                let name = format!("{model} {pose_name} θ = {theta} {:?}", sc.shadow);
                 assert_eq!(graphics.raster, Raster::Graphics);
                 assert_eq!(compute.raster, Raster::Compute, "{name}");
                 assert!(graphics.label_unshadowed.iter().any(|&l| l != 0), "{name}: in view");

@@ -12,9 +12,7 @@ pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/
 pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
 pub const RASTER_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.comp.spv"));
 pub const RASTER_LARGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large.comp.spv"));
-pub const RASTER_RESOLVE_RANGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve_range.comp.spv"));
-pub const RASTER_RESOLVE_SHADOW_COMP: &[u8] =
-    include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve_shadow.comp.spv"));
+pub const RASTER_RESOLVE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve.comp.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
 pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
 pub const EFFECT_GRAZING_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_grazing.comp.spv"));

@@ -12,8 +12,9 @@
 //!   workgroup of 64 invocations. Where the mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
-//! - Resolve (shaders/raster_resolve.comp), per view: one invocation per pixel writes what the
-//!   graphics path's fragment shader would have written for that triangle.
+//! - Resolve (shaders/raster_resolve.comp), the range view's: one invocation per pixel writes
+//!   what the graphics path's fragment shader would have written for that triangle. The
+//!   shadow view's only reader, the shadow mask, reads its words instead (shadow_pass.rs).
 //!
 //! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
 //! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
@@ -26,6 +27,7 @@
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
 //! renders, the graphics pipeline elsewhere.
 
+use super::shadow_pass::MaskPipelines;
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
@@ -141,81 +143,56 @@ const MAX_GROUPS: u32 = 65_535;
 pub struct ComputeRasterPipelines {
     coverage: ComputePipeline,
     large: ComputePipeline,
-    resolve_range: ComputePipeline,
-    resolve_shadow: ComputePipeline,
+    resolve: ComputePipeline,
+    /// The shadow mask reading the shadow view's words (shadow_pass.rs).
+    pub mask: MaskPipelines,
 }
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         // Coverage binds both views' draw tables and visibility words, the large-triangle
-        // queue and its dispatch arguments; resolve one view's attachments, table and words.
+        // queue and its dispatch arguments; resolve the range view's attachments, its table
+        // and its words.
         let coverage = (0, 6);
         let coverage_push = size_of::<CoverageConstants>();
-        let resolve = |kind: ViewKind| (kind.colour_attachments().len(), 2);
-        let resolve_push = size_of::<RasterView>();
+        let pipeline = |bindings, push, code, name| ComputePipeline::new(ctx, bindings, push, code, &[], name);
         Ok(Self {
-            coverage: ComputePipeline::new(
-                ctx,
-                coverage,
-                coverage_push,
-                shaders::RASTER_COMP,
-                &[],
-                "compute raster coverage",
-            )?,
-            large: ComputePipeline::new(
-                ctx,
+            coverage: pipeline(coverage, coverage_push, shaders::RASTER_COMP, "compute raster coverage")?,
+            large: pipeline(
                 coverage,
                 coverage_push,
                 shaders::RASTER_LARGE_COMP,
-                &[],
                 "compute raster coverage (large triangles)",
             )?,
-            resolve_range: ComputePipeline::new(
-                ctx,
-                resolve(ViewKind::Range),
-                resolve_push,
-                shaders::RASTER_RESOLVE_RANGE_COMP,
-                &[],
-                "compute raster resolve (range view)",
+            resolve: pipeline(
+                (ViewKind::Range.colour_attachments().len(), 2),
+                size_of::<RasterView>(),
+                shaders::RASTER_RESOLVE_COMP,
+                "compute raster resolve",
             )?,
-            resolve_shadow: ComputePipeline::new(
-                ctx,
-                resolve(ViewKind::Shadow),
-                resolve_push,
-                shaders::RASTER_RESOLVE_SHADOW_COMP,
-                &[],
-                "compute raster resolve (shadow view)",
-            )?,
+            mask: MaskPipelines::new(ctx, true)?,
         })
-    }
-
-    fn resolve(&self, kind: ViewKind) -> &ComputePipeline {
-        match kind {
-            ViewKind::Range => &self.resolve_range,
-            ViewKind::Shadow => &self.resolve_shadow,
-        }
     }
 }
 
-/// A view the compute rasterizer renders: its attachments, their size, and its draw table.
-pub(crate) struct ComputeTarget<'t, 'a> {
-    pub targets: &'t ViewTargets,
+/// A view the compute rasterizer renders: its attachments' size, and its draw table.
+pub(crate) struct ComputeTarget<'a> {
     pub size: (u32, u32),
     pub draw_table: &'a Buffer,
 }
 
-/// One view's visibility words and the bindings of its resolve pass.
+/// One view's visibility words.
 struct ViewWords<'a> {
-    kind: ViewKind,
     nearest: Buffer,
     /// Pixels per row of `nearest` (the attachments' width).
     stride: u32,
     draw_table: &'a Buffer,
-    resolve: StorageSet,
 }
 
 /// The range view's and (where a shadow pass runs) the shadow view's visibility words, the
-/// queue of large triangles the coverage pass fills for both, and the passes' bindings.
+/// queue of large triangles the coverage pass fills for both, and the passes' bindings. The
+/// range view's words are resolved into its attachments; the shadow view's are read by the
+/// shadow mask as they are.
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
     shadow: Option<ViewWords<'a>>,
@@ -224,35 +201,37 @@ pub(crate) struct ComputeViews<'a> {
     large_args: Buffer,
     large_capacity: u32,
     coverage: StorageSet,
+    resolve: StorageSet,
 }
 
 impl<'a> ComputeViews<'a> {
-    /// Visibility words for the views, rendering draws of no more than `max_triangles`.
+    /// Visibility words for the views, rendering draws of no more than `max_triangles`, and
+    /// the bindings that resolve the range view's into `range_targets`.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
-        range: ComputeTarget<'_, 'a>,
-        shadow: Option<ComputeTarget<'_, 'a>>,
+        (range, range_targets): (ComputeTarget<'a>, &ViewTargets),
+        shadow: Option<ComputeTarget<'a>>,
         max_triangles: u32,
         name: &str,
     ) -> Result<Self> {
-        let words = |kind: ViewKind, view: ComputeTarget<'_, 'a>| -> Result<ViewWords<'a>> {
+        let words = |kind: ViewKind, view: ComputeTarget<'a>| -> Result<ViewWords<'a>> {
             let (width, height) = view.size;
             let bytes = u64::from(width) * u64::from(height) * VISIBILITY_WORD_BYTES;
             let nearest =
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
-            let images: Vec<&Image> = view.targets.colour.iter().collect();
-            let resolve = StorageSet::new(
-                ctx,
-                pipelines.resolve(kind).set_layout,
-                &images,
-                &[view.draw_table, &nearest],
-                &format!("{name} {kind:?} view resolve bindings"),
-            )?;
-            Ok(ViewWords { kind, nearest, stride: width, draw_table: view.draw_table, resolve })
+            Ok(ViewWords { nearest, stride: width, draw_table: view.draw_table })
         };
         let range = words(ViewKind::Range, range)?;
         let shadow = shadow.map(|view| words(ViewKind::Shadow, view)).transpose()?;
+        let images: Vec<&Image> = range_targets.colour.iter().collect();
+        let resolve = StorageSet::new(
+            ctx,
+            pipelines.resolve.set_layout,
+            &images,
+            &[range.draw_table, &range.nearest],
+            &format!("{name} resolve bindings"),
+        )?;
         let views = if shadow.is_some() { 2 } else { 1 };
         let large_capacity = max_triangles.saturating_mul(views).clamp(1, MAX_GROUPS);
         let large_bytes = u64::from(large_capacity) * 4;
@@ -271,7 +250,12 @@ impl<'a> ComputeViews<'a> {
             &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
             &format!("{name} coverage bindings"),
         )?;
-        Ok(Self { range, shadow, large, large_args, large_capacity, coverage })
+        Ok(Self { range, shadow, large, large_args, large_capacity, coverage, resolve })
+    }
+
+    /// The shadow view's words and their pixels per row, for the shadow mask.
+    pub fn shadow_words(&self) -> Option<(&Buffer, u32)> {
+        self.shadow.as_ref().map(|view| (&view.nearest, view.stride))
     }
 
     fn views(&self) -> impl Iterator<Item = &ViewWords<'a>> {
@@ -280,14 +264,14 @@ impl<'a> ComputeViews<'a> {
 
     /// Records the passes of one draw (number `index` in the draw tables) over the range
     /// view's `range_area` and, where these words include the shadow view's, over its
-    /// `shadow_targets` and `shadow_area`: the attachments' colour images end written in
-    /// GENERAL layout, as a compute pass leaves them.
+    /// `shadow_area`: the range view's colour attachments end written in GENERAL layout, as a
+    /// compute pass leaves them, and the shadow view's words are left for the shadow mask.
     pub fn record(
         &self,
         enc: &mut Encoder,
         pipelines: &ComputeRasterPipelines,
         (range_targets, range_area): (&ViewTargets, PixelRect),
-        shadow: Option<(&ViewTargets, PixelRect)>,
+        shadow_area: Option<PixelRect>,
         (index, draw): (u32, &Draw),
     ) {
         let cmd = enc.cmd;
@@ -309,11 +293,11 @@ impl<'a> ComputeViews<'a> {
             _pad: [0; 2],
         };
         let range = raster_view(&self.range, range_area);
-        let shadow_view = self.shadow.as_ref().zip(shadow).map(|(view, (_, area))| raster_view(view, area));
+        let shadow = self.shadow.as_ref().zip(shadow_area).map(|(view, area)| raster_view(view, area));
         let triangles = draw.mesh.index_count / 3;
         let constants = CoverageConstants {
-            views: [range, shadow_view.unwrap_or(range)],
-            view_count: 1 + u32::from(shadow_view.is_some()),
+            views: [range, shadow.unwrap_or(range)],
+            view_count: 1 + u32::from(shadow.is_some()),
             triangles,
             large_capacity: self.large_capacity,
             cull: cull_sign(draw.mesh.solidity),
@@ -332,15 +316,12 @@ impl<'a> ComputeViews<'a> {
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
         enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
-        let resolved = std::iter::once((&self.range, range_targets, range)).chain(
-            self.shadow.as_ref().zip(shadow).zip(shadow_view).map(|((view, (targets, _)), rv)| (view, targets, rv)),
+        let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
+        enc.access(
+            &writes,
+            &[(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)],
         );
-        for (view, targets, raster_view) in resolved {
-            let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
-            enc.access(&writes, &[(&view.nearest, Access::ComputeRead), (view.draw_table, Access::ComputeRead)]);
-            let area = raster_view.area;
-            let pixels = [area[2], area[3]].map(|n| n.div_ceil(8));
-            view.resolve.dispatch(cmd, pipelines.resolve(view.kind), bytemuck::bytes_of(&raster_view), pixels);
-        }
+        let pixels = [range_area.width, range_area.height].map(|n| n.div_ceil(8));
+        self.resolve.dispatch(cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels);
     }
 }

@@ -94,6 +94,17 @@ impl<'a> Slot<'a> {
                 SinkKind::Compute => BufferDesc::gpu_storage(bytes),
             }
         };
+        // Before the mask's bindings: the mask reads the compute rasterizer's shadow words.
+        let compute = match (shape.compute_raster, raster_pipelines) {
+            (Some((range_table, max_triangles)), Some(rp)) => {
+                let range_view = ComputeTarget { size: (w, h), draw_table: range_table };
+                let shadow_view = shape
+                    .shadow
+                    .map(|(shadow_width, table)| ComputeTarget { size: (shadow_width, h), draw_table: table });
+                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, max_triangles, name)?)
+            }
+            _ => None,
+        };
         let (shadow, masked, mask_bindings) = match shape.shadow {
             None if shape.from_host => {
                 (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None)
@@ -102,7 +113,8 @@ impl<'a> Slot<'a> {
             Some((shadow_width, draw_table)) => {
                 let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
-                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table)?;
+                let words = compute.as_ref().and_then(|c| c.shadow_words()).map(|(words, _)| words);
+                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words)?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
         };
@@ -113,16 +125,6 @@ impl<'a> Slot<'a> {
             _ => None,
         };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
-        let compute = match (shape.compute_raster, raster_pipelines) {
-            (Some((range_table, max_triangles)), Some(rp)) => {
-                let range_view = ComputeTarget { targets: &range, size: (w, h), draw_table: range_table };
-                let shadow_view = shadow.as_ref().zip(shape.shadow).map(|(targets, (shadow_width, table))| {
-                    ComputeTarget { targets, size: (shadow_width, h), draw_table: table }
-                });
-                Some(ComputeViews::new(ctx, rp, range_view, shadow_view, max_triangles, name)?)
-            }
-            _ => None,
-        };
         Ok(Self { range, shadow, masked, mask_bindings, effects, reflectivities, compute })
     }
 
@@ -267,10 +269,10 @@ impl Passes<'_> {
         match compute {
             // Both views in one coverage pass (compute_raster.rs).
             Some((state, rp, draw)) => {
-                let shadow_view = shadow.map(|(targets, _, area, ..)| (targets, area));
-                state.record(enc, rp, (&slot.range, job.area), shadow_view, draw);
+                let shadow_area = shadow.map(|(_, _, area, ..)| area);
+                state.record(enc, rp, (&slot.range, job.area), shadow_area, draw);
                 if let Some(c) = &mut clock {
-                    c.lap(cmd, if shadow_view.is_some() { "range and shadow" } else { "range" });
+                    c.lap(cmd, if shadow_area.is_some() { "range and shadow" } else { "range" });
                 }
             }
             None => {
@@ -308,8 +310,20 @@ impl Passes<'_> {
         if let Some((targets, grid, _, masked, bindings, test)) = shadow {
             let reads: Vec<_> =
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
-            enc.access(&reads, &[(masked, Access::ComputeWrite)]);
-            bindings.record(cmd, p, test, &MaskConstants::new(sensor, views, grid, job.area));
+            // Where the compute rasterizer rendered the shadow view, the mask reads its words
+            // (bound in a slot that has them for either pipeline, so stated either way).
+            let words = compute.and_then(|(state, rp, (index, _))| Some((state.shadow_words()?, rp, index)));
+            let bound_words = slot.compute.as_ref().and_then(|c| c.shadow_words());
+            let mut buffers = vec![(masked, Access::ComputeWrite)];
+            buffers.extend(bound_words.map(|(words, _)| (words, Access::ComputeRead)));
+            enc.access(&reads, &buffers);
+            let constants = MaskConstants::new(sensor, views, grid, job.area);
+            match words {
+                Some(((_, stride), rp, index)) => {
+                    bindings.record(cmd, &rp.mask, test, &constants.reading_words(index, stride))
+                }
+                None => bindings.record(cmd, &p.mask, test, &constants),
+            }
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
             }

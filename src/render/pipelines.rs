@@ -43,7 +43,7 @@ impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
-        let mask = MaskPipelines::new(ctx)?;
+        let mask = MaskPipelines::new(ctx, false)?;
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),

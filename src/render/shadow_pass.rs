@@ -1,5 +1,8 @@
 //! The compute pass that applies the shadow test (shaders/shadow_mask.comp, src/shadow.rs)
-//! to the range view, reading both views' attachments and writing the shadowed labels.
+//! to the range view, reading both views' attachments and writing the shadowed labels. Where
+//! the compute rasterizer rendered the shadow view, the pass reads its visibility words
+//! instead of the visibility attachment: the shadow view's only reader needs no resolve pass
+//! (compute_raster.rs), which cost as much as the label test itself.
 
 use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
@@ -25,11 +28,14 @@ pub struct MaskConstants {
     sin_theta: f32,
     bias_pitch: f32,
     bias_relative: f32,
+    words_draw: u32,
+    words_stride: u32,
 }
 
 // std430 offsets of `Mask` in shaders/shadow_mask.comp.
 const _: () = assert!(std::mem::offset_of!(MaskConstants, cos_theta) == 64);
-const _: () = assert!(size_of::<MaskConstants>() == 80);
+const _: () = assert!(std::mem::offset_of!(MaskConstants, words_draw) == 80);
+const _: () = assert!(size_of::<MaskConstants>() == 88);
 
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
@@ -48,14 +54,23 @@ impl MaskConstants {
             sin_theta: sensor.theta().sin() as f32,
             bias_pitch: (DEPTH_BIAS_PIXELS * sensor.pitch[0]) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
+            words_draw: 0,
+            words_stride: 0,
         }
+    }
+
+    /// The same constants for a pipeline reading the shadow view from visibility words
+    /// `stride` pixels a row, rendered for draw `draw` alone.
+    pub fn reading_words(self, draw: u32, stride: u32) -> Self {
+        Self { words_draw: draw, words_stride: stride, ..self }
     }
 }
 
-/// The mask pipelines, one per [`ShadowTest`], the test a specialization constant. Their
-/// descriptor-set layouts are defined identically, so one set serves all three. On lavapipe,
-/// which runs both sides of a branch on a uniform value, the label test alone ran in a
-/// quarter of the time of the shader that switched on a push constant (256², 1.0 ms
+/// The mask pipelines, one per [`ShadowTest`], the test a specialization constant, and
+/// another the shadow view's source (the visibility attachment, or the compute rasterizer's
+/// words). Their descriptor-set layouts are defined identically, so one set serves them all.
+/// On lavapipe, which runs both sides of a branch on a uniform value, the label test alone ran
+/// in a quarter of the time of the shader that switched on a push constant (256², 1.0 ms
 /// against 4.5 ms).
 pub struct MaskPipelines {
     label: ComputePipeline,
@@ -64,7 +79,10 @@ pub struct MaskPipelines {
 }
 
 impl MaskPipelines {
-    pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+    /// The pipelines reading the shadow view from the visibility attachment, or, `from_words`,
+    /// from the compute rasterizer's words.
+    pub fn new(ctx: &Arc<GpuContext>, from_words: bool) -> Result<Self> {
+        let source = if from_words { ", from visibility words" } else { "" };
         let pipeline = |test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
@@ -78,8 +96,9 @@ impl MaskPipelines {
                     LINK_INDEX_SHIFT,
                     LINK_SAME_WAY,
                     LINK_EDGE_MASK,
+                    u32::from(from_words),
                 ],
-                name,
+                &format!("{name}{source}"),
             )
         };
         Ok(Self {
@@ -99,7 +118,8 @@ impl MaskPipelines {
 }
 
 /// The descriptor set binding both views' colour attachments (range view's, then shadow
-/// view's), the output labels and the shadow view's draw table.
+/// view's), the output labels, the shadow view's draw table and the compute rasterizer's
+/// shadow-view words (the draw table again where there are none: never read then).
 pub struct MaskBindings {
     set: StorageSet,
 }
@@ -107,8 +127,8 @@ pub struct MaskBindings {
 impl MaskBindings {
     /// Storage images the mask pass binds, from binding 0.
     pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
-    /// Storage buffers bound after them: the shadowed labels and the draw table.
-    pub const BUFFERS: usize = 2;
+    /// Storage buffers bound after them: the shadowed labels, the draw table and the words.
+    pub const BUFFERS: usize = 3;
 
     /// `draw_table` holds the shadow pass's [`DrawConstants`](super::draw::DrawConstants)
     /// at the draw indices it recorded.
@@ -119,17 +139,24 @@ impl MaskBindings {
         shadow: &ViewTargets,
         masked: &Buffer,
         draw_table: &Buffer,
+        shadow_words: Option<&Buffer>,
     ) -> Result<Self> {
         let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
         debug_assert_eq!(images.len(), Self::IMAGES);
-        let buffers = [masked, draw_table];
+        let buffers = [masked, draw_table, shadow_words.unwrap_or(draw_table)];
         let set_layout = pipelines.mask.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, &buffers, "shadow mask bindings")? })
     }
 
-    /// Records `test` over the constants' region (8×8 workgroups).
-    pub fn record(&self, cmd: vk::CommandBuffer, pipelines: &Pipelines, test: ShadowTest, constants: &MaskConstants) {
+    /// Records `test` with one of `pipelines` over the constants' region (8×8 workgroups).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipelines: &MaskPipelines,
+        test: ShadowTest,
+        constants: &MaskConstants,
+    ) {
         let groups = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, pipelines.mask.for_test(test), bytemuck::bytes_of(constants), groups);
+        self.set.dispatch(cmd, pipelines.for_test(test), bytemuck::bytes_of(constants), groups);
     }
 }
