@@ -1,7 +1,7 @@
 #version 460
 // The compute rasterizer's coverage passes (src/render/compute_raster.rs), over the range
 // view and, where there is one, the shadow view at once: a triangle's corners and normal are
-// read once for both (the reads are most of a small triangle's cost). Corners go to window
+// read once for both (reading them is most of a small triangle's set-up). Corners go to window
 // coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
 // edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit

@@ -3,8 +3,8 @@
 //! unchanged.
 //!
 //! - Coverage (shaders/raster.comp), over the range view and the shadow view at once: one
-//!   invocation per triangle reads its corners and normal once (the reads are most of a small
-//!   triangle's cost) and, in each view, finds the pixel centres it covers (1/256-pixel
+//!   invocation per triangle reads its corners and normal once (reading them is most of a small
+//!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions) and keeps the nearest
 //!   triangle per pixel with a 64-bit atomicMin of (depth bits, triangle) on that view's
 //!   words. A triangle whose bounding box in a view holds more than 256 pixels is queued for
