@@ -68,8 +68,57 @@ fn write_layer(
     write_atomically(path, |file| {
         let mut out = std::io::BufWriter::new(file);
         Image::from_layer(layer).write().to_buffered(&mut out).map_err(|e| exr_error(path, e))?;
-        out.flush().map_err(|e| Error::io(path, e))
+        out.flush().map_err(|e| Error::io(path, e))?;
+        sort_header_attributes(out.get_mut()).map_err(|e| Error::io(path, e))
     })
+}
+
+/// Most bytes of a written file read back to find its header (ours are well under 4 KiB).
+const MAX_HEADER_BYTES: u64 = 64 << 10;
+
+/// Puts the header attributes of a file the exr crate just wrote in name order. It writes the
+/// attributes it has no field for (ours: the sensor, shadow and effects settings) from a
+/// HashMap, in an order that changes from process to process; sorted, the same image always
+/// gives the same bytes. The attributes keep their bytes and the header its length, so the
+/// offset table after it stays right. A header this cannot take apart is left as it is.
+fn sort_header_attributes(file: &mut std::fs::File) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut header = Vec::new();
+    file.seek(SeekFrom::Start(0))?;
+    Read::by_ref(file).take(MAX_HEADER_BYTES).read_to_end(&mut header)?;
+    let Some(mut attributes) = header_attributes(&header) else {
+        return Ok(());
+    };
+    attributes.sort_by_key(|(name, _)| *name);
+    let sorted: Vec<u8> = attributes.iter().flat_map(|(_, bytes)| bytes.iter().copied()).collect();
+    file.seek(SeekFrom::Start(HEADER_ATTRIBUTES_START as u64))?;
+    file.write_all(&sorted)
+}
+
+/// Where a single-part OpenEXR header's attributes start: after the magic number and the
+/// version field.
+const HEADER_ATTRIBUTES_START: usize = 8;
+
+/// A single-part header's attributes in file order, each its name and its bytes (name, type,
+/// size and value); `None` where `file` does not begin with a whole single-part header.
+fn header_attributes(file: &[u8]) -> Option<Vec<(&[u8], &[u8])>> {
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    const MULTIPART: u8 = 0x10; // bit 12 of the version field
+    if file.get(..4)? != MAGIC || file.get(5)? & MULTIPART != 0 {
+        return None;
+    }
+    let until_nul = |from: usize| Some(from + file.get(from..)?.iter().position(|&b| b == 0)?);
+    let mut attributes = Vec::new();
+    let mut at = HEADER_ATTRIBUTES_START;
+    while *file.get(at)? != 0 {
+        let name_end = until_nul(at)?;
+        let size_at = until_nul(name_end + 1)? + 1;
+        let size = u32::from_le_bytes(file.get(size_at..size_at + 4)?.try_into().ok()?);
+        let end = (size_at + 4).checked_add(usize::try_from(size).ok()?)?;
+        attributes.push((&file[at..name_end], file.get(at..end)?));
+        at = end;
+    }
+    Some(attributes)
 }
 
 /// Reads a range image (`range.exr` as `render` writes it) within `budget`.
@@ -221,5 +270,34 @@ fn exr_error(path: &Path, e: exr::error::Error) -> Error {
     match e {
         exr::error::Error::Io(io) => Error::io(path, io),
         other => Error::file(path, format!("not a usable OpenEXR file ({other})")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::header_attributes;
+
+    /// An attribute as a header stores it: name, type, size and value.
+    fn attribute(name: &str, value: &[u8]) -> Vec<u8> {
+        let mut bytes = [name.as_bytes(), b"\0string\0"].concat();
+        bytes.extend((value.len() as u32).to_le_bytes());
+        bytes.extend(value);
+        bytes
+    }
+
+    #[test]
+    fn header_attributes_are_taken_apart_or_left_alone() {
+        let (b, a) = (attribute("b", b"xy"), attribute("a", b""));
+        let header = [&[0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0][..], &b, &a, &[0], b"pixels"].concat();
+        let names: Vec<&[u8]> = header_attributes(&header).unwrap().iter().map(|(name, _)| *name).collect();
+        assert_eq!(names, [&b"b"[..], b"a"]);
+        assert_eq!(header_attributes(&header).unwrap()[0].1, &b[..]);
+        // Cut short anywhere, multi-part, or not OpenEXR at all: nothing to sort.
+        let end = 8 + b.len() + a.len();
+        assert!((0..=end).all(|cut| header_attributes(&header[..cut]).is_none()));
+        let mut multipart = header.clone();
+        multipart[5] |= 0x10;
+        assert!(header_attributes(&multipart).is_none());
+        assert!(header_attributes(b"GIF89a......").is_none());
     }
 }
