@@ -234,17 +234,26 @@ bool shadowed(ivec2 pixel, uint label) {
     uint loaded = 0xffffffffu;
     DrawData d;
     uvec2 lower = uvec2(0xffffffffu);
-    for (int k = 0; k < 9; k++) {
-        // The centre first, then its eight neighbours in rows.
-        int i = k == 0 ? 4 : k - int(k <= 4);
-        ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
-        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
-            continue;
+    // Each invocation goes through its nine on its own cursor, one walk a round: invocations
+    // that run in lockstep then take as many rounds as the most walks any of them needs, not
+    // one for each of the nine that any of them walks from.
+    int k = 0;
+    while (true) {
+        // The next pixel to walk from: the centre first, then its eight neighbours in rows.
+        uvec2 seen = uvec2(0xffffffffu);
+        bool found = false;
+        for (; k < 9 && !found; k++) {
+            int i = k == 0 ? 4 : k - int(k <= 4);
+            ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
+                continue;
+            }
+            uvec4 at = shadow_seen(q);
+            seen = at.yz;
+            found = at.x != 0u && (k == 0 || (seen != centre && seen != previous));
         }
-        uvec4 at = shadow_seen(q);
-        uvec2 seen = at.yz;
-        if (at.x == 0u || (k > 0 && (seen == centre || seen == previous))) {
-            continue;
+        if (!found) {
+            return false;
         }
         previous = seen;
         if (seen.x != loaded) {
@@ -255,7 +264,6 @@ bool shadowed(ivec2 pixel, uint label) {
             return true;
         }
     }
-    return false;
 }
 
 void main() {
