@@ -53,10 +53,10 @@ pub enum Raster {
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
 /// compute against graphics in the same run): spheres of 0.015 triangles per footprint pixel
-/// ran 0.95× as fast (0.82× in another run), 0.071 1.16× (1.16×, 1.14×, 0.93× in others),
-/// 0.17 1.21×, 0.31 1.33×, 1.3 1.42×, 3.1 2.30×, 32 4.99× (7.15×); the box, 0.001, 0.90×.
-/// Compute starts to win between 0.015 and 0.071. No other device has been measured yet; they
-/// use the same rule.
+/// ran 0.91× as fast (0.82–0.95× in other runs), 0.071 1.10× (1.09–1.16×; once 0.93×), 0.17
+/// 1.25×, 0.31 1.26×, 0.70 1.42×, 1.3 1.76×, 3.1 2.28×, 32 7.22× (5.0–7.2×); the box, 0.001,
+/// 0.88×. Compute starts to win between 0.015 and 0.071. No other device has been measured
+/// yet; they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.05;
 
 impl Raster {
