@@ -1,8 +1,8 @@
 //! The compute pass that applies the shadow test (shaders/shadow_mask.comp, src/shadow.rs)
 //! to the range view, reading both views' attachments and writing the shadowed labels. Where
 //! the compute rasterizer rendered the shadow view, the pass reads its visibility words
-//! instead of the visibility attachment: the shadow view's only reader needs no resolve pass
-//! (compute_raster.rs), which cost as much as the label test itself.
+//! instead of the visibility attachment, so that view needs no resolve pass (compute_raster.rs;
+//! it cost about 0.9 ms of the box's 3.7 ms a hypothesis in label mode on lavapipe).
 
 use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
