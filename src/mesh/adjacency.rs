@@ -35,7 +35,7 @@ pub(super) fn weld_vertices(positions: &[[f32; 3]]) -> Vec<u32> {
 }
 
 /// The triangle an edge link names, or NO_NEIGHBOUR.
-pub(crate) fn linked_triangle(link: u32) -> u32 {
+pub(super) fn linked_triangle(link: u32) -> u32 {
     match link {
         NO_NEIGHBOUR => NO_NEIGHBOUR,
         link => link >> LINK_INDEX_SHIFT,

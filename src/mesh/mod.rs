@@ -15,7 +15,7 @@ mod solid;
 mod surfaces;
 
 pub use adjacency::NO_NEIGHBOUR;
-pub(crate) use adjacency::{linked_triangle, LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY, MAX_LINKED_TRIANGLES};
+pub(crate) use adjacency::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY, MAX_LINKED_TRIANGLES};
 pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
 pub use obj::{load_obj, parse_obj};
 pub use solid::Solidity;

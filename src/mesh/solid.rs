@@ -13,7 +13,7 @@
 //! of itself inside out, passes this test and would lose the inside-out part; such a surface
 //! bounds no solid, and finding it would cost a triangle-triangle intersection test.)
 
-use super::adjacency::weld_vertices;
+use super::adjacency::{linked_triangle, LINK_SAME_WAY};
 use super::{Mesh, NO_NEIGHBOUR};
 use glam::DVec3;
 
@@ -35,20 +35,24 @@ pub enum Solidity {
 const MIN_RELATIVE_VOLUME: f64 = 1e-9;
 
 impl Mesh {
-    /// Whether this mesh bounds a solid.
+    /// Whether this mesh bounds a solid (`Open` for one too large to link, which cannot be
+    /// rendered either).
     pub fn solidity(&self) -> Solidity {
-        self.solidity_with(&self.triangle_neighbours())
+        self.solidity_with(&self.edge_links())
     }
 
-    /// As [`Mesh::solidity`], given the mesh's [`Mesh::triangle_neighbours`] (the upload has
-    /// them already).
-    pub(crate) fn solidity_with(&self, neighbours: &[[u32; 3]]) -> Solidity {
-        debug_assert_eq!(neighbours.len(), self.triangles.len());
-        if !self.is_closed_and_consistent() {
+    /// As [`Mesh::solidity`], given the mesh's [`Mesh::edge_links`] (the upload has them
+    /// already).
+    pub(crate) fn solidity_with(&self, links: &[[u32; 3]]) -> Solidity {
+        debug_assert_eq!(links.len(), self.triangles.len());
+        // Closed and consistently wound: every edge links two triangles that run it in opposite
+        // directions (adjacency.rs links an edge only where exactly two share it; an edge from a
+        // point to itself runs the same way in both).
+        if !links.iter().flatten().all(|&link| link != NO_NEIGHBOUR && link & LINK_SAME_WAY == 0) {
             return Solidity::Open;
         }
         let mut sign = 0.0;
-        for shell in shells(neighbours) {
+        for shell in shells(links) {
             let corners = |t: u32| self.triangles[t as usize].map(|v| self.vertex(v));
             // Relative to a corner of the shell, so that a shell far from the origin keeps its digits.
             let origin = corners(shell[0])[0];
@@ -72,27 +76,13 @@ impl Mesh {
             false => Solidity::Inward,
         }
     }
-
-    /// Every edge (welded) joins two points and is run once in each direction, so by two
-    /// different triangles.
-    fn is_closed_and_consistent(&self) -> bool {
-        let welded = weld_vertices(&self.positions);
-        let directed = |a: u32, b: u32| (u64::from(welded[a as usize]) << 32) | u64::from(welded[b as usize]);
-        let mut edges: Vec<u64> =
-            self.triangles.iter().flat_map(|&[a, b, c]| [directed(a, b), directed(b, c), directed(c, a)]).collect();
-        edges.sort_unstable();
-        let reversed = |edge: u64| edge.rotate_left(32);
-        let joins_two_points = edges.iter().all(|&edge| reversed(edge) != edge);
-        let unique = edges.windows(2).all(|pair| pair[0] != pair[1]);
-        joins_two_points && unique && edges.iter().all(|&edge| edges.binary_search(&reversed(edge)).is_ok())
-    }
 }
 
 /// The triangles of each connected shell, across linked edges.
-fn shells(neighbours: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut seen = vec![false; neighbours.len()];
+fn shells(links: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut seen = vec![false; links.len()];
     let mut shells = Vec::new();
-    for start in 0..neighbours.len() {
+    for start in 0..links.len() {
         if seen[start] {
             continue;
         }
@@ -100,7 +90,7 @@ fn shells(neighbours: &[[u32; 3]]) -> Vec<Vec<u32>> {
         let mut shell = vec![start as u32];
         let mut next = 0;
         while next < shell.len() {
-            for n in neighbours[shell[next] as usize] {
+            for n in links[shell[next] as usize].map(linked_triangle) {
                 if n != NO_NEIGHBOUR && !seen[n as usize] {
                     seen[n as usize] = true;
                     shell.push(n);
@@ -117,10 +107,6 @@ fn shells(neighbours: &[[u32; 3]]) -> Vec<Vec<u32>> {
 mod tests {
     use super::*;
     use crate::mesh::builtin_mesh;
-
-    fn solidity(mesh: &Mesh) -> Solidity {
-        mesh.solidity()
-    }
 
     /// Both meshes' triangles in one mesh.
     fn join(a: &Mesh, b: &Mesh) -> Mesh {
@@ -156,8 +142,8 @@ mod tests {
 
     #[test]
     fn a_cube_wound_outward_or_inward_bounds_a_solid() {
-        assert_eq!(solidity(&cube()), Solidity::Outward);
-        assert_eq!(solidity(&inside_out(cube())), Solidity::Inward);
+        assert_eq!(cube().solidity(), Solidity::Outward);
+        assert_eq!(inside_out(cube()).solidity(), Solidity::Inward);
     }
 
     #[test]
@@ -165,39 +151,39 @@ mod tests {
         let mut open = cube();
         open.triangles.pop();
         open.triangle_surfaces.pop();
-        assert_eq!(solidity(&open), Solidity::Open);
+        assert_eq!(open.solidity(), Solidity::Open);
         let mut flipped = cube();
         flipped.triangles[0].swap(1, 2);
-        assert_eq!(solidity(&flipped), Solidity::Open);
+        assert_eq!(flipped.solidity(), Solidity::Open);
     }
 
     #[test]
     fn shells_count_only_when_all_wound_the_same_way() {
         let apart = moved(cube(), [3.0, 0.0, 0.0], 1.0);
-        assert_eq!(solidity(&join(&cube(), &apart)), Solidity::Outward);
-        assert_eq!(solidity(&join(&cube(), &inside_out(apart))), Solidity::Open);
+        assert_eq!(join(&cube(), &apart).solidity(), Solidity::Outward);
+        assert_eq!(join(&cube(), &inside_out(apart)).solidity(), Solidity::Open);
         // A hollow cube, its cavity wound inward: the camera never sees the cavity, but the
         // shells' volumes differ in sign, and the rule keeps it whole.
         let cavity = inside_out(moved(cube(), [0.25, 0.25, 0.25], 0.5));
-        assert_eq!(solidity(&join(&cube(), &cavity)), Solidity::Open);
+        assert_eq!(join(&cube(), &cavity).solidity(), Solidity::Open);
     }
 
     #[test]
     fn a_double_sided_sheet_encloses_nothing() {
         let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let sheet = Mesh::new("sheet", positions, vec![[0, 1, 2], [0, 2, 1]], vec![1, 1], vec!["s".into()]).unwrap();
-        assert_eq!(solidity(&sheet), Solidity::Open);
+        assert_eq!(sheet.solidity(), Solidity::Open);
     }
 
     #[test]
     fn the_builtin_solids_are_wound_outward() {
         for name in ["builtin:box", "builtin:cylinder", "builtin:sphere", "builtin:sphere:320"] {
             let mesh = builtin_mesh(name).unwrap();
-            assert_eq!(solidity(&mesh), Solidity::Outward, "{name}");
+            assert_eq!(mesh.solidity(), Solidity::Outward, "{name}");
         }
         // The stepped block's sides end where its bottom has no corner (T-junctions), and its
         // +y side is wound like its −y side: it is drawn whole.
-        assert_eq!(solidity(&builtin_mesh("builtin:step").unwrap()), Solidity::Open);
-        assert_eq!(solidity(&builtin_mesh("builtin:plane").unwrap()), Solidity::Open);
+        assert_eq!(builtin_mesh("builtin:step").unwrap().solidity(), Solidity::Open);
+        assert_eq!(builtin_mesh("builtin:plane").unwrap().solidity(), Solidity::Open);
     }
 }

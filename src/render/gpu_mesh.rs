@@ -10,7 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
-use crate::mesh::{linked_triangle, Mesh, Solidity, MAX_LINKED_TRIANGLES};
+use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
 use std::sync::Arc;
 
@@ -41,7 +41,6 @@ impl GpuMesh {
             });
         }
         let links = mesh.edge_links();
-        let neighbours: Vec<[u32; 3]> = links.iter().map(|l| l.map(linked_triangle)).collect();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
                 ctx,
@@ -74,7 +73,7 @@ impl GpuMesh {
                 &format!("{name} edge links"),
             )?,
             index_count: indices.len() as u32,
-            solidity: mesh.solidity_with(&neighbours),
+            solidity: mesh.solidity_with(&links),
         })
     }
 }
