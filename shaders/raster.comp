@@ -149,7 +149,7 @@ void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
         return;
     }
     uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-    uint at = word_index(r.views[v], pixel);
+    uint at = word_index(r.views[v].stride, pixel);
     if (v == 0u) {
         atomicMin(range_words[at], word);
     } else {

@@ -1,11 +1,9 @@
-// What the compute rasterizer's passes share (src/render/compute_raster.rs): per-pixel
-// visibility words, 64 bits each, one buffer a view: the depth's bits high (a non-negative
-// float orders as its bits) and the triangle low, so an atomicMin keeps the nearest triangle,
-// and among equal depths the first in the mesh, as the graphics pipeline's LESS depth test
-// does.
+// What the compute rasterizer's passes share (src/render/compute_raster.rs): each view's
+// visibility words (visibility_word.glsl), one buffer a view, and how they are addressed.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #include "draw.glsl"
+#include "visibility_word.glsl"
 
 // One view as the passes see it; matches `RasterView` in src/render/compute_raster.rs.
 struct RasterView {
@@ -15,13 +13,8 @@ struct RasterView {
     uint pad0, pad1;
 };
 
-// No triangle at this pixel (the words are filled with ones before the raster pass).
-const uint64_t EMPTY = 0xffffffffffffffffUL;
-
-// Where a pixel's word is in its view's buffer.
-uint word_index(RasterView view, ivec2 pixel) {
-    return uint(pixel.y) * view.stride + uint(pixel.x);
-}
+// No triangle at this pixel.
+const uint64_t EMPTY = (uint64_t(EMPTY_HALF) << 32) | uint64_t(EMPTY_HALF);
 
 // The view-frame z at the centre of pixel (c, r) of the plane through corner a with unit
 // normal n, as raster.frag computes it.

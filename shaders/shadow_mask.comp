@@ -3,6 +3,7 @@
 // One invocation per range pixel: move its point into the shadow frame with R_y(-theta),
 // find the nearest shadow-buffer pixel and keep or drop the label.
 #include "draw.glsl"
+#include "visibility_word.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -16,8 +17,7 @@ layout(set = 0, binding = 5, std430) writeonly buffer Masked { uint masked_label
 // The shadow view's draws, indexed by the draw index the shadow view stored per pixel.
 layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[]; };
 // Where the compute rasterizer rendered the shadow view (FROM_WORDS): its visibility words
-// (shaders/raster_compute.glsl), read as two 32-bit halves, triangle low, in place of the
-// resolved visibility image it never writes.
+// (visibility_word.glsl), in place of the resolved visibility image it never writes.
 layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
 
 layout(push_constant, std430) uniform Mask {
@@ -53,9 +53,9 @@ uvec4 shadow_seen(ivec2 q) {
     if (!FROM_WORDS) {
         return imageLoad(shadow_visibility, q);
     }
-    uint at = 2u * (uint(q.y) * m.words_stride + uint(q.x));
+    uint at = 2u * word_index(m.words_stride, q);
     uint triangle = shadow_words[at], depth_bits = shadow_words[at + 1u];
-    if ((triangle & depth_bits) == 0xffffffffu) {
+    if (triangle == EMPTY_HALF && depth_bits == EMPTY_HALF) {
         return uvec4(0u);
     }
     uint label = TEST == TEST_LABEL || TEST == TEST_LABEL_SQUARE ? triangle_label(draws[m.words_draw], triangle) : 1u;

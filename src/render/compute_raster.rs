@@ -132,7 +132,7 @@ fn cull_sign(solidity: Solidity) -> i32 {
     }
 }
 
-/// Bytes of a pixel's visibility word (shaders/raster_compute.glsl), in each view.
+/// Bytes of a pixel's visibility word (shaders/visibility_word.glsl), in each view.
 pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
