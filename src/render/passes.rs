@@ -312,17 +312,16 @@ impl Passes<'_> {
                 slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
             // Where the compute rasterizer rendered the shadow view, the mask reads its words
             // (bound in a slot that has them for either pipeline, so stated either way).
-            let words = compute.and_then(|(state, rp, (index, _))| Some((state.shadow_words()?, rp, index)));
-            let bound_words = slot.compute.as_ref().and_then(|c| c.shadow_words());
+            let words = slot.compute.as_ref().and_then(|c| c.shadow_words());
             let mut buffers = vec![(masked, Access::ComputeWrite)];
-            buffers.extend(bound_words.map(|(words, _)| (words, Access::ComputeRead)));
+            buffers.extend(words.map(|(words, _)| (words, Access::ComputeRead)));
             enc.access(&reads, &buffers);
             let constants = MaskConstants::new(sensor, views, grid, job.area);
-            match words {
-                Some(((_, stride), rp, index)) => {
+            match (compute, words) {
+                (Some((_, rp, (index, _))), Some((_, stride))) => {
                     bindings.record(cmd, &rp.mask, test, &constants.reading_words(index, stride))
                 }
-                None => bindings.record(cmd, &p.mask, test, &constants),
+                _ => bindings.record(cmd, &p.mask, test, &constants),
             }
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
