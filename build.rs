@@ -11,6 +11,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster.frag", "raster_shadow.frag.spv", &["SHADOW_VIEW"]),
     ("raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
     ("shadow_mask.comp", "shadow_mask.comp.spv", &[]),
+    ("shadow_mask.comp", "shadow_mask_words.comp.spv", &["FROM_WORDS"]),
     ("raster.comp", "raster.comp.spv", &[]),
     ("raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
     ("raster_resolve.comp", "raster_resolve.comp.spv", &[]),

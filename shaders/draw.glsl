@@ -74,6 +74,14 @@ vec3 triangle_normal(DrawData d, uint triangle) {
     return rotate_to_view(d, mesh_normal(d, triangle));
 }
 
+// The view-frame z at the centre of pixel (c, r) of the plane through corner a with unit
+// normal n, as raster.frag computes it: for the compute rasterizer (raster.comp,
+// raster_resolve.comp) and the shadow mask that resolves its range view (shadow_mask.comp).
+float plane_z(DrawData d, vec3 a, vec3 n, ivec2 pixel) {
+    vec2 centre = vec2(d.grid.x + float(pixel.x) * d.grid.z, d.grid.y - float(pixel.y) * d.grid.w);
+    return a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
+}
+
 // What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that
 // shaders/shadow_mask.comp decodes (src/mesh/adjacency.rs, Mesh::edge_links).
 uint triangle_link(DrawData d, uint triangle, uint k) {

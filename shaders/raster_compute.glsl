@@ -15,10 +15,3 @@ struct RasterView {
 
 // No triangle at this pixel.
 const uint64_t EMPTY = (uint64_t(EMPTY_HALF) << 32) | uint64_t(EMPTY_HALF);
-
-// The view-frame z at the centre of pixel (c, r) of the plane through corner a with unit
-// normal n, as raster.frag computes it.
-float plane_z(DrawData d, vec3 a, vec3 n, ivec2 pixel) {
-    vec2 centre = vec2(d.grid.x + float(pixel.x) * d.grid.z, d.grid.y - float(pixel.y) * d.grid.w);
-    return a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
-}

@@ -2,7 +2,9 @@
 // The compute rasterizer's resolve pass (src/render/compute_raster.rs): one invocation per
 // pixel of the range view's area writes what raster.frag would have written for the nearest
 // triangle into the view's attachments, or zeros where no triangle covers the pixel (the
-// graphics pass clears to 0). The shadow view needs none: the shadow mask reads its words.
+// graphics pass clears to 0). Recorded only where no shadow mask follows: the mask resolves
+// the range view itself as it tests it, and reads the shadow view's words as they are
+// (shadow_mask.comp).
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "raster_compute.glsl"
 

@@ -2,23 +2,37 @@
 // Triangulation shadow test (paper Fig. 4; DESIGN.md "The shadow test"; src/shadow.rs).
 // One invocation per range pixel: move its point into the shadow frame with R_y(-theta),
 // find the nearest shadow-buffer pixel and keep or drop the label.
+//
+// FROM_WORDS: the variant for views the compute rasterizer rendered (src/render/shadow_pass.rs).
+// It reads the shadow view from its visibility words, and resolves the range view itself: it
+// reads the range view's words, writes the range view's attachments as the resolve pass would
+// (raster_resolve.comp) and tests the values it wrote, so the range view takes no resolve pass
+// of its own.
 #include "draw.glsl"
 #include "visibility_word.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
-layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
-layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
-layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
+#ifdef FROM_WORDS
+#define RANGE_ACCESS writeonly
+#else
+#define RANGE_ACCESS readonly
+#endif
+layout(set = 0, binding = 0, r32ui) uniform RANGE_ACCESS uimage2D range_label;
+layout(set = 0, binding = 1, r32f) uniform RANGE_ACCESS image2D range_z;
+layout(set = 0, binding = 2, r32f) uniform RANGE_ACCESS image2D range_dz_dx;
+layout(set = 0, binding = 3, r32f) uniform RANGE_ACCESS image2D range_dz_dy;
 // Per shadow pixel: label, draw index, triangle (src/render/targets.rs).
 layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D shadow_visibility;
 layout(set = 0, binding = 5, std430) writeonly buffer Masked { uint masked_label[]; };
 // The shadow view's draws, indexed by the draw index the shadow view stored per pixel.
 layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[]; };
-// Where the compute rasterizer rendered the shadow view (FROM_WORDS): its visibility words
-// (visibility_word.glsl), in place of the resolved visibility image it never writes.
+// FROM_WORDS: the compute rasterizer's visibility words (visibility_word.glsl) of the shadow
+// view, in place of the visibility image it never writes; the range view's draw table; and
+// the range view's words. (Other buffers are bound there otherwise, never read.)
 layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
+layout(set = 0, binding = 8, std430) readonly buffer RangeDrawTable { DrawData range_draws[]; };
+layout(set = 0, binding = 9, std430) readonly buffer RangeWords { uint range_words[]; };
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -29,8 +43,9 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
-    uint words_draw;    // FROM_WORDS: the one draw the shadow view rendered
-    uint words_stride;  // FROM_WORDS: pixels per row of the words
+    uint words_draw;    // FROM_WORDS: the one draw both views rendered
+    uint shadow_stride; // FROM_WORDS: pixels per row of the shadow view's words
+    uint range_stride;  // FROM_WORDS: pixels per row of the range view's words
 } m;
 
 // The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
@@ -43,23 +58,28 @@ layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
 layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
-// Whether the shadow view is read from the compute rasterizer's words (src/render/shadow_pass.rs).
-layout(constant_id = 6) const bool FROM_WORDS = false;
+
+// The triangle of a view's word, given as its two halves, or EMPTY_HALF where no triangle
+// covers the pixel (meshes have fewer triangles than that).
+uint word_triangle(uint triangle, uint depth_bits) {
+    return triangle == EMPTY_HALF && depth_bits == EMPTY_HALF ? EMPTY_HALF : triangle;
+}
 
 // What shadow pixel q (in the grid) saw: its label, draw index and triangle, or all zeros.
 // From the words, the label is read only for the label tests; the depth test needs only
 // whether a triangle was seen there, and gets 1.
 uvec4 shadow_seen(ivec2 q) {
-    if (!FROM_WORDS) {
-        return imageLoad(shadow_visibility, q);
-    }
-    uint at = 2u * word_index(m.words_stride, q);
-    uint triangle = shadow_words[at], depth_bits = shadow_words[at + 1u];
-    if (triangle == EMPTY_HALF && depth_bits == EMPTY_HALF) {
+#ifdef FROM_WORDS
+    uint at = 2u * word_index(m.shadow_stride, q);
+    uint triangle = word_triangle(shadow_words[at], shadow_words[at + 1u]);
+    if (triangle == EMPTY_HALF) {
         return uvec4(0u);
     }
     uint label = TEST == TEST_LABEL || TEST == TEST_LABEL_SQUARE ? triangle_label(draws[m.words_draw], triangle) : 1u;
     return uvec4(label, m.words_draw, triangle, 0u);
+#else
+    return imageLoad(shadow_visibility, q);
+#endif
 }
 
 // Whether shadow pixel q exists and carries `label`.
@@ -181,10 +201,18 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
     return false;
 }
 
-bool shadowed(ivec2 pixel, uint label) {
+// What the range view holds at a pixel: its label (0: nothing), z and the plane's gradient.
+struct RangePixel {
+    uint label;
+    float z;
+    vec2 gradient;
+};
+
+bool shadowed(ivec2 pixel, RangePixel range) {
+    uint label = range.label;
     float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
     float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
-    float z = imageLoad(range_z, pixel).r;
+    float z = range.z;
     // p' = R_y(-theta) p
     vec3 ps = vec3(m.cos_theta * x - m.sin_theta * z, y, m.sin_theta * x + m.cos_theta * z);
     float column = (ps.x - m.shadow_grid.x) / m.shadow_grid.z;
@@ -205,7 +233,7 @@ bool shadowed(ivec2 pixel, uint label) {
     }
     // Depth mode. The camera sees the side of a surface the projector lights only when that
     // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).
-    vec2 gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
+    vec2 gradient = range.gradient;
     float facing = m.cos_theta - m.sin_theta * gradient.x;
     float scale = max(max(abs(ps.x), abs(ps.y)), max(abs(ps.z), abs(z)));
     // z came from a plane evaluated in f32, which errs in proportion to its steepness.
@@ -266,14 +294,50 @@ bool shadowed(ivec2 pixel, uint label) {
     }
 }
 
+#ifdef FROM_WORDS
+// The range view at a pixel from its words, written to its attachments as raster_resolve.comp
+// writes them (zeros where no triangle covers it).
+RangePixel resolve_range(DrawData d, ivec2 pixel) {
+    uint at = 2u * word_index(m.range_stride, pixel);
+    uint t = word_triangle(range_words[at], range_words[at + 1u]);
+    RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
+    if (t != EMPTY_HALF) {
+        vec3 n = triangle_normal(d, t);
+        range = RangePixel(triangle_label(d, t), plane_z(d, triangle_corner(d, t, 0u), n, pixel),
+                           vec2(-n.x / n.z, -n.y / n.z));
+    }
+    imageStore(range_label, pixel, uvec4(range.label));
+    imageStore(range_z, pixel, vec4(range.z));
+    imageStore(range_dz_dx, pixel, vec4(range.gradient.x));
+    imageStore(range_dz_dy, pixel, vec4(range.gradient.y));
+    return range;
+}
+#else
+// The range view at a pixel, from its attachments; the gradient only for the depth test.
+RangePixel read_range(ivec2 pixel) {
+    RangePixel range = RangePixel(imageLoad(range_label, pixel).r, imageLoad(range_z, pixel).r, vec2(0.0));
+    if (TEST != TEST_LABEL && TEST != TEST_LABEL_SQUARE) {
+        range.gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
+    }
+    return range;
+}
+#endif
+
 void main() {
+#ifdef FROM_WORDS
+    // Read while every invocation is still active: a software rasterizer then reads it once
+    // for all of them instead of gathering it per invocation.
+    DrawData range_draw = range_draws[m.words_draw];
+#endif
     if (any(greaterThanEqual(ivec2(gl_GlobalInvocationID.xy), m.region.zw))) {
         return;
     }
     ivec2 pixel = m.region.xy + ivec2(gl_GlobalInvocationID.xy);
-    uint label = imageLoad(range_label, pixel).r;
+#ifdef FROM_WORDS
+    RangePixel range = resolve_range(range_draw, pixel);
+#else
+    RangePixel range = read_range(pixel);
+#endif
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
-
-
-    masked_label[index] = (label != 0u && shadowed(pixel, label)) ? 0u : label;
+    masked_label[index] = (range.label != 0u && shadowed(pixel, range)) ? 0u : range.label;
 }

@@ -9,6 +9,7 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DVec3};
+use rangesynth::effects::{Effects, Reason};
 use rangesynth::mesh::{builtin_mesh, Mesh, Solidity};
 use rangesynth::render::Raster;
 use rangesynth::scene::{Scene, SceneObject};
@@ -75,6 +76,27 @@ fn both_rasterizers_render_identical_images_of_one_object() {
                 assert_eq!(differ(&bits(&compute.z), &bits(&graphics.z)), 0, "{name}: z");
             }
         }
+    }
+}
+
+/// The effects read the range view's attachments, gradients included, which the shadow mask
+/// writes where the compute rasterizer rendered the views: grazing incidence and noise turn
+/// on them, and must drop and perturb the same pixels by the same bits.
+#[test]
+fn effects_see_the_same_range_view_from_either_rasterizer() {
+    let effects: Effects =
+        toml::from_str("[grazing]\nmax_incidence_deg = 55\n[noise]\nsigma = 0.002\nseed = 7").expect("effects");
+    for (model, mode) in [("builtin:sphere:64", ShadowMode::Depth), ("builtin:cylinder:48", ShadowMode::Label)] {
+        let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 35.0);
+        let mut sc = scene(s, mode, &[(model, turned())]);
+        sc.effects = effects;
+        let (graphics, compute) = (render(&sc), render_compute(&sc));
+        assert_eq!(compute.raster, Raster::Compute, "{model}");
+        assert!(graphics.pixels_lost_to(Reason::Grazing) > 0, "{model}: grazing drops pixels");
+        assert_eq!(compute.reason, graphics.reason, "{model}: reasons");
+        assert_eq!(compute.label, graphics.label, "{model}: labels");
+        let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&compute.z), bits(&graphics.z), "{model}: z");
     }
 }
 

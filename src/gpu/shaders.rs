@@ -14,6 +14,7 @@ pub const RASTER_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.
 pub const RASTER_LARGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large.comp.spv"));
 pub const RASTER_RESOLVE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve.comp.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
+pub const SHADOW_MASK_WORDS_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask_words.comp.spv"));
 pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
 pub const EFFECT_GRAZING_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_grazing.comp.spv"));
 pub const EFFECT_WORKING_VOLUME_COMP: &[u8] =

@@ -12,9 +12,11 @@
 //!   workgroup of 64 invocations. Where the mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
-//! - Resolve (shaders/raster_resolve.comp), the range view's: one invocation per pixel writes
-//!   what the graphics path's fragment shader would have written for that triangle. The
-//!   shadow view's only reader, the shadow mask, reads its words instead (shadow_pass.rs).
+//! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
+//!   fragment shader would have written for that triangle. Where a shadow mask follows, the
+//!   mask does it as it tests each pixel, and reads the shadow view's words as they are
+//!   (shadow_pass.rs): neither view takes a pass of its own. Without one, the resolve pass
+//!   (shaders/raster_resolve.comp) does it.
 //!
 //! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
 //! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
@@ -27,7 +29,7 @@
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
 //! renders, the graphics pipeline elsewhere.
 
-use super::shadow_pass::MaskPipelines;
+use super::shadow_pass::{MaskPipelines, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
@@ -191,7 +193,8 @@ struct ViewWords<'a> {
 
 /// The range view's and (where a shadow pass runs) the shadow view's visibility words, the
 /// queue of large triangles the coverage pass fills for both, and the passes' bindings. The
-/// range view's words are resolved into its attachments; the shadow view's are read by the
+/// range view's words are resolved into its attachments, by the shadow mask where there is a
+/// shadow view and by the resolve pass where there is none; the shadow view's are read by the
 /// shadow mask as they are.
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
@@ -253,9 +256,17 @@ impl<'a> ComputeViews<'a> {
         Ok(Self { range, shadow, large, large_args, large_capacity, coverage, resolve })
     }
 
-    /// The shadow view's words and their pixels per row, for the shadow mask.
-    pub fn shadow_words(&self) -> Option<(&Buffer, u32)> {
-        self.shadow.as_ref().map(|view| (&view.nearest, view.stride))
+    /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
+    /// include the shadow view's, and the views' pixels per row (range view's, shadow view's).
+    pub fn to_mask(&self) -> Option<(WordsToMask<'_>, (u32, u32))> {
+        self.shadow.as_ref().map(|shadow| {
+            let words = WordsToMask {
+                shadow_words: &shadow.nearest,
+                range_table: self.range.draw_table,
+                range_words: &self.range.nearest,
+            };
+            (words, (self.range.stride, shadow.stride))
+        })
     }
 
     fn views(&self) -> impl Iterator<Item = &ViewWords<'a>> {
@@ -264,8 +275,9 @@ impl<'a> ComputeViews<'a> {
 
     /// Records the passes of one draw (number `index` in the draw tables) over the range
     /// view's `range_area` and, where these words include the shadow view's, over its
-    /// `shadow_area`: the range view's colour attachments end written in GENERAL layout, as a
-    /// compute pass leaves them, and the shadow view's words are left for the shadow mask.
+    /// `shadow_area`. With a shadow view, both views' words are left for the shadow mask, which
+    /// resolves the range view (shadow_pass.rs); without, the resolve pass writes the range
+    /// view's colour attachments, in GENERAL layout as a compute pass leaves them.
     pub fn record(
         &self,
         enc: &mut Encoder,
@@ -316,6 +328,9 @@ impl<'a> ComputeViews<'a> {
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
         enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
+        if shadow.is_some() {
+            return;
+        }
         let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
         enc.access(
             &writes,

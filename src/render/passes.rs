@@ -113,8 +113,8 @@ impl<'a> Slot<'a> {
             Some((shadow_width, draw_table)) => {
                 let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
-                let words = compute.as_ref().and_then(|c| c.shadow_words()).map(|(words, _)| words);
-                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words)?;
+                let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
+                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words.as_ref())?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
         };
@@ -308,18 +308,23 @@ impl Passes<'_> {
         }
         let mut shadowed_labels = None;
         if let Some((targets, grid, _, masked, bindings, test)) = shadow {
-            let reads: Vec<_> =
-                slot.range.colour.iter().chain(&targets.colour).map(|image| (image, Access::ComputeRead)).collect();
-            // Where the compute rasterizer rendered the shadow view, the mask reads its words
-            // (bound in a slot that has them for either pipeline, so stated either way).
-            let words = slot.compute.as_ref().and_then(|c| c.shadow_words());
+            // Where the compute rasterizer rendered the views, the mask reads their words and
+            // writes the range view's attachments (shadow_pass.rs). The words are bound in a
+            // slot that has them for either variant, so their reads are stated either way.
+            let words = slot.compute.as_ref().and_then(|c| c.to_mask());
+            let resolves = compute.is_some() && words.is_some();
+            let range_use = if resolves { Access::ComputeWrite } else { Access::ComputeRead };
+            let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, range_use)).collect();
+            images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
             let mut buffers = vec![(masked, Access::ComputeWrite)];
-            buffers.extend(words.map(|(words, _)| (words, Access::ComputeRead)));
-            enc.access(&reads, &buffers);
+            if let Some((w, _)) = &words {
+                buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
+            }
+            enc.access(&images, &buffers);
             let constants = MaskConstants::new(sensor, views, grid, job.area);
             match (compute, words) {
-                (Some((_, rp, (index, _))), Some((_, stride))) => {
-                    bindings.record(cmd, &rp.mask, test, &constants.reading_words(index, stride))
+                (Some((_, rp, (index, _))), Some((_, strides))) => {
+                    bindings.record(cmd, &rp.mask, test, &constants.reading_words(index, strides))
                 }
                 _ => bindings.record(cmd, &p.mask, test, &constants),
             }

@@ -1,8 +1,13 @@
 //! The compute pass that applies the shadow test (shaders/shadow_mask.comp, src/shadow.rs)
-//! to the range view, reading both views' attachments and writing the shadowed labels. Where
-//! the compute rasterizer rendered the shadow view, the pass reads its visibility words
-//! instead of the visibility attachment, so that view needs no resolve pass (compute_raster.rs;
-//! it cost about 0.9 ms of the box's 3.7 ms a hypothesis in label mode on lavapipe).
+//! to the range view, reading both views' attachments and writing the shadowed labels.
+//!
+//! Where the compute rasterizer rendered the views (compute_raster.rs), its variant reads
+//! their visibility words instead, so that neither view takes a resolve pass of its own: it
+//! reads the shadow view's words where the other reads the visibility attachment, and it
+//! resolves the range view itself, writing the range view's attachments from its words as the
+//! resolve pass would and testing what it wrote. On lavapipe a compute pass over a 256² view
+//! costs about 0.5 ms however little each invocation does: the shadow view's resolve cost about
+//! 0.9 ms of the box's 3.7 ms a hypothesis in label mode, the range view's about 0.7 ms of 3.
 
 use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
@@ -29,13 +34,14 @@ pub struct MaskConstants {
     bias_pitch: f32,
     bias_relative: f32,
     words_draw: u32,
-    words_stride: u32,
+    shadow_stride: u32,
+    range_stride: u32,
 }
 
 // std430 offsets of `Mask` in shaders/shadow_mask.comp.
 const _: () = assert!(std::mem::offset_of!(MaskConstants, cos_theta) == 64);
 const _: () = assert!(std::mem::offset_of!(MaskConstants, words_draw) == 80);
-const _: () = assert!(size_of::<MaskConstants>() == 88);
+const _: () = assert!(size_of::<MaskConstants>() == 92);
 
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
@@ -55,20 +61,22 @@ impl MaskConstants {
             bias_pitch: (DEPTH_BIAS_PIXELS * sensor.pitch[0]) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
             words_draw: 0,
-            words_stride: 0,
+            shadow_stride: 0,
+            range_stride: 0,
         }
     }
 
-    /// The same constants for a pipeline reading the shadow view from visibility words
-    /// `stride` pixels a row, rendered for draw `draw` alone.
-    pub fn reading_words(self, draw: u32, stride: u32) -> Self {
-        Self { words_draw: draw, words_stride: stride, ..self }
+    /// The same constants for the pipelines reading both views from visibility words, the
+    /// range view's `range_stride` pixels a row and the shadow view's `shadow_stride`, which
+    /// rendered draw `draw` alone.
+    pub fn reading_words(self, draw: u32, (range_stride, shadow_stride): (u32, u32)) -> Self {
+        Self { words_draw: draw, shadow_stride, range_stride, ..self }
     }
 }
 
-/// The mask pipelines, one per [`ShadowTest`], the test a specialization constant, and
-/// another the shadow view's source (the visibility attachment, or the compute rasterizer's
-/// words). Their descriptor-set layouts are defined identically, so one set serves them all.
+/// The mask pipelines, one per [`ShadowTest`], the test a specialization constant, of one of
+/// the shader's two variants: reading the views' attachments, or the compute rasterizer's
+/// words. Their descriptor-set layouts are defined identically, so one set serves them all.
 /// On lavapipe, which runs both sides of a branch on a uniform value, the label test alone ran
 /// in a quarter of the time of the shader that switched on a push constant (256², 1.0 ms
 /// against 4.5 ms).
@@ -79,16 +87,19 @@ pub struct MaskPipelines {
 }
 
 impl MaskPipelines {
-    /// The pipelines reading the shadow view from the visibility attachment, or, `from_words`,
-    /// from the compute rasterizer's words.
+    /// The pipelines reading the views' attachments, or, `from_words`, the compute
+    /// rasterizer's words.
     pub fn new(ctx: &Arc<GpuContext>, from_words: bool) -> Result<Self> {
-        let source = if from_words { ", from visibility words" } else { "" };
+        let (code, source) = match from_words {
+            true => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words"),
+            false => (shaders::SHADOW_MASK_COMP, ""),
+        };
         let pipeline = |test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
                 (MaskBindings::IMAGES, MaskBindings::BUFFERS),
                 size_of::<MaskConstants>(),
-                shaders::SHADOW_MASK_COMP,
+                code,
                 &[
                     test as u32,
                     ShadowTest::Label as u32,
@@ -96,7 +107,6 @@ impl MaskPipelines {
                     LINK_INDEX_SHIFT,
                     LINK_SAME_WAY,
                     LINK_EDGE_MASK,
-                    u32::from(from_words),
                 ],
                 &format!("{name}{source}"),
             )
@@ -117,9 +127,17 @@ impl MaskPipelines {
     }
 }
 
+/// What the variant reading visibility words reads besides the shadow view's draw table: the
+/// shadow view's words, the range view's draw table and the range view's words.
+pub struct WordsToMask<'a> {
+    pub shadow_words: &'a Buffer,
+    pub range_table: &'a Buffer,
+    pub range_words: &'a Buffer,
+}
+
 /// The descriptor set binding both views' colour attachments (range view's, then shadow
-/// view's), the output labels, the shadow view's draw table and the compute rasterizer's
-/// shadow-view words (the draw table again where there are none: never read then).
+/// view's), the output labels, the shadow view's draw table and what the variant reading
+/// visibility words reads (the draw table again where there are none: never read then).
 pub struct MaskBindings {
     set: StorageSet,
 }
@@ -127,8 +145,9 @@ pub struct MaskBindings {
 impl MaskBindings {
     /// Storage images the mask pass binds, from binding 0.
     pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
-    /// Storage buffers bound after them: the shadowed labels, the draw table and the words.
-    pub const BUFFERS: usize = 3;
+    /// Storage buffers bound after them: the shadowed labels, the draw table and
+    /// [`WordsToMask`]'s three.
+    pub const BUFFERS: usize = 5;
 
     /// `draw_table` holds the shadow pass's [`DrawConstants`](super::draw::DrawConstants)
     /// at the draw indices it recorded.
@@ -139,11 +158,14 @@ impl MaskBindings {
         shadow: &ViewTargets,
         masked: &Buffer,
         draw_table: &Buffer,
-        shadow_words: Option<&Buffer>,
+        words: Option<&WordsToMask>,
     ) -> Result<Self> {
         let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
         debug_assert_eq!(images.len(), Self::IMAGES);
-        let buffers = [masked, draw_table, shadow_words.unwrap_or(draw_table)];
+        let buffers = match words {
+            Some(w) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words],
+            None => [masked, draw_table, draw_table, draw_table, draw_table],
+        };
         let set_layout = pipelines.mask.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, &buffers, "shadow mask bindings")? })
     }
