@@ -287,14 +287,25 @@ impl<'a> ComputeViews<'a> {
         (index, draw): (u32, &Draw),
     ) {
         let cmd = enc.cmd;
-        let mut cleared: Vec<_> = self.views().map(|v| (&v.nearest, Access::TransferWrite)).collect();
+        // The rows of each view's area are emptied, not the whole view: a hypothesis costs its
+        // footprint, not the image. Nothing reads a word beyond the area's rows, as nothing
+        // reads the attachments beyond the area that the graphics pass clears (draw.rs).
+        let emptied: Vec<_> = std::iter::once((&self.range, range_area))
+            .chain(self.shadow.as_ref().zip(shadow_area))
+            .map(|(view, area)| {
+                let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
+                (view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes)
+            })
+            .collect();
+        let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
         cleared.push((&self.large_args, Access::TransferWrite));
         enc.access(&[], &cleared);
-        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers.
+        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
+        // rows lie within the view's words, and their bytes are a multiple of 4.
         unsafe {
             let d = &enc.ctx().device;
-            for view in self.views() {
-                d.cmd_fill_buffer(cmd, view.nearest.raw, 0, vk::WHOLE_SIZE, u32::MAX);
+            for &(view, offset, size) in &emptied {
+                d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
             }
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
         }
