@@ -312,8 +312,16 @@ impl Passes<'_> {
             // writes the range view's attachments (shadow_pass.rs). The words are bound in a
             // slot that has them for either variant, so their reads are stated either way.
             let words = slot.compute.as_ref().and_then(|c| c.to_mask());
-            let resolves = compute.is_some() && words.is_some();
-            let range_use = if resolves { Access::ComputeWrite } else { Access::ComputeRead };
+            let constants = MaskConstants::new(sensor, views, grid, job.area);
+            // The variant reading words where it runs: one choice for the pipeline and for the
+            // range view's use.
+            let reading_words = match (compute, &words) {
+                (Some((_, rp, (index, _))), Some((_, strides))) => {
+                    Some((&rp.mask, constants.reading_words(index, *strides)))
+                }
+                _ => None,
+            };
+            let range_use = if reading_words.is_some() { Access::ComputeWrite } else { Access::ComputeRead };
             let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, range_use)).collect();
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
             let mut buffers = vec![(masked, Access::ComputeWrite)];
@@ -321,13 +329,8 @@ impl Passes<'_> {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }
             enc.access(&images, &buffers);
-            let constants = MaskConstants::new(sensor, views, grid, job.area);
-            match (compute, words) {
-                (Some((_, rp, (index, _))), Some((_, strides))) => {
-                    bindings.record(cmd, &rp.mask, test, &constants.reading_words(index, strides))
-                }
-                _ => bindings.record(cmd, &p.mask, test, &constants),
-            }
+            let (mask, constants) = reading_words.unwrap_or((&p.mask, constants));
+            bindings.record(cmd, mask, test, &constants);
             if let Some(c) = &mut clock {
                 c.lap(cmd, "shadow mask");
             }
