@@ -5,7 +5,7 @@
 // coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
 // edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit
-// integer arithmetic. Each covered pixel keeps the nearest triangle by atomicMin on its
+// integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered pixel keeps the nearest triangle by atomicMin on its
 // view's visibility word.
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view. A
@@ -129,15 +129,23 @@ Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     return s;
 }
 
-// The edge functions of b–c, c–a and a–b at the centre of a pixel.
+// The edge functions of b–c, c–a and a–b at the centre of a pixel, each less one where its
+// edge is neither top nor left, so that the pixel is covered exactly when all three are at
+// least 0 (on such an edge, 0 becomes −1): one sign test for the top-left rule.
 i64vec3 edges_at(Setup s, ivec2 pixel) {
     i64vec2 p = i64vec2(pixel) * 256 + 128;
-    return i64vec3(edge(s.b, s.c, p), edge(s.c, s.a, p), edge(s.a, s.b, p));
+    i64vec3 e = i64vec3(edge(s.b, s.c, p), edge(s.c, s.a, p), edge(s.a, s.b, p));
+    return e - i64vec3(s.bc ? 0 : 1, s.ca ? 0 : 1, s.ab ? 0 : 1);
 }
 
-// Whether a pixel centre with edge functions e is covered.
-bool inside(Setup s, i64vec3 e) {
-    return (e.x > 0 || (e.x == 0 && s.bc)) && (e.y > 0 || (e.y == 0 && s.ca)) && (e.z > 0 || (e.z == 0 && s.ab));
+// From pixel to pixel the edge functions change by constants: exact integer steps, where
+// evaluating them afresh takes 64-bit products. One pixel right, and one pixel down:
+i64vec3 step_right(Setup s) {
+    return -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
+}
+
+i64vec3 step_down(Setup s) {
+    return 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
 }
 
 // Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
@@ -157,16 +165,14 @@ void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
     }
 }
 
-// Tests the pixels of one row of the box, `e` the edge functions at its first: from pixel to
-// pixel they change by constants, exact integer steps where evaluating them afresh takes
-// 64-bit products.
+// Tests the pixels of one row of the box, `e` the edge functions at its first.
 void cover_row(uint v, DrawData d, uint t, Setup s, int row, i64vec3 e) {
-    i64vec3 step_right = -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
+    i64vec3 right = step_right(s);
     for (int col = s.first.x; col <= s.last.x; col++) {
-        if (inside(s, e)) {
+        if ((e.x | e.y | e.z) >= 0) {
             keep(v, d, t, s, ivec2(col, row));
         }
-        e += step_right;
+        e += right;
     }
 }
 
@@ -209,15 +215,31 @@ bool queue_large(uint t, uint v) {
 void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     Setup s = set_up(d, r.views[v], m);
     ivec2 box = s.last - s.first + 1;
-    if (box.x > 0 && box.y > 0 && box.x * box.y > LARGE_PIXELS && queue_large(t, v)) {
+    if (box.x <= 0 || box.y <= 0 || (box.x * box.y > LARGE_PIXELS && queue_large(t, v))) {
         return;
     }
-    // One pixel down, the edge functions change by a constant too.
-    i64vec3 step_down = 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
-    i64vec3 row_start = edges_at(s, s.first);
+    i64vec3 first = edges_at(s, s.first), right = step_right(s), down = step_down(s);
+    // Where every edge function in the box fits in 32 bits (as for any small triangle near
+    // the view), the steps are taken in 32-bit arithmetic, which a software rasterizer does
+    // in half the lanes' width.
+    i64vec3 reach = abs(first) + abs(right) * int64_t(box.x) + abs(down) * int64_t(box.y);
+    if (all(lessThan(reach, i64vec3(0x7fffffffl)))) {
+        ivec3 row_start = ivec3(first), narrow_right = ivec3(right), narrow_down = ivec3(down);
+        for (int row = s.first.y; row <= s.last.y; row++) {
+            ivec3 e = row_start;
+            for (int col = s.first.x; col <= s.last.x; col++) {
+                if ((e.x | e.y | e.z) >= 0) {
+                    keep(v, d, t, s, ivec2(col, row));
+                }
+                e += narrow_right;
+            }
+            row_start += narrow_down;
+        }
+        return;
+    }
     for (int row = s.first.y; row <= s.last.y; row++) {
-        cover_row(v, d, t, s, row, row_start);
-        row_start += step_down;
+        cover_row(v, d, t, s, row, first);
+        first += down;
     }
 }
 
