@@ -5,8 +5,8 @@
 // coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
 // edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit
-// integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered pixel keeps the nearest triangle by atomicMin on its
-// view's visibility word.
+// integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered
+// pixel keeps the nearest triangle by atomicMin on its view's visibility word.
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view. A
 // triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
