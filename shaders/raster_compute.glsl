@@ -10,7 +10,8 @@ struct RasterView {
     uvec4 area;        // the pixels to draw: first column, first row, width, height
     uint draw;         // the draw's entry in the view's draw table
     uint stride;       // pixels per row of the view's words (the attachments' width)
-    uint pad0, pad1;
+    uint base;         // where the job's words start among the view's words
+    uint pad;
 };
 
 // No triangle at this pixel.

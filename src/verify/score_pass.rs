@@ -95,7 +95,7 @@ pub(crate) struct ScoreBindings {
 impl ScoreBindings {
     /// Records the pass over the constants' region (8×8 workgroups).
     pub fn record(&self, cmd: vk::CommandBuffer, pass: &ScorePass, constants: &ScoreConstants) {
-        let groups = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), groups);
+        let [x, y] = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
+        self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), [x, y, 1]);
     }
 }
