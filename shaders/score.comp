@@ -1,9 +1,15 @@
 #version 460
 // Verification counts (paper §4; src/verify/counts.rs has the layout): one invocation per
-// pixel of the hypothesis' footprint compares the hypothesis' synthetic labels and depths with the sensed image and adds
-// to exact integer counters. Integer atomics are order-independent, so the counts are the
-// same whatever the batch; areas are summed in fixed point for the same reason.
-// Every buffer is bound, so that synchronization validation sees each access.
+// run of RUN pixels of a row of the hypothesis' footprint compares the hypothesis' synthetic
+// labels and depths with the sensed image and adds to exact integer counters. Integer atomics
+// are order-independent, so the counts are the same whatever the batch; areas are summed in
+// fixed point for the same reason. Every buffer is bound, so that synchronization validation
+// sees each access.
+//
+// An invocation tallies its run before it adds: a counter is added to once for as many
+// neighbouring pixels as add to it in turn (most do: a run mostly sees one surface in one
+// segment), where adding a pixel at a time spent half the pass on atomics that every
+// invocation aimed at the same few counters.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
@@ -42,6 +48,8 @@ layout(constant_id = 0) const uint N1_PLUS = 0xffffffffu;
 layout(constant_id = 1) const uint N1_MINUS = 0xffffffffu;
 layout(constant_id = 2) const uint N0 = 0xffffffffu;
 layout(constant_id = 3) const uint POPULATIONS = 0xffffffffu;
+// Pixels an invocation scores, consecutive in a row (given by the host, score_pass.rs).
+layout(constant_id = 4) const uint RUN = 1u;
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
@@ -67,16 +75,54 @@ uint synthetic(ivec2 p) {
     return shadowed_label[uint(p.y) * s.width + uint(p.x)];
 }
 
-// An exact 64-bit sum in two words: the low word's wrap-around is the carry.
-void add_units(uint index, uint units) {
-    uint before = atomicAdd(count[s.counts_offset + index], units);
-    if (before + units < before) {
-        atomicAdd(count[s.counts_offset + index + 1u], 1u);
+// Pixels of a run counted for one counter (its index), not yet added.
+struct Tally {
+    uint index;
+    uint pixels;
+};
+
+void add(inout Tally t) {
+    if (t.pixels != 0u) {
+        atomicAdd(count[s.counts_offset + t.index], t.pixels);
     }
+    t.pixels = 0u;
 }
 
-void add_one(uint index) {
-    atomicAdd(count[s.counts_offset + index], 1u);
+// Counts a pixel for counter `index`, first adding what was counted for another.
+void count_pixel(inout Tally t, uint index) {
+    if (t.index != index) {
+        add(t);
+        t.index = index;
+    }
+    t.pixels += 1u;
+}
+
+// Area units of a run for one surface's area (index: its low word), an exact 64-bit sum.
+struct AreaTally {
+    uint index;
+    uint low;
+    uint high;
+};
+
+// Adds to the counter's two words: the low word's wrap-around is the carry.
+void add(inout AreaTally a) {
+    uint before = atomicAdd(count[s.counts_offset + a.index], a.low);
+    uint high = a.high + (before + a.low < before ? 1u : 0u);
+    if (high != 0u) {
+        atomicAdd(count[s.counts_offset + a.index + 1u], high);
+    }
+    a.low = 0u;
+    a.high = 0u;
+}
+
+void count_units(inout AreaTally a, uint index, uint units) {
+    if (a.index != index) {
+        add(a);
+        a.index = index;
+    }
+    uint carry;
+    a.low = uaddCarry(a.low, units, carry);
+    a.high += carry;
 }
 
 // area.rs block_area_units, operation for operation, without fused multiply-adds.
@@ -87,48 +133,71 @@ uint triangle_units(float p, float q, float level) {
 }
 
 void main() {
-    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, s.region.zw))) {
+    uvec2 start = uvec2(gl_GlobalInvocationID.x * RUN, gl_GlobalInvocationID.y);
+    if (any(greaterThanEqual(start, s.region.zw))) {
         return;
     }
-    ivec2 p = ivec2(s.region.xy + gl_GlobalInvocationID.xy);
-    uint index = uint(p.y) * s.width + uint(p.x);
-    uint m = synthetic(p);
-    uint k = sensed_segment[index];
-    // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
-    // need not cover the whole image.
-    if (m == 0u) {
-        return;
-    }
-    add_one(POPULATIONS + m - 1u);
-    float z = synthetic_z(p);
-    if (k == 0u) {
-        add_one(N0);
-    } else {
-        uint overlaps = POPULATIONS + s.surfaces;
-        add_one(overlaps + (k - 1u) * s.surfaces + (m - 1u));
-        precise float d = z - sensed_z[index];
-        if (abs(d) <= s.tolerance) {
-            add_one(N1_PLUS);
-        } else if (d > s.tolerance) {
-            add_one(N1_MINUS);
+    uint populations = POPULATIONS, overlaps = POPULATIONS + s.surfaces;
+    uint areas = overlaps + s.segments * s.surfaces;
+    Tally population = Tally(populations, 0u), overlap = Tally(overlaps, 0u);
+    Tally n0 = Tally(N0, 0u), n1_plus = Tally(N1_PLUS, 0u), n1_minus = Tally(N1_MINUS, 0u);
+    AreaTally area = AreaTally(areas, 0u, 0u);
+    uint end = min(start.x + RUN, s.region.z);
+    // Each label is read once: a pixel's right and across neighbours, which its 2×2 block
+    // reads, are the next pixel and the one below it.
+    ivec2 first = ivec2(s.region.xy + start);
+    bool has_down = uint(first.y) + 1u < s.height;
+    uint label = synthetic(first), label_below = has_down ? synthetic(first + ivec2(0, 1)) : 0u;
+    for (uint x = start.x; x < end; x++) {
+        ivec2 p = ivec2(s.region.xy + uvec2(x, start.y));
+        ivec2 right = p + ivec2(1, 0), down = p + ivec2(0, 1), across = p + ivec2(1, 1);
+        bool has_right = uint(right.x) < s.width;
+        uint m = label, m_below = label_below;
+        uint m_right = has_right ? synthetic(right) : 0u;
+        uint m_across = has_right && has_down ? synthetic(across) : 0u;
+        label = m_right;
+        label_below = m_across;
+        uint index = uint(p.y) * s.width + uint(p.x);
+        uint k = sensed_segment[index];
+        // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
+        // need not cover the whole image.
+        if (m == 0u) {
+            continue;
+        }
+        count_pixel(population, populations + m - 1u);
+        float z = synthetic_z(p);
+        if (k == 0u) {
+            n0.pixels += 1u;
+        } else {
+            count_pixel(overlap, overlaps + (k - 1u) * s.surfaces + (m - 1u));
+            precise float d = z - sensed_z[index];
+            if (abs(d) <= s.tolerance) {
+                n1_plus.pixels += 1u;
+            } else if (d > s.tolerance) {
+                n1_minus.pixels += 1u;
+            }
+        }
+        // The 2×2 block whose top-left pixel this is, if all four carry surface m.
+        if (has_right && has_down && m_right == m && m_below == m && m_across == m) {
+            float z10 = synthetic_z(right);
+            float z01 = synthetic_z(down);
+            float z11 = synthetic_z(across);
+            precise float a = z10 - z;
+            precise float b = z11 - z;
+            precise float e = z01 - z;
+            precise float dxdy = s.dx * s.dy;
+            precise float level = dxdy * dxdy;
+            precise float q1 = s.dx * (a - b);
+            precise float p2 = s.dy * (b - e);
+            uint surface_area = areas + 2u * (m - 1u);
+            count_units(area, surface_area, triangle_units(s.dy * a, q1, level));
+            count_units(area, surface_area, triangle_units(p2, s.dx * e, level));
         }
     }
-    // The 2×2 block whose top-left pixel this is, if all four carry surface m.
-    ivec2 right = p + ivec2(1, 0), down = p + ivec2(0, 1), across = p + ivec2(1, 1);
-    if (uint(across.x) < s.width && uint(across.y) < s.height
-        && synthetic(right) == m && synthetic(down) == m && synthetic(across) == m) {
-        float z10 = synthetic_z(right);
-        float z01 = synthetic_z(down);
-        float z11 = synthetic_z(across);
-        precise float a = z10 - z;
-        precise float b = z11 - z;
-        precise float e = z01 - z;
-        precise float dxdy = s.dx * s.dy;
-        precise float level = dxdy * dxdy;
-        precise float q1 = s.dx * (a - b);
-        precise float p2 = s.dy * (b - e);
-        uint areas = POPULATIONS + s.surfaces + s.segments * s.surfaces + 2u * (m - 1u);
-        add_units(areas, triangle_units(s.dy * a, q1, level));
-        add_units(areas, triangle_units(p2, s.dx * e, level));
-    }
+    add(population);
+    add(overlap);
+    add(n0);
+    add(n1_plus);
+    add(n1_minus);
+    add(area);
 }

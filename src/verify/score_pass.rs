@@ -39,6 +39,11 @@ const _: () = assert!(std::mem::offset_of!(ScoreConstants, use_measured_z) == 24
 const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 32);
 const _: () = assert!(size_of::<ScoreConstants>() == 72);
 
+/// Pixels of a row one invocation of the score pass scores (`RUN` in shaders/score.comp): it
+/// adds to a counter once for as many of them as count for it in turn. At 1024² on lavapipe,
+/// adding a pixel at a time spent about half the pass on its atomics.
+const SCORE_RUN: u32 = 16;
+
 /// The score pass's pipeline, built once per verifier.
 pub(crate) struct ScorePass {
     pipeline: ComputePipeline,
@@ -52,7 +57,7 @@ impl ScorePass {
             (2, 6),
             size_of::<ScoreConstants>(),
             shaders::SCORE_COMP,
-            &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS],
+            &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS, SCORE_RUN],
             "verification counts",
         )?;
         Ok(Self { pipeline })
@@ -93,9 +98,10 @@ pub(crate) struct ScoreBindings {
 }
 
 impl ScoreBindings {
-    /// Records the pass over the constants' region (8×8 workgroups).
+    /// Records the pass over the constants' region: workgroups of 8×8 invocations, each
+    /// scoring a run of [`SCORE_RUN`] pixels.
     pub fn record(&self, cmd: vk::CommandBuffer, pass: &ScorePass, constants: &ScoreConstants) {
-        let [x, y] = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
+        let [x, y] = [constants.region[2].div_ceil(8 * SCORE_RUN), constants.region[3].div_ceil(8)];
         self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), [x, y, 1]);
     }
 }
