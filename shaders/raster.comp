@@ -8,50 +8,36 @@
 // integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered
 // pixel keeps the nearest triangle by atomicMin on its view's visibility word.
 //
-// One dispatch renders a group of jobs (its members, each a hypothesis of a batch): the
-// workgroups along z are the members, each with its own draws, triangle count and areas, and
-// its own words in each view's buffer, so that a batch pays the passes' fixed costs once a
-// group instead of once a hypothesis.
-//
 // Small triangles: one invocation per triangle walks its bounding box in each view. A
 // triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
 // instead (up to the queue's capacity), and LARGE_TRIANGLES, dispatched indirectly, gives each
-// queued (member, triangle, view) a workgroup whose 64 invocations share its rows: one
-// invocation never serialises thousands of pixels.
+// queued (triangle, view) a workgroup whose 64 invocations share its rows: one invocation
+// never serialises thousands of pixels.
 layout(local_size_x = 64) in;
 #include "raster_compute.glsl"
 
-// Each view's draw table and visibility words, every member's in one buffer: views[0] is the
-// range view, views[1] the shadow view (where there is none, the range view's are bound again
-// and never used).
+// Each view's draw table and visibility words: views[0] is the range view, views[1] the
+// shadow view (where there is none, the range view's are bound again and never used).
 layout(set = 0, binding = 0, std430) readonly buffer RangeDraws { DrawData range_draws[]; };
 layout(set = 0, binding = 1, std430) readonly buffer ShadowDraws { DrawData shadow_draws[]; };
 layout(set = 0, binding = 2, std430) buffer RangeWords { uint64_t range_words[]; };
 layout(set = 0, binding = 3, std430) buffer ShadowWords { uint64_t shadow_words[]; };
-// The queue of large (member, triangle, view) triples, the view's bit and the member's two
-// bits above the triangle's index (meshes have fewer than 2^29 triangles:
-// src/mesh/adjacency.rs), and the indirect dispatch's (x, y, z), x its length.
+// The queue of large (triangle, view) pairs, a view's bit above the triangle's index (meshes
+// have fewer than 2^29 triangles: src/mesh/adjacency.rs), and the indirect dispatch's
+// (x, y, z), x its length.
 layout(set = 0, binding = 4, std430) buffer Large { uint large[]; };
 layout(set = 0, binding = 5, std430) buffer LargeCount { uint large_count; uint large_y; uint large_z; };
 
-// One member of the group; matches `CoverageJob` in src/render/compute_raster.rs.
-struct CoverageJob {
-    RasterView views[2];
-    uint triangles;      // its mesh's triangle count
-    int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
-    uint view_count;     // 1: the range view alone; 2: and the shadow view
-    uint pad;
-};
-layout(set = 0, binding = 6, std430) readonly buffer Jobs { CoverageJob jobs[]; };
-
 // Matches `CoverageConstants` in src/render/compute_raster.rs.
 layout(push_constant, std430) uniform Coverage {
+    RasterView views[2];
+    uint view_count;     // 1: the range view alone; 2: and the shadow view
+    uint triangles;      // the mesh's triangle count
     uint large_capacity; // room in the queue of large triangles
+    int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
 } r;
 
 const uint VIEW_BIT = 31u;
-const uint MEMBER_SHIFT = 29u;
-const uint TRIANGLE_MASK = (1u << MEMBER_SHIFT) - 1u;
 
 // A triangle with more pixels in its bounding box than this is queued.
 const int LARGE_PIXELS = 256;
@@ -100,8 +86,8 @@ MeshTriangle read_triangle(DrawData d, uint t, vec3 normal) {
 
 // A solid's triangles facing away from the camera are never the first hit
 // (src/mesh/solid.rs).
-bool culled(CoverageJob job, DrawData d, vec3 model_normal) {
-    return job.cull != 0 && float(job.cull) * rotate_to_view(d, model_normal).z < 0.0;
+bool culled(DrawData d, vec3 model_normal) {
+    return r.cull != 0 && float(r.cull) * rotate_to_view(d, model_normal).z < 0.0;
 }
 
 // A triangle set up for coverage tests in one view: snapped corners with positive area,
@@ -163,7 +149,7 @@ i64vec3 step_down(Setup s) {
 }
 
 // Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
-void keep(uint v, RasterView view, DrawData d, uint t, Setup s, ivec2 pixel) {
+void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
     float z = plane_z(d, s.corner, s.normal, pixel);
     precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
@@ -171,7 +157,7 @@ void keep(uint v, RasterView view, DrawData d, uint t, Setup s, ivec2 pixel) {
         return;
     }
     uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-    uint at = view.base + word_index(view.stride, pixel);
+    uint at = word_index(r.views[v].stride, pixel);
     if (v == 0u) {
         atomicMin(range_words[at], word);
     } else {
@@ -180,11 +166,11 @@ void keep(uint v, RasterView view, DrawData d, uint t, Setup s, ivec2 pixel) {
 }
 
 // Tests the pixels of one row of the box, `e` the edge functions at its first.
-void cover_row(uint v, RasterView view, DrawData d, uint t, Setup s, int row, i64vec3 e) {
+void cover_row(uint v, DrawData d, uint t, Setup s, int row, i64vec3 e) {
     i64vec3 right = step_right(s);
     for (int col = s.first.x; col <= s.last.x; col++) {
         if ((e.x | e.y | e.z) >= 0) {
-            keep(v, view, d, t, s, ivec2(col, row));
+            keep(v, d, t, s, ivec2(col, row));
         }
         e += right;
     }
@@ -196,29 +182,28 @@ void main() {
         return;
     }
     uint entry = large[gl_WorkGroupID.x];
-    uint v = entry >> VIEW_BIT, member = (entry >> MEMBER_SHIFT) & 3u, t = entry & TRIANGLE_MASK;
-    RasterView view = jobs[member].views[v];
+    uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
     DrawData d;
     if (v == 0u) {
-        d = range_draws[view.draw];
+        d = range_draws[r.views[0].draw];
     } else {
-        d = shadow_draws[view.draw];
+        d = shadow_draws[r.views[1].draw];
     }
-    Setup s = set_up(d, view, read_triangle(d, t, mesh_normal(d, t)));
+    Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal(d, t)));
     // The workgroup's invocations share the box's rows.
     for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
-        cover_row(v, view, d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
+        cover_row(v, d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
     }
 }
 #else
-// Queues (member, t, v) unless the queue is full; the queue's length never exceeds its
-// capacity, so the indirect dispatch stays within the device's limits.
-bool queue_large(uint member, uint t, uint v) {
+// Queues (t, v) unless the queue is full; the queue's length never exceeds its capacity, so
+// the indirect dispatch stays within the device's limits.
+bool queue_large(uint t, uint v) {
     uint length = large_count;
     while (length < r.large_capacity) {
         uint before = atomicCompSwap(large_count, length, length + 1u);
         if (before == length) {
-            large[length] = t | (member << MEMBER_SHIFT) | (v << VIEW_BIT);
+            large[length] = t | (v << VIEW_BIT);
             return true;
         }
         length = before;
@@ -227,10 +212,10 @@ bool queue_large(uint member, uint t, uint v) {
 }
 
 // Covers a triangle's pixels in view v, or queues it there if its box is large.
-void cover(uint member, uint v, RasterView view, DrawData d, uint t, MeshTriangle m) {
-    Setup s = set_up(d, view, m);
+void cover(uint v, DrawData d, uint t, MeshTriangle m) {
+    Setup s = set_up(d, r.views[v], m);
     ivec2 box = s.last - s.first + 1;
-    if (box.x <= 0 || box.y <= 0 || (box.x * box.y > LARGE_PIXELS && queue_large(member, t, v))) {
+    if (box.x <= 0 || box.y <= 0 || (box.x * box.y > LARGE_PIXELS && queue_large(t, v))) {
         return;
     }
     i64vec3 first = edges_at(s, s.first), right = step_right(s), down = step_down(s);
@@ -244,7 +229,7 @@ void cover(uint member, uint v, RasterView view, DrawData d, uint t, MeshTriangl
             ivec3 e = row_start;
             for (int col = s.first.x; col <= s.last.x; col++) {
                 if ((e.x | e.y | e.z) >= 0) {
-                    keep(v, view, d, t, s, ivec2(col, row));
+                    keep(v, d, t, s, ivec2(col, row));
                 }
                 e += narrow_right;
             }
@@ -253,36 +238,34 @@ void cover(uint member, uint v, RasterView view, DrawData d, uint t, MeshTriangl
         return;
     }
     for (int row = s.first.y; row <= s.last.y; row++) {
-        cover_row(v, view, d, t, s, row, first);
+        cover_row(v, d, t, s, row, first);
         first += down;
     }
 }
 
 void main() {
     // Read while every invocation is still active: a software rasterizer then reads them
-    // once for all of them instead of gathering them per invocation. The workgroup's member:
-    uint member = gl_WorkGroupID.z;
-    CoverageJob job = jobs[member];
-    DrawData range_draw = range_draws[job.views[0].draw];
-    DrawData shadow_draw = shadow_draws[job.views[1].draw];
+    // once for all of them instead of gathering them per invocation.
+    DrawData range_draw = range_draws[r.views[0].draw];
+    DrawData shadow_draw = shadow_draws[r.views[1].draw];
     // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
     uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    if (t >= job.triangles) {
+    if (t >= r.triangles) {
         return;
     }
     // The normal first: a triangle culled in every view needs no corners.
     vec3 normal = mesh_normal(range_draw, t);
-    bool in_range = !culled(job, range_draw, normal);
-    bool in_shadow = job.view_count > 1u && !culled(job, shadow_draw, normal);
+    bool in_range = !culled(range_draw, normal);
+    bool in_shadow = r.view_count > 1u && !culled(shadow_draw, normal);
     if (!in_range && !in_shadow) {
         return;
     }
     MeshTriangle m = read_triangle(range_draw, t, normal);
     if (in_range) {
-        cover(member, 0u, job.views[0], range_draw, t, m);
+        cover(0u, range_draw, t, m);
     }
     if (in_shadow) {
-        cover(member, 1u, job.views[1], shadow_draw, t, m);
+        cover(1u, shadow_draw, t, m);
     }
 }
 #endif

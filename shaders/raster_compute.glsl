@@ -10,8 +10,7 @@ struct RasterView {
     uvec4 area;        // the pixels to draw: first column, first row, width, height
     uint draw;         // the draw's entry in the view's draw table
     uint stride;       // pixels per row of the view's words (the attachments' width)
-    uint base;         // where the job's words start among the view's words
-    uint pad;
+    uint pad0, pad1;
 };
 
 // No triangle at this pixel.

@@ -27,7 +27,7 @@ void main() {
         return;
     }
     ivec2 pixel = ivec2(r.view.area.xy + gl_GlobalInvocationID.xy);
-    uint64_t word = nearest[r.view.base + word_index(r.view.stride, pixel)];
+    uint64_t word = nearest[word_index(r.view.stride, pixel)];
     bool hit = word != EMPTY;
     uint t = uint(word & 0xffffffffUL);
     if (!hit) {

@@ -46,8 +46,6 @@ layout(push_constant, std430) uniform Mask {
     uint words_draw;    // FROM_WORDS: the one draw both views rendered
     uint shadow_stride; // FROM_WORDS: pixels per row of the shadow view's words
     uint range_stride;  // FROM_WORDS: pixels per row of the range view's words
-    uint shadow_base;   // FROM_WORDS: where this job's words start among the shadow view's
-    uint range_base;    // FROM_WORDS: and among the range view's
 } m;
 
 // The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
@@ -72,7 +70,7 @@ uint word_triangle(uint triangle, uint depth_bits) {
 // whether a triangle was seen there, and gets 1.
 uvec4 shadow_seen(ivec2 q) {
 #ifdef FROM_WORDS
-    uint at = 2u * (m.shadow_base + word_index(m.shadow_stride, q));
+    uint at = 2u * word_index(m.shadow_stride, q);
     uint triangle = word_triangle(shadow_words[at], shadow_words[at + 1u]);
     if (triangle == EMPTY_HALF) {
         return uvec4(0u);
@@ -300,7 +298,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
 // The range view at a pixel from its words, written to its attachments as raster_resolve.comp
 // writes them (zeros where no triangle covers it).
 RangePixel resolve_range(DrawData d, ivec2 pixel) {
-    uint at = 2u * (m.range_base + word_index(m.range_stride, pixel));
+    uint at = 2u * word_index(m.range_stride, pixel);
     uint t = word_triangle(range_words[at], range_words[at + 1u]);
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {

@@ -74,10 +74,10 @@ impl StorageSet {
 impl StorageSet {
     /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
     /// `constants` pushed at offset 0. The set's resources must already be in GENERAL layout.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 3]) {
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
         self.bind(cmd, pipeline, constants);
         // SAFETY: cmd is recording with the pipeline and set bound.
-        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], 1) };
     }
 
     /// As [`StorageSet::dispatch`], with the workgroup counts read from `args` (a

@@ -12,13 +12,6 @@
 //!   workgroup of 64 invocations. Where the mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
-//! - Groups: the coverage passes render a group of up to [`MAX_GROUP`] jobs (`verify`'s
-//!   hypotheses, one in each of a batch's slots) in one dispatch each, the members along the
-//!   dispatch's z, each with its own words at its own offset in each view's buffer and its own
-//!   table entry (draw, areas, triangle count). A batch then pays their fixed costs (a
-//!   dispatch, a barrier, the queue's reset) once a group instead of once a hypothesis, and a
-//!   small model's dispatch fills more than one workgroup. The mask, the effects and the score
-//!   pass still run per job.
 //! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
 //!   fragment shader would have written for that triangle. Where a shadow mask follows, the
 //!   mask does it as it tests each pixel, and reads the shadow view's words as they are
@@ -36,7 +29,7 @@
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
 //! renders, the graphics pipeline elsewhere.
 
-use super::shadow_pass::{MaskPipelines, WordsLayout, WordsToMask};
+use super::shadow_pass::{MaskPipelines, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
@@ -112,33 +105,23 @@ struct RasterView {
     area: [u32; 4],
     draw: u32,
     stride: u32,
-    /// Where the job's words start among the view's words.
-    base: u32,
-    _pad: u32,
-}
-
-/// One member of a group as the coverage passes read it; matches `CoverageJob` in
-/// shaders/raster.comp.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CoverageJob {
-    views: [RasterView; 2],
-    triangles: u32,
-    cull: i32,
-    view_count: u32,
-    _pad: u32,
+    _pad: [u32; 2],
 }
 
 /// Push constants of the coverage passes; matches `Coverage` in shaders/raster.comp.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CoverageConstants {
+    views: [RasterView; 2],
+    view_count: u32,
+    triangles: u32,
     large_capacity: u32,
+    cull: i32,
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
-const _: () = assert!(std::mem::offset_of!(CoverageJob, triangles) == 64);
-const _: () = assert!(size_of::<CoverageJob>() == 80);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, view_count) == 64);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 76);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -153,10 +136,6 @@ fn cull_sign(solidity: Solidity) -> i32 {
 
 /// Bytes of a pixel's visibility word (shaders/visibility_word.glsl), in each view.
 pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
-
-/// Most jobs one coverage dispatch renders: a queued large triangle names its member in two
-/// bits (shaders/raster.comp).
-pub(crate) const MAX_GROUP: u32 = 4;
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
 const COVERAGE_GROUP: u32 = 64;
@@ -174,9 +153,9 @@ pub struct ComputeRasterPipelines {
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         // Coverage binds both views' draw tables and visibility words, the large-triangle
-        // queue, its dispatch arguments and the group's jobs; resolve the range view's
-        // attachments, its table and its words.
-        let coverage = (0, 7);
+        // queue and its dispatch arguments; resolve the range view's attachments, its table
+        // and its words.
+        let coverage = (0, 6);
         let coverage_push = size_of::<CoverageConstants>();
         let pipeline = |bindings, push, code, name| ComputePipeline::new(ctx, bindings, push, code, &[], name);
         Ok(Self {
@@ -204,73 +183,60 @@ pub(crate) struct ComputeTarget<'a> {
     pub draw_table: &'a Buffer,
 }
 
-/// One view's visibility words, every member's in one buffer.
+/// One view's visibility words.
 struct ViewWords<'a> {
     nearest: Buffer,
-    /// Pixels per row of `nearest` (the attachments' width), and words a member.
+    /// Pixels per row of `nearest` (the attachments' width).
     stride: u32,
-    member_words: u32,
     draw_table: &'a Buffer,
 }
 
-impl ViewWords<'_> {
-    /// Where a member's words start.
-    fn base(&self, member: u32) -> u32 {
-        member * self.member_words
-    }
-}
-
-/// One job of a group the coverage passes render: its draw (its number in the draw tables),
-/// the range view's pixels to render and, where there is a shadow view, the shadow view's.
-pub(crate) struct GroupJob<'d> {
-    pub draw: (u32, &'d Draw<'d>),
-    pub range_area: PixelRect,
-    pub shadow_area: Option<PixelRect>,
-}
-
-/// The visibility words of the range view and (where a shadow pass runs) the shadow view for
-/// a group of up to `members` jobs, each member's own, the queue of large triangles the
-/// coverage pass fills for them all, and the passes' bindings: one for a submission, its jobs
-/// rendered a group at a time. The range view's words are resolved into its attachments, by
-/// the shadow mask where there is a shadow view and by the resolve pass where there is none;
-/// the shadow view's are read by the shadow mask as they are.
+/// The range view's and (where a shadow pass runs) the shadow view's visibility words, the
+/// queue of large triangles the coverage pass fills for both, and the passes' bindings. The
+/// range view's words are resolved into its attachments, by the shadow mask where there is a
+/// shadow view and by the resolve pass where there is none; the shadow view's are read by the
+/// shadow mask as they are.
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
     shadow: Option<ViewWords<'a>>,
-    members: u32,
-    /// The group's jobs as the coverage passes read them.
-    jobs: Buffer,
     /// The queue of large triangles, and its length as an indirect dispatch's (x, 1, 1).
     large: Buffer,
     large_args: Buffer,
     large_capacity: u32,
     coverage: StorageSet,
+    resolve: StorageSet,
 }
 
 impl<'a> ComputeViews<'a> {
-    /// Visibility words for groups of `members` (at most [`MAX_GROUP`]) jobs rendering draws
-    /// of no more than `max_triangles`.
+    /// Visibility words for the views, rendering draws of no more than `max_triangles`, and
+    /// the bindings that resolve the range view's into `range_targets`.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
-        (range, shadow): (ComputeTarget<'a>, Option<ComputeTarget<'a>>),
+        (range, range_targets): (ComputeTarget<'a>, &ViewTargets),
+        shadow: Option<ComputeTarget<'a>>,
         max_triangles: u32,
-        members: u32,
         name: &str,
     ) -> Result<Self> {
-        assert!((1..=MAX_GROUP).contains(&members), "{members} jobs a group");
         let words = |kind: ViewKind, view: ComputeTarget<'a>| -> Result<ViewWords<'a>> {
             let (width, height) = view.size;
-            let member_words = width * height;
-            let bytes = u64::from(member_words) * u64::from(members) * VISIBILITY_WORD_BYTES;
+            let bytes = u64::from(width) * u64::from(height) * VISIBILITY_WORD_BYTES;
             let nearest =
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
-            Ok(ViewWords { nearest, stride: width, member_words, draw_table: view.draw_table })
+            Ok(ViewWords { nearest, stride: width, draw_table: view.draw_table })
         };
         let range = words(ViewKind::Range, range)?;
         let shadow = shadow.map(|view| words(ViewKind::Shadow, view)).transpose()?;
+        let images: Vec<&Image> = range_targets.colour.iter().collect();
+        let resolve = StorageSet::new(
+            ctx,
+            pipelines.resolve.set_layout,
+            &images,
+            &[range.draw_table, &range.nearest],
+            &format!("{name} resolve bindings"),
+        )?;
         let views = if shadow.is_some() { 2 } else { 1 };
-        let large_capacity = max_triangles.saturating_mul(views * members).clamp(1, MAX_GROUPS);
+        let large_capacity = max_triangles.saturating_mul(views).clamp(1, MAX_GROUPS);
         let large_bytes = u64::from(large_capacity) * 4;
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
         let args = BufferDesc {
@@ -278,55 +244,28 @@ impl<'a> ComputeViews<'a> {
             ..BufferDesc::gpu_storage(12)
         };
         let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
-        let job_bytes = u64::from(members) * size_of::<CoverageJob>() as u64;
-        let jobs = Buffer::new(ctx, BufferDesc::gpu_storage(job_bytes), &format!("{name} coverage jobs"))?;
         // Without a shadow view, the range view's table and words fill its bindings too.
         let second = shadow.as_ref().unwrap_or(&range);
         let coverage = StorageSet::new(
             ctx,
             pipelines.coverage.set_layout,
             &[],
-            &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args, &jobs],
+            &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
             &format!("{name} coverage bindings"),
         )?;
-        Ok(Self { range, shadow, members, jobs, large, large_args, large_capacity, coverage })
+        Ok(Self { range, shadow, large, large_args, large_capacity, coverage, resolve })
     }
 
-    /// Jobs a group holds.
-    pub fn members(&self) -> u32 {
-        self.members
-    }
-
-    /// The bindings of the resolve pass writing the range view's words into `range_targets`,
-    /// for jobs without a shadow view (with one, the shadow mask resolves them).
-    pub fn resolve_bindings(
-        &self,
-        ctx: &Arc<GpuContext>,
-        pipelines: &ComputeRasterPipelines,
-        range_targets: &ViewTargets,
-        name: &str,
-    ) -> Result<StorageSet> {
-        let images: Vec<&Image> = range_targets.colour.iter().collect();
-        let buffers = [self.range.draw_table, &self.range.nearest];
-        StorageSet::new(ctx, pipelines.resolve.set_layout, &images, &buffers, &format!("{name} resolve bindings"))
-    }
-
-    /// What the shadow mask's variant reading words binds (shadow_pass.rs), where these words
-    /// include the shadow view's.
-    pub fn to_mask(&self) -> Option<WordsToMask<'_>> {
-        self.shadow.as_ref().map(|shadow| WordsToMask {
-            shadow_words: &shadow.nearest,
-            range_table: self.range.draw_table,
-            range_words: &self.range.nearest,
-        })
-    }
-
-    /// Where a member's words lie in each view's buffer, where these words include the
-    /// shadow view's.
-    pub fn layout(&self, member: u32) -> Option<WordsLayout> {
-        self.shadow.as_ref().map(|shadow| WordsLayout {
-            strides: (self.range.stride, shadow.stride),
-            bases: (self.range.base(member), shadow.base(member)),
+    /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
+    /// include the shadow view's, and the views' pixels per row (range view's, shadow view's).
+    pub fn to_mask(&self) -> Option<(WordsToMask<'_>, (u32, u32))> {
+        self.shadow.as_ref().map(|shadow| {
+            let words = WordsToMask {
+                shadow_words: &shadow.nearest,
+                range_table: self.range.draw_table,
+                range_words: &self.range.nearest,
+            };
+            (words, (self.range.stride, shadow.stride))
         })
     }
 
@@ -334,109 +273,81 @@ impl<'a> ComputeViews<'a> {
         std::iter::once(&self.range).chain(&self.shadow)
     }
 
-    /// Records the coverage passes of a group of jobs, job k its member k, over the range
-    /// view's area of each and, where these words include the shadow view's, over its shadow
-    /// area. Their words are left for the shadow mask, or without a shadow view for
-    /// [`ComputeViews::record_resolve`].
-    pub fn record_group(&self, enc: &mut Encoder, pipelines: &ComputeRasterPipelines, group: &[GroupJob]) {
-        assert!(!group.is_empty() && group.len() <= self.members as usize, "{} jobs for a group", group.len());
+    /// Records the passes of one draw (number `index` in the draw tables) over the range
+    /// view's `range_area` and, where these words include the shadow view's, over its
+    /// `shadow_area`. With a shadow view, both views' words are left for the shadow mask, which
+    /// resolves the range view (shadow_pass.rs); without, the resolve pass writes the range
+    /// view's colour attachments, in GENERAL layout as a compute pass leaves them.
+    pub fn record(
+        &self,
+        enc: &mut Encoder,
+        pipelines: &ComputeRasterPipelines,
+        (range_targets, range_area): (&ViewTargets, PixelRect),
+        shadow_area: Option<PixelRect>,
+        (index, draw): (u32, &Draw),
+    ) {
         let cmd = enc.cmd;
-        let members = 0..group.len() as u32;
-        let coverage_jobs: Vec<CoverageJob> = members
-            .clone()
-            .zip(group)
-            .map(|(member, job)| {
-                let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
-                    area: [area.col, area.row, area.width, area.height],
-                    draw: job.draw.0,
-                    stride: view.stride,
-                    base: view.base(member),
-                    _pad: 0,
-                };
-                let range = raster_view(&self.range, job.range_area);
-                let shadow = self.shadow.as_ref().zip(job.shadow_area).map(|(view, area)| raster_view(view, area));
-                let mesh = job.draw.1.mesh;
-                CoverageJob {
-                    views: [range, shadow.unwrap_or(range)],
-                    triangles: mesh.index_count / 3,
-                    cull: cull_sign(mesh.solidity),
-                    view_count: 1 + u32::from(shadow.is_some()),
-                    _pad: 0,
-                }
-            })
-            .collect();
-        // The rows of each view's area are emptied, not the whole view: a job costs its
+        // The rows of each view's area are emptied, not the whole view: a hypothesis costs its
         // footprint, not the image. Nothing reads a word beyond the area's rows, as nothing
         // reads the attachments beyond the area that the graphics pass clears (draw.rs).
-        let emptied: Vec<_> = members
-            .zip(group)
-            .flat_map(|(member, job)| {
-                std::iter::once((&self.range, job.range_area)).chain(self.shadow.as_ref().zip(job.shadow_area)).map(
-                    move |(view, area)| {
-                        let first = u64::from(view.base(member)) + u64::from(area.row) * u64::from(view.stride);
-                        let words = u64::from(area.height) * u64::from(view.stride);
-                        (view, first * VISIBILITY_WORD_BYTES, words * VISIBILITY_WORD_BYTES)
-                    },
-                )
+        let emptied: Vec<_> = std::iter::once((&self.range, range_area))
+            .chain(self.shadow.as_ref().zip(shadow_area))
+            .map(|(view, area)| {
+                let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
+                (view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes)
             })
             .collect();
-        let mut written: Vec<_> = self.views().map(|view| (&view.nearest, Access::TransferWrite)).collect();
-        written.extend([(&self.large_args, Access::TransferWrite), (&self.jobs, Access::TransferWrite)]);
-        enc.access(&[], &written);
+        let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
+        cleared.push((&self.large_args, Access::TransferWrite));
+        enc.access(&[], &cleared);
         // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
-        // rows lie within the member's words, and their bytes are a multiple of 4; the jobs
-        // fit their buffer (at most MAX_GROUP of 80 bytes).
+        // rows lie within the view's words, and their bytes are a multiple of 4.
         unsafe {
             let d = &enc.ctx().device;
             for &(view, offset, size) in &emptied {
                 d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
             }
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
-            d.cmd_update_buffer(cmd, self.jobs.raw, 0, bytemuck::cast_slice(&coverage_jobs));
         }
-        let constants = CoverageConstants { large_capacity: self.large_capacity };
+        let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
+            area: [area.col, area.row, area.width, area.height],
+            draw: index,
+            stride: view.stride,
+            _pad: [0; 2],
+        };
+        let range = raster_view(&self.range, range_area);
+        let shadow = self.shadow.as_ref().zip(shadow_area).map(|(view, area)| raster_view(view, area));
+        let triangles = draw.mesh.index_count / 3;
+        let constants = CoverageConstants {
+            views: [range, shadow.unwrap_or(range)],
+            view_count: 1 + u32::from(shadow.is_some()),
+            triangles,
+            large_capacity: self.large_capacity,
+            cull: cull_sign(draw.mesh.solidity),
+        };
         let coverage_uses = |queue: Access, args: Access| {
             let mut uses: Vec<_> = self
                 .views()
                 .flat_map(|v| [(&v.nearest, Access::ComputeWrite), (v.draw_table, Access::ComputeRead)])
                 .collect();
-            uses.extend([(&self.large, queue), (&self.large_args, args), (&self.jobs, Access::ComputeRead)]);
+            uses.extend([(&self.large, queue), (&self.large_args, args)]);
             uses
         };
         enc.access(&[], &coverage_uses(Access::ComputeWrite, Access::ComputeWrite));
-        let triangles = coverage_jobs.iter().map(|job| job.triangles).max().unwrap_or(0);
         let groups = triangles.div_ceil(COVERAGE_GROUP);
-        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS), group.len() as u32];
+        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
         enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
-    }
-
-    /// Records the resolve pass of member `member` of the group last recorded (a job without a
-    /// shadow view, draw number `draw`): its words over `range_area` written into its range
-    /// view's colour attachments, bound by `bindings`
-    /// ([`ComputeViews::resolve_bindings`]), in GENERAL layout as a compute pass leaves them.
-    pub fn record_resolve(
-        &self,
-        enc: &mut Encoder,
-        (pipelines, bindings): (&ComputeRasterPipelines, &StorageSet),
-        range_targets: &ViewTargets,
-        (member, draw): (u32, u32),
-        range_area: PixelRect,
-    ) {
+        if shadow.is_some() {
+            return;
+        }
         let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
         enc.access(
             &writes,
             &[(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)],
         );
-        let view = RasterView {
-            area: [range_area.col, range_area.row, range_area.width, range_area.height],
-            draw,
-            stride: self.range.stride,
-            base: self.range.base(member),
-            _pad: 0,
-        };
         let pixels = [range_area.width, range_area.height].map(|n| n.div_ceil(8));
-        bindings.dispatch(enc.cmd, &pipelines.resolve, bytemuck::bytes_of(&view), [pixels[0], pixels[1], 1]);
+        self.resolve.dispatch(cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels);
     }
 }

@@ -198,7 +198,7 @@ impl EffectBuffers {
         z_in_buffer: bool,
     ) {
         let constants = EffectConstants::new(effect, effects, sensor, job, z_in_buffer);
-        let [x, y] = [job.region.width, job.region.height].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, pipelines.get(effect), bytemuck::bytes_of(&constants), [x, y, 1]);
+        let groups = [job.region.width, job.region.height].map(|n| n.div_ceil(8));
+        self.set.dispatch(cmd, pipelines.get(effect), bytemuck::bytes_of(&constants), groups);
     }
 }

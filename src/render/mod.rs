@@ -19,7 +19,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
-pub(crate) use compute_raster::{ComputeViews, MAX_GROUP, VISIBILITY_WORD_BYTES};
+pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
@@ -37,7 +37,6 @@ use crate::pose::check_rigid;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
-use compute_raster::ComputeTarget;
 use glam::DVec3;
 use mesh_cache::MeshCache;
 use passes::PassClock;
@@ -214,24 +213,6 @@ impl Renderer {
         &self.ctx
     }
 
-    /// The compute rasterizer's visibility words for groups of `members` jobs (at most
-    /// [`MAX_GROUP`]) whose range view is `size` with draw table `range_table`, whose shadow
-    /// view (where there is one) is as wide as its first and has draw table its second, and
-    /// whose draws have at most `max_triangles` (compute_raster.rs).
-    pub(crate) fn compute_views<'a>(
-        &self,
-        (size, range_table): ((u32, u32), &'a Buffer),
-        shadow: Option<(u32, &'a Buffer)>,
-        max_triangles: u32,
-        members: u32,
-        name: &str,
-    ) -> Result<ComputeViews<'a>> {
-        let pipelines = self.pipelines.compute_raster()?;
-        let range = ComputeTarget { size, draw_table: range_table };
-        let shadow = shadow.map(|(width, draw_table)| ComputeTarget { size: (width, size.1), draw_table });
-        ComputeViews::new(&self.ctx, pipelines, (range, shadow), max_triangles, members, name)
-    }
-
     /// Render targets for jobs of this shape (passes.rs).
     pub(crate) fn slot<'a>(&'a self, shape: &SlotShape<'a>, name: &str) -> Result<Slot<'a>> {
         let effect_pipelines = shape.effects.as_ref().map(|_| self.pipelines.effects()).transpose()?;
@@ -343,18 +324,13 @@ impl Renderer {
                 Buffer::with_data(ctx, ash::vk::BufferUsageFlags::STORAGE_BUFFER, &table, "reflectivities")
             })
             .transpose()?;
-        let shadow = views.shadow.as_ref().zip(shadow_table.as_ref()).map(|(g, t)| (g.width, t));
-        let compute_views = range_table
-            .as_ref()
-            .map(|table| self.compute_views(((w, h), table), shadow, draws[0].mesh.index_count / 3, 1, "render"))
-            .transpose()?;
         let shape = SlotShape {
             size: (w, h),
-            shadow,
+            shadow: views.shadow.as_ref().zip(shadow_table.as_ref()).map(|(g, t)| (g.width, t)),
             sink: SinkKind::Readback,
             effects: (!effects.is_empty())
                 .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-            compute_raster: compute_views.as_ref(),
+            compute_raster: range_table.as_ref().map(|t| (t, draws[0].mesh.index_count / 3)),
             from_host: host_view.is_some(),
         };
         let slot = self.slot(&shape, "render")?;
@@ -366,7 +342,7 @@ impl Renderer {
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
-            passes.record_group(&mut enc, &[(&slot, &job, sink)], Some(&mut clock));
+            passes.record(&mut enc, &slot, &job, &sink, Some(&mut clock));
             Ok(())
         })?;
 

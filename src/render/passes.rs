@@ -7,26 +7,24 @@
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
-//! Jobs are recorded a group at a time, so that the compute rasterizer renders the views of
-//! a whole group in one coverage pass (compute_raster.rs) before each job's further passes.
 //! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
 //! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
 //! resource and the [`Encoder`] derives the barriers.
 
-use super::compute_raster::{ComputeRasterPipelines, ComputeViews, GroupJob};
+use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::host_view::HostView;
 use super::pipelines::Pipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
-use super::targets::{ViewKind, ViewTargets};
+use super::targets::ViewKind;
 use super::Views;
 use crate::effects::{Effect, Effects, EFFECT_ORDER};
 use crate::error::Result;
-use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, StorageSet, Timestamps};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::render_output::PassTime;
-use crate::sensor::{PixelRect, Sensor, ViewGrid};
+use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::ShadowSettings;
 use ash::vk;
 use glam::DMat4;
@@ -43,9 +41,9 @@ pub(crate) struct Slot<'a> {
     effects: Option<EffectBuffers>,
     /// The reflectivity table the effect passes read, where the reflectivity effect is named.
     reflectivities: Option<&'a Buffer>,
-    /// The compute rasterizer's words, which the slots of a submission share, where it
-    /// renders; with the resolve pass's bindings where no shadow mask resolves the range view.
-    compute: Option<(&'a ComputeViews<'a>, Option<StorageSet>)>,
+    /// The compute rasterizer's state for the range view and the shadow view, where it
+    /// renders.
+    compute: Option<ComputeViews<'a>>,
 }
 
 /// What a slot must hold.
@@ -58,8 +56,9 @@ pub(crate) struct SlotShape<'a> {
     pub sink: SinkKind,
     /// The effect buffers to make, where effects are named.
     pub effects: Option<EffectShape<'a>>,
-    /// The compute rasterizer's words, where it renders.
-    pub compute_raster: Option<&'a ComputeViews<'a>>,
+    /// The range view's draw table and the most triangles of any draw, where the compute
+    /// rasterizer renders (it reads the shadow view's table from `shadow`).
+    pub compute_raster: Option<(&'a Buffer, u32)>,
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
     pub from_host: bool,
@@ -95,13 +94,14 @@ impl<'a> Slot<'a> {
                 SinkKind::Compute => BufferDesc::gpu_storage(bytes),
             }
         };
+        // Before the mask's bindings: the mask reads the compute rasterizer's shadow words.
         let compute = match (shape.compute_raster, raster_pipelines) {
-            (Some(views), Some(rp)) => {
-                let resolve = match shape.shadow {
-                    None => Some(views.resolve_bindings(ctx, rp, &range, name)?),
-                    Some(_) => None,
-                };
-                Some((views, resolve))
+            (Some((range_table, max_triangles)), Some(rp)) => {
+                let range_view = ComputeTarget { size: (w, h), draw_table: range_table };
+                let shadow_view = shape
+                    .shadow
+                    .map(|(shadow_width, table)| ComputeTarget { size: (shadow_width, h), draw_table: table });
+                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, max_triangles, name)?)
             }
             _ => None,
         };
@@ -113,7 +113,7 @@ impl<'a> Slot<'a> {
             Some((shadow_width, draw_table)) => {
                 let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
-                let words = compute.as_ref().and_then(|(views, _)| views.to_mask());
+                let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
                 let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words.as_ref())?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
@@ -235,104 +235,44 @@ pub(crate) struct Passes<'a> {
 }
 
 impl Passes<'_> {
-    /// Records a group of jobs, each with the slot it renders into and its sink: the compute
-    /// rasterizer's coverage passes for all the group's jobs it renders (at most
-    /// [`ComputeViews::members`], each in a slot of its own), then each job's other passes in
-    /// turn. `render` records a group of one job, timed by `clock`.
-    pub fn record_group(&self, enc: &mut Encoder, group: &[(&Slot, &Job, Sink)], mut clock: Option<&mut PassClock>) {
-        // The graphics pipeline's attachments, for the jobs it renders (outside the timings).
-        let mut prepare = Vec::new();
-        for (slot, job, _) in group {
-            if job.host_view.is_some() || self.computes(slot, job).is_some() {
-                continue;
-            }
+    /// Records one job's passes into the encoder's command buffer.
+    pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, mut clock: Option<&mut PassClock>) {
+        let (p, sensor) = (self.pipelines, self.sensor);
+        let cmd = enc.cmd;
+        let views = job.views;
+        // The compute rasterizer renders views of one draw (compute_raster.rs).
+        let compute = match (&slot.compute, self.raster_pipelines, job.draws) {
+            (Some(state), Some(rp), [draw]) if job.compute => Some((state, rp, (job.first_draw_index, draw))),
+            _ => None,
+        };
+        if let Some(host_view) = job.host_view {
+            return self.record_from_host(enc, slot, job, host_view, sink, clock);
+        }
+        if compute.is_none() {
+            let mut prepare = Vec::new();
             for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
                 prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
                 prepare.push((&targets.depth, Access::DepthAttachmentWrite));
             }
+            enc.access(&prepare, &[]);
         }
-        enc.access(&prepare, &[]);
         if let Some(c) = &mut clock {
-            c.start(enc.cmd);
+            c.start(cmd);
         }
-        // The jobs the compute rasterizer renders, numbered as the group's members.
-        let mut members = Vec::new();
-        let mut compute_views = None;
-        let computed: Vec<Option<u32>> = group
-            .iter()
-            .map(|(slot, job, _)| {
-                let (views, rp, draw) = self.computes(slot, job)?;
-                compute_views = Some((views, rp));
-                let shadow_area = self.shadow_view(slot, job).map(|(_, _, area)| area);
-                members.push(GroupJob { draw, range_area: job.area, shadow_area });
-                Some(members.len() as u32 - 1)
-            })
-            .collect();
-        if let Some((views, rp)) = compute_views {
-            views.record_group(enc, rp, &members);
-            if let Some(c) = &mut clock {
-                let shadowed = members.iter().any(|m| m.shadow_area.is_some());
-                c.lap(enc.cmd, if shadowed { "range and shadow" } else { "range" });
-            }
-        }
-        for ((slot, job, sink), member) in group.iter().zip(computed) {
-            self.record_job(enc, slot, job, member, sink, clock.as_deref_mut());
-        }
-    }
-
-    /// Where the compute rasterizer renders a job's views (one draw's: compute_raster.rs):
-    /// the slot's words, its pipelines, and the draw with its number in the draw tables.
-    fn computes<'s>(
-        &'s self,
-        slot: &'s Slot,
-        job: &'s Job,
-    ) -> Option<(&'s ComputeViews<'s>, &'s ComputeRasterPipelines, (u32, &'s Draw<'s>))> {
-        match (&slot.compute, self.raster_pipelines, job.draws) {
-            (Some((views, _)), Some(rp), [draw]) if job.compute && job.host_view.is_none() => {
-                Some((views, rp, (job.first_draw_index, draw)))
+        // The shadow view, where the mode and θ ask for one and the job's rows reach it.
+        let shadow = match (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings) {
+            (Some(targets), Some(grid), Some(area), Some(masked), Some(bindings)) => {
+                self.shadow.test().map(|test| (&**targets, grid, area, masked, bindings, test))
             }
             _ => None,
-        }
-    }
-
-    /// A job's shadow view, where the mode and θ ask for one and the job's rows reach it: its
-    /// targets, grid and area.
-    fn shadow_view<'s>(&self, slot: &'s Slot, job: &'s Job) -> Option<(&'s ViewTargets, &'s ViewGrid, PixelRect)> {
-        match (&slot.shadow, &job.views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings) {
-            (Some(targets), Some(grid), Some(area), Some(_), Some(_)) => {
-                self.shadow.test().map(|_| (&**targets, grid, area))
-            }
-            _ => None,
-        }
-    }
-
-    /// Records one job's passes after the group's coverage passes: where the compute
-    /// rasterizer rendered it as member `member`, its resolve or shadow mask reads its words;
-    /// elsewhere the graphics pipeline renders its views first.
-    fn record_job(
-        &self,
-        enc: &mut Encoder,
-        slot: &Slot,
-        job: &Job,
-        member: Option<u32>,
-        sink: &Sink,
-        mut clock: Option<&mut PassClock>,
-    ) {
-        let (p, sensor) = (self.pipelines, self.sensor);
-        let cmd = enc.cmd;
-        let views = job.views;
-        if let Some(host_view) = job.host_view {
-            return self.record_from_host(enc, slot, job, host_view, sink, clock);
-        }
-        let shadow = self.shadow_view(slot, job);
-        let compute = member.and_then(|member| Some((self.computes(slot, job)?, member)));
+        };
         match compute {
-            // Rendered by the group's coverage pass; without a shadow mask, resolved here.
-            Some(((state, rp, (index, _)), member)) => {
-                if shadow.is_none() {
-                    let bindings = slot.compute.as_ref().and_then(|(_, resolve)| resolve.as_ref());
-                    let bindings = bindings.expect("a slot without a shadow view binds the resolve pass");
-                    state.record_resolve(enc, (rp, bindings), &slot.range, (member, index), job.area);
+            // Both views in one coverage pass (compute_raster.rs).
+            Some((state, rp, draw)) => {
+                let shadow_area = shadow.map(|(_, _, area, ..)| area);
+                state.record(enc, rp, (&slot.range, job.area), shadow_area, draw);
+                if let Some(c) = &mut clock {
+                    c.lap(cmd, if shadow_area.is_some() { "range and shadow" } else { "range" });
                 }
             }
             None => {
@@ -349,7 +289,7 @@ impl Passes<'_> {
                 if let Some(c) = &mut clock {
                     c.lap(cmd, "range");
                 }
-                if let Some((targets, grid, area)) = shadow {
+                if let Some((targets, grid, area, ..)) = shadow {
                     let shadow_pass = ViewPass {
                         pipelines: &p.shadow,
                         layout: p.raster_layout,
@@ -367,23 +307,25 @@ impl Passes<'_> {
             }
         }
         let mut shadowed_labels = None;
-        let mask = shadow.zip(slot.masked.as_ref().zip(slot.mask_bindings.as_ref())).zip(self.shadow.test());
-        if let Some((((targets, grid, _), (masked, bindings)), test)) = mask {
+        if let Some((targets, grid, _, masked, bindings, test)) = shadow {
             // Where the compute rasterizer rendered the views, the mask reads their words and
             // writes the range view's attachments (shadow_pass.rs). The words are bound in a
             // slot that has them for either variant, so their reads are stated either way.
-            let words = slot.compute.as_ref().and_then(|(views, _)| views.to_mask());
+            let words = slot.compute.as_ref().and_then(|c| c.to_mask());
             let constants = MaskConstants::new(sensor, views, grid, job.area);
             // The variant reading words where it runs: one choice for the pipeline and for the
             // range view's use.
-            let reading_words = compute.and_then(|((state, rp, (index, _)), member)| {
-                Some((&rp.mask, constants.reading_words(index, state.layout(member)?)))
-            });
+            let reading_words = match (compute, &words) {
+                (Some((_, rp, (index, _))), Some((_, strides))) => {
+                    Some((&rp.mask, constants.reading_words(index, *strides)))
+                }
+                _ => None,
+            };
             let range_use = if reading_words.is_some() { Access::ComputeWrite } else { Access::ComputeRead };
             let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, range_use)).collect();
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
             let mut buffers = vec![(masked, Access::ComputeWrite)];
-            if let Some(w) = &words {
+            if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }
             enc.access(&images, &buffers);
@@ -409,6 +351,9 @@ impl Passes<'_> {
         mut clock: Option<&mut PassClock>,
     ) {
         let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
+        if let Some(c) = &mut clock {
+            c.start(enc.cmd);
+        }
         host_view.record(enc, &slot.range, shadowed);
         if let Some(c) = &mut clock {
             c.lap(enc.cmd, "exact upload");

@@ -37,14 +37,12 @@ pub struct MaskConstants {
     words_draw: u32,
     shadow_stride: u32,
     range_stride: u32,
-    shadow_base: u32,
-    range_base: u32,
 }
 
 // std430 offsets of `Mask` in shaders/shadow_mask.comp.
 const _: () = assert!(std::mem::offset_of!(MaskConstants, cos_theta) == 64);
 const _: () = assert!(std::mem::offset_of!(MaskConstants, words_draw) == 80);
-const _: () = assert!(size_of::<MaskConstants>() == 100);
+const _: () = assert!(size_of::<MaskConstants>() == 92);
 
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
@@ -66,25 +64,15 @@ impl MaskConstants {
             words_draw: 0,
             shadow_stride: 0,
             range_stride: 0,
-            shadow_base: 0,
-            range_base: 0,
         }
     }
 
-    /// The same constants for the pipelines reading both views from visibility words, laid
-    /// out as `words` says, which rendered draw `draw` alone.
-    pub fn reading_words(self, draw: u32, words: WordsLayout) -> Self {
-        let WordsLayout { strides: (range_stride, shadow_stride), bases: (range_base, shadow_base) } = words;
-        Self { words_draw: draw, shadow_stride, range_stride, shadow_base, range_base, ..self }
+    /// The same constants for the pipelines reading both views from visibility words, the
+    /// range view's `range_stride` pixels a row and the shadow view's `shadow_stride`, which
+    /// rendered draw `draw` alone.
+    pub fn reading_words(self, draw: u32, (range_stride, shadow_stride): (u32, u32)) -> Self {
+        Self { words_draw: draw, shadow_stride, range_stride, ..self }
     }
-}
-
-/// Where one job's visibility words lie in each view's buffer (compute_raster.rs): the views'
-/// pixels a row and the job's first word, the range view's and the shadow view's.
-#[derive(Clone, Copy)]
-pub struct WordsLayout {
-    pub strides: (u32, u32),
-    pub bases: (u32, u32),
 }
 
 /// The mask pipelines, one per [`ShadowTest`], the test a specialization constant, of one of
@@ -191,7 +179,7 @@ impl MaskBindings {
         test: ShadowTest,
         constants: &MaskConstants,
     ) {
-        let [x, y] = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
-        self.set.dispatch(cmd, pipelines.for_test(test), bytemuck::bytes_of(constants), [x, y, 1]);
+        let groups = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
+        self.set.dispatch(cmd, pipelines.for_test(test), bytemuck::bytes_of(constants), groups);
     }
 }

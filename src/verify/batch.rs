@@ -21,17 +21,15 @@ use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
     draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, MAX_GROUP, VISIBILITY_WORD_BYTES,
+    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
 
-/// Render-target slots in flight within one submission; the compute rasterizer renders as
-/// many jobs, each in a slot of its own, in one coverage pass.
+/// Render-target slots in flight within one submission.
 pub const SLOTS: usize = 4;
-const _: () = assert!(SLOTS <= MAX_GROUP as usize);
 
 /// The sensed image as the score pass reads it (uploaded once per `SensedImage`).
 pub struct SensedBuffers<'a> {
@@ -189,31 +187,17 @@ pub(crate) fn count_batch(
         true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
         false => None,
     };
-    let slot_count = SLOTS.min(items.len());
-    let shadow = shadow_width.zip(shadow_table.as_ref());
-    // The compute rasterizer renders a group of jobs, each in a slot of its own, at a time,
-    // all their words in one buffer a view, which the device must bind whole.
-    let member_bytes = slot_view_pixels * VISIBILITY_WORD_BYTES;
-    let members = (ctx.max_storage_buffer_range() / member_bytes.max(1)).clamp(1, slot_count as u64) as u32;
-    let max_triangles = items.iter().map(|i| i.mesh.index_count / 3).max().unwrap_or(0);
-    let compute_views = range_table
-        .as_ref()
-        .map(|table| {
-            renderer.compute_views(((sensor.width, sensor.height), table), shadow, max_triangles, members, "batch")
-        })
-        .transpose()?;
     let shape = SlotShape {
         size: (sensor.width, sensor.height),
-        shadow,
+        shadow: shadow_width.zip(shadow_table.as_ref()),
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-        compute_raster: compute_views.as_ref(),
+        compute_raster: range_table.as_ref().zip(items.iter().map(|i| i.mesh.index_count / 3).max()),
         from_host: !host_views.is_empty(),
     };
     let slots: Vec<Slot> =
-        (0..slot_count).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
-    let group_size = compute_views.as_ref().map_or(slot_count, |views| views.members() as usize);
+        (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
     let bytes = (counts_words as u64 * 4).max(4);
     let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
     let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
@@ -245,67 +229,50 @@ pub(crate) fn count_batch(
         // SAFETY: cmd is recording; the buffer is not in use.
         unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
         enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-        let recorded: Vec<(&BatchItem, &Job)> =
-            items.iter().zip(&jobs).filter_map(|(item, job)| Some((item, job.as_ref()?))).collect();
-        for (first, group) in (0..).step_by(group_size).zip(recorded.chunks(group_size)) {
-            // Each job's score pass, recorded as its sink.
-            let scorers: Vec<_> = (first..)
-                .zip(group)
-                .map(|(index, &(item, job))| {
-                    let score = move |offset: usize| ScoreConstants {
-                        counts_offset: offset as u32,
-                        use_shadowed: 0,
-                        width: sensor.width,
-                        height: sensor.height,
-                        z_origin: job.views.origin.z as f32,
-                        use_losses: 0,
-                        use_measured_z: 0,
-                        _pad: 0,
-                        region: [job.area.col, job.area.row, job.area.width, job.area.height],
-                        surfaces: item.surfaces,
-                        segments: settings.sensed.segment_count,
-                        tolerance: settings.tolerance,
-                        area_scale: settings.area_scale,
-                        dx: sensor.pitch[0] as f32,
-                        dy: sensor.pitch[1] as f32,
-                    };
-                    let (bindings, counts) = (&score_bindings[index % slots.len()], &counts);
-                    move |enc: &mut Encoder, images: &JobImages| {
-                        let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-                        let mut buffers = vec![
-                            (settings.sensed.segments, Access::ComputeRead),
-                            (settings.sensed.z, Access::ComputeRead),
-                            (counts, Access::ComputeWrite),
-                        ];
-                        let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
-                        buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
-                        enc.access(&range_reads, &buffers);
-                        let effects = ScoreConstants {
-                            use_losses: u32::from(images.losses.is_some()),
-                            use_measured_z: u32::from(images.measured_z.is_some()),
-                            ..score(item.counts_offset)
-                        };
-                        let use_shadowed = u32::from(images.shadowed_labels.is_some());
-                        bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..effects });
-                        // Counted again unshadowed only where a shadow pass ran; else the verifier
-                        // copies the counts. The counts are written again: ordered after the first.
-                        if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
-                            enc.access(&[], &[(counts, Access::ComputeWrite)]);
-                            bindings.record(
-                                enc.cmd,
-                                score_pass,
-                                &ScoreConstants { counts_offset: offset as u32, ..effects },
-                            );
-                        }
-                    }
-                })
-                .collect();
-            let group: Vec<_> = (first..)
-                .zip(group)
-                .zip(&scorers)
-                .map(|((index, &(_, job)), scorer)| (&slots[index % slots.len()], job, Sink::Compute(scorer)))
-                .collect();
-            passes.record_group(&mut enc, &group, None);
+        for (recorded, (item, job)) in items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate() {
+            let score = |offset: usize| ScoreConstants {
+                counts_offset: offset as u32,
+                use_shadowed: 0,
+                width: sensor.width,
+                height: sensor.height,
+                z_origin: job.views.origin.z as f32,
+                use_losses: 0,
+                use_measured_z: 0,
+                _pad: 0,
+                region: [job.area.col, job.area.row, job.area.width, job.area.height],
+                surfaces: item.surfaces,
+                segments: settings.sensed.segment_count,
+                tolerance: settings.tolerance,
+                area_scale: settings.area_scale,
+                dx: sensor.pitch[0] as f32,
+                dy: sensor.pitch[1] as f32,
+            };
+            let bindings = &score_bindings[recorded % slots.len()];
+            let record_scores = |enc: &mut Encoder, images: &JobImages| {
+                let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
+                let mut buffers = vec![
+                    (settings.sensed.segments, Access::ComputeRead),
+                    (settings.sensed.z, Access::ComputeRead),
+                    (&counts, Access::ComputeWrite),
+                ];
+                let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
+                buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
+                enc.access(&range_reads, &buffers);
+                let effects = ScoreConstants {
+                    use_losses: u32::from(images.losses.is_some()),
+                    use_measured_z: u32::from(images.measured_z.is_some()),
+                    ..score(item.counts_offset)
+                };
+                let use_shadowed = u32::from(images.shadowed_labels.is_some());
+                bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..effects });
+                // Counted again unshadowed only where a shadow pass ran; else the verifier
+                // copies the counts. The counts are written again: ordered after the first.
+                if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                    enc.access(&[], &[(&counts, Access::ComputeWrite)]);
+                    bindings.record(enc.cmd, score_pass, &ScoreConstants { counts_offset: offset as u32, ..effects });
+                }
+            };
+            passes.record(&mut enc, &slots[recorded % slots.len()], job, &Sink::Compute(&record_scores), None);
         }
         enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
         let region = [vk::BufferCopy::default().size(bytes)];

@@ -101,7 +101,7 @@ impl ScoreBindings {
     /// Records the pass over the constants' region: workgroups of 8×8 invocations, each
     /// scoring a run of [`SCORE_RUN`] pixels.
     pub fn record(&self, cmd: vk::CommandBuffer, pass: &ScorePass, constants: &ScoreConstants) {
-        let [x, y] = [constants.region[2].div_ceil(8 * SCORE_RUN), constants.region[3].div_ceil(8)];
-        self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), [x, y, 1]);
+        let groups = [constants.region[2].div_ceil(8 * SCORE_RUN), constants.region[3].div_ceil(8)];
+        self.set.dispatch(cmd, &pass.pipeline, bytemuck::bytes_of(constants), groups);
     }
 }
