@@ -106,6 +106,9 @@ struct AreaTally {
 
 // Adds to the counter's two words: the low word's wrap-around is the carry.
 void add(inout AreaTally a) {
+    if ((a.low | a.high) == 0u) {
+        return;
+    }
     uint before = atomicAdd(count[s.counts_offset + a.index], a.low);
     uint high = a.high + (before + a.low < before ? 1u : 0u);
     if (high != 0u) {

@@ -174,9 +174,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             })
             .collect()
     };
-    // Chunks of 5 are rendered in groups of up to 4 hypotheses a coverage pass, of three
-    // models; the shadow mask resolves each one's range view, or without shadows the resolve
-    // pass does.
+    // Chunks of 5 hypotheses of three models; the shadow mask resolves each one's range view,
+    // or without shadows the resolve pass does.
     for mode in [ShadowMode::Depth, ShadowMode::None] {
         let settings = VerifySettings {
             sensor: s,

@@ -117,6 +117,8 @@ fn gpu_counts_and_scores_match_the_cpu_scorer() {
                 DMat4::from_translation(DVec3::new(-0.5, 0.2, 0.3)),
                 &[(1, 1), (9, 1)],
             ),
+            // Past the image's bottom-right corner: the score pass's last column and row.
+            hypothesis("at the corner", "builtin:box", DMat4::from_translation(DVec3::new(2.1, -2.1, 0.0)), &[(1, 1)]),
         ];
         let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
         for (h, v) in hypotheses.iter().zip(&results) {
