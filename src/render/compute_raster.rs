@@ -54,11 +54,11 @@ pub enum Raster {
 
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
-/// compute against graphics in the same run): spheres of 0.015 triangles per footprint pixel
-/// ran 0.91× as fast (0.82–0.95× in other runs), 0.071 1.10× (1.09–1.16×; once 0.93×), 0.17
-/// 1.25×, 0.31 1.26×, 0.70 1.42×, 1.3 1.76×, 3.1 2.28×, 32 7.22× (5.0–7.2×); the box, 0.001,
-/// 0.88×. Compute starts to win between 0.015 and 0.071. No other device has been measured
-/// yet; they use the same rule.
+/// compute against graphics in the same run; three runs): spheres of 0.015 triangles per
+/// footprint pixel ran 0.68–1.37× as fast, 0.071 1.23–1.66× (1.09–1.16× in an earlier
+/// session; once 0.93×), 0.17 1.17–1.68×, 0.31 1.02–1.73×, 0.70 1.45–1.55×, 1.3 1.51–2.14×,
+/// 3.1 2.57–2.92×, 32 4.68–6.76×; the box, 0.001, 0.79–0.99×. Compute starts to win between
+/// 0.015 and 0.071. No other device has been measured yet; they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.05;
 
 impl Raster {
