@@ -74,11 +74,11 @@ vec3 triangle_normal(DrawData d, uint triangle) {
     return rotate_to_view(d, mesh_normal(d, triangle));
 }
 
-// The view-frame z at the centre of pixel (c, r) of the plane through corner a with unit
-// normal n, as raster.frag computes it: for the compute rasterizer (raster.comp,
-// raster_resolve.comp) and the shadow mask that resolves its range view (shadow_mask.comp).
-float plane_z(DrawData d, vec3 a, vec3 n, ivec2 pixel) {
-    vec2 centre = vec2(d.grid.x + float(pixel.x) * d.grid.z, d.grid.y - float(pixel.y) * d.grid.w);
+// The view-frame z at the centre of pixel (c, r), given as floats, of the plane through
+// corner a with unit normal n: for the range view (range_pixel) and the compute rasterizer's
+// depths (raster.comp).
+float plane_z(DrawData d, vec3 a, vec3 n, vec2 pixel) {
+    vec2 centre = vec2(d.grid.x + pixel.x * d.grid.z, d.grid.y - pixel.y * d.grid.w);
     return a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
 }
 
@@ -90,4 +90,25 @@ uint triangle_link(DrawData d, uint triangle, uint k) {
 
 uint triangle_label(DrawData d, uint triangle) {
     return d.label_base + Words(d.surface_ids).word[triangle];
+}
+
+// What the range view holds at a pixel: its label (0: nothing), z and the plane's gradient
+// (∂z/∂x, ∂z/∂y).
+struct RangePixel {
+    uint label;
+    float z;
+    vec2 gradient;
+};
+
+// The range view at pixel (c, r), given as floats, that triangle t of draw d covers: its label, and the view-frame z
+// and gradient of the triangle's plane at the exact pixel centre rather than interpolated
+// (interpolation error grows with a facet's slope, the plane does not). The plane's normal is
+// the triangle's unit normal, computed once in f64 on the host (src/render/gpu_mesh.rs): a
+// cross product of a sliver's nearly parallel edges here, in f32, would lose most of its
+// digits. The one definition for the graphics path (raster.frag) and the compute rasterizer's
+// resolve (raster_resolve.comp, shadow_mask.comp), so that both write the same bits.
+RangePixel range_pixel(DrawData d, uint t, vec2 pixel) {
+    vec3 n = triangle_normal(d, t);
+    return RangePixel(triangle_label(d, t), plane_z(d, triangle_corner(d, t, 0u), n, pixel),
+                      vec2(-n.x / n.z, -n.y / n.z));
 }

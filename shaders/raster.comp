@@ -150,7 +150,7 @@ i64vec3 step_down(Setup s) {
 
 // Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
 void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
-    float z = plane_z(d, s.corner, s.normal, pixel);
+    float z = plane_z(d, s.corner, s.normal, vec2(pixel));
     precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
     if (!(depth >= 0.0 && depth < 1.0)) {

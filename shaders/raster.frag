@@ -1,11 +1,7 @@
 #version 460
 // Writes the surface label (u32 end to end, never through a float), and:
 // - in the range view, the view-frame z of the nearest surface and its gradient (∂z/∂x,
-//   ∂z/∂y), from the triangle's plane at the exact pixel centre rather than interpolated:
-//   interpolation error grows with a facet's slope, the plane does not. The plane's normal is
-//   the triangle's unit normal, computed once in f64 on the host (src/render/gpu_mesh.rs): a
-//   cross product of a sliver's nearly parallel edges here, in f32, would lose most of its
-//   digits.
+//   ∂z/∂y), from the triangle's plane at the exact pixel centre (range_pixel, draw.glsl).
 // - in the shadow view (SHADOW_VIEW), which triangle of which draw is nearest: a visibility
 //   buffer, from which the depth-mode shadow test intersects the camera ray with the actual
 //   triangles (src/shadow.rs).
@@ -34,15 +30,13 @@ void main() {
 #ifdef SHADOW_VIEW
     visibility = uvec4(triangle_label(draw, t), draw.draw_index, t, 0u);
 #else
-    label = triangle_label(draw, t);
-    vec3 a = triangle_corner(draw, t, 0u);
-    vec3 n = triangle_normal(draw, t);
-    vec2 centre = vec2(draw.grid.x + (gl_FragCoord.x - 0.5) * draw.grid.z,
-                       draw.grid.y - (gl_FragCoord.y - 0.5) * draw.grid.w);
-    // A fragment exists only where the triangle covers area in xy, so n.z ≠ 0.
-    z = a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
-    dz_dx = -n.x / n.z;
-    dz_dy = -n.y / n.z;
+    // A fragment exists only where the triangle covers area in xy, so n.z ≠ 0; its
+    // coordinates are the pixel's centre, (col + ½, row + ½).
+    RangePixel range = range_pixel(draw, t, gl_FragCoord.xy - 0.5);
+    label = range.label;
+    z = range.z;
+    dz_dx = range.gradient.x;
+    dz_dy = range.gradient.y;
 #endif
 #ifdef TIES
     gl_FragDepth = max(gl_FragCoord.z - tie_depth(draw), 0.0);

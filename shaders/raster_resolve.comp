@@ -28,18 +28,12 @@ void main() {
     }
     ivec2 pixel = ivec2(r.view.area.xy + gl_GlobalInvocationID.xy);
     uint64_t word = nearest[word_index(r.view.stride, pixel)];
-    bool hit = word != EMPTY;
-    uint t = uint(word & 0xffffffffUL);
-    if (!hit) {
-        imageStore(label, pixel, uvec4(0u));
-        imageStore(z, pixel, vec4(0.0));
-        imageStore(dz_dx, pixel, vec4(0.0));
-        imageStore(dz_dy, pixel, vec4(0.0));
-        return;
+    RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
+    if (word != EMPTY) {
+        range = range_pixel(d, uint(word & 0xffffffffUL), vec2(pixel));
     }
-    vec3 n = triangle_normal(d, t);
-    imageStore(label, pixel, uvec4(triangle_label(d, t)));
-    imageStore(z, pixel, vec4(plane_z(d, triangle_corner(d, t, 0u), n, pixel)));
-    imageStore(dz_dx, pixel, vec4(-n.x / n.z));
-    imageStore(dz_dy, pixel, vec4(-n.y / n.z));
+    imageStore(label, pixel, uvec4(range.label));
+    imageStore(z, pixel, vec4(range.z));
+    imageStore(dz_dx, pixel, vec4(range.gradient.x));
+    imageStore(dz_dy, pixel, vec4(range.gradient.y));
 }

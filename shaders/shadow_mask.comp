@@ -206,13 +206,6 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
     return false;
 }
 
-// What the range view holds at a pixel: its label (0: nothing), z and the plane's gradient.
-struct RangePixel {
-    uint label;
-    float z;
-    vec2 gradient;
-};
-
 bool shadowed(ivec2 pixel, RangePixel range) {
     uint label = range.label;
     float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
@@ -307,9 +300,7 @@ RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint t = word_triangle(range_words[at], range_words[at + 1u]);
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {
-        vec3 n = triangle_normal(d, t);
-        range = RangePixel(triangle_label(d, t), plane_z(d, triangle_corner(d, t, 0u), n, pixel),
-                           vec2(-n.x / n.z, -n.y / n.z));
+        range = range_pixel(d, t, vec2(pixel));
     }
     imageStore(range_label, pixel, uvec4(range.label));
     imageStore(range_z, pixel, vec4(range.z));
