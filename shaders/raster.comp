@@ -6,7 +6,11 @@
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
 // edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit
 // integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered
-// pixel keeps the nearest triangle by atomicMin on its view's visibility word.
+// pixel keeps the nearest triangle by atomicMin on its view's visibility word, ordered by the
+// depth of the triangle's plane, affine in the pixel's column and row in an orthographic view
+// (two multiply-adds a pixel where evaluating the plane afresh took two divisions). That depth
+// only orders the triangles at a pixel; the z the range view holds is the plane's at the exact
+// pixel centre (range_pixel, draw.glsl).
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view. A
 // triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
@@ -94,7 +98,8 @@ bool culled(DrawData d, vec3 model_normal) {
 // which edges are top or left, and the pixels of its bounding box within the view's area
 // (empty when degenerate).
 struct Setup {
-    vec3 corner, normal;    // the plane: corner 0 and the unit normal, view frame
+    float depth_first;      // the plane's depth (0..1) at the box's first pixel,
+    vec2 depth_step;        // and its change a column right and a row down
     i64vec2 a, b, c;
     bool ab, bc, ca;
     ivec2 first, last;
@@ -102,9 +107,8 @@ struct Setup {
 
 Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     Setup s;
-    s.corner = to_view(d, m.corner[0]);
-    s.normal = rotate_to_view(d, m.normal);
-    precise vec3 v0 = window(d, s.corner);
+    vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
+    precise vec3 v0 = window(d, corner);
     precise vec3 v1 = window(d, to_view(d, m.corner[1]));
     precise vec3 v2 = window(d, to_view(d, m.corner[2]));
     s.a = snap(v0.xy);
@@ -126,6 +130,10 @@ Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     if (area == 0) {
         s.last = s.first - 1;
     }
+    // In an orthographic view the plane's depth is affine in the pixel's column and row.
+    float span = d.z_range.y - d.z_range.x;
+    s.depth_first = (d.z_range.y - plane_z(d, corner, normal, vec2(s.first))) / span;
+    s.depth_step = vec2(normal.x * d.grid.z, -normal.y * d.grid.w) / (normal.z * span);
     return s;
 }
 
@@ -150,8 +158,8 @@ i64vec3 step_down(Setup s) {
 
 // Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
 void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
-    float z = plane_z(d, s.corner, s.normal, vec2(pixel));
-    precise float depth = (d.z_range.y - z) / (d.z_range.y - d.z_range.x);
+    vec2 from_first = vec2(pixel - s.first);
+    float depth = fma(from_first.x, s.depth_step.x, fma(from_first.y, s.depth_step.y, s.depth_first));
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
     if (!(depth >= 0.0 && depth < 1.0)) {
         return;
