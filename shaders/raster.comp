@@ -12,7 +12,8 @@
 // only orders the triangles at a pixel; the z the range view holds is the plane's at the exact
 // pixel centre (range_pixel, draw.glsl).
 //
-// Small triangles: one invocation per triangle walks its bounding box in each view. A
+// Small triangles: one invocation per triangle walks its bounding box in each view (a box of
+// at most 8 × 8 pixels first as coverage bits, then keeping each covered pixel). A
 // triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
 // instead (up to the queue's capacity), and LARGE_TRIANGLES, dispatched indirectly, gives each
 // queued (triangle, view) a workgroup whose 64 invocations share its rows: one invocation
@@ -219,6 +220,43 @@ bool queue_large(uint t, uint v) {
     return false;
 }
 
+// A box of at most 8 × 8 pixels, its edge functions stepped in 32 bits: the pixels it covers
+// are first found as bits (8 a row, rows 0–3 in x, 4–7 in y), then kept one set bit at a time,
+// so that invocations running in lockstep take as many rounds of keep as the most pixels any
+// of them covers, not as the largest box among them has pixels. (A software rasterizer runs
+// a keep for every lane of every round, covered or not.) Dense sphere at 256²: coverage pass
+// 6.5–6.8 → 5.2–5.5 ms; at 1024², where its triangles cover half their boxes, 2–5% slower;
+// taking the bits only for boxes up to 9 or 16 pixels was slower at both.
+void cover_small_box(uint v, DrawData d, uint t, Setup s, ivec3 first, ivec3 right, ivec3 down) {
+    uvec2 covered = uvec2(0u);
+    ivec3 row_start = first;
+    for (int row = 0; row <= s.last.y - s.first.y; row++) {
+        ivec3 e = row_start;
+        for (int col = 0; col <= s.last.x - s.first.x; col++) {
+            uint bit = ((e.x | e.y | e.z) >= 0 ? 1u : 0u) << uint(((row & 3) << 3) | col);
+            if (row < 4) {
+                covered.x |= bit;
+            } else {
+                covered.y |= bit;
+            }
+            e += right;
+        }
+        row_start += down;
+    }
+    while (covered != uvec2(0u)) {
+        bool low = covered.x != 0u;
+        uint bits = low ? covered.x : covered.y;
+        int k = findLSB(bits);
+        bits &= bits - 1u;
+        if (low) {
+            covered.x = bits;
+        } else {
+            covered.y = bits;
+        }
+        keep(v, d, t, s, s.first + ivec2(k & 7, (k >> 3) + (low ? 0 : 4)));
+    }
+}
+
 // Covers a triangle's pixels in view v, or queues it there if its box is large.
 void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     Setup s = set_up(d, r.views[v], m);
@@ -231,7 +269,12 @@ void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     // the view), the steps are taken in 32-bit arithmetic, which a software rasterizer does
     // in half the lanes' width.
     i64vec3 reach = abs(first) + abs(right) * int64_t(box.x) + abs(down) * int64_t(box.y);
-    if (all(lessThan(reach, i64vec3(0x7fffffffl)))) {
+    bool narrow = all(lessThan(reach, i64vec3(0x7fffffffl)));
+    if (narrow && all(lessThanEqual(box, ivec2(8)))) {
+        cover_small_box(v, d, t, s, ivec3(first), ivec3(right), ivec3(down));
+        return;
+    }
+    if (narrow) {
         ivec3 row_start = ivec3(first), narrow_right = ivec3(right), narrow_down = ivec3(down);
         for (int row = s.first.y; row <= s.last.y; row++) {
             ivec3 e = row_start;
