@@ -59,11 +59,6 @@ layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 
-// The triangle of a view's word, given as its two halves, or EMPTY_HALF where no triangle
-// covers the pixel (meshes have fewer triangles than that).
-uint word_triangle(uint triangle, uint depth_bits) {
-    return triangle == EMPTY_HALF && depth_bits == EMPTY_HALF ? EMPTY_HALF : triangle;
-}
 
 #ifdef FROM_WORDS
 // The shadow view's one draw, read in main with the range view's.
@@ -76,7 +71,7 @@ DrawData shadow_draw;
 uvec4 shadow_seen(ivec2 q) {
 #ifdef FROM_WORDS
     uint at = 2u * word_index(m.shadow_stride, q);
-    uint triangle = word_triangle(shadow_words[at], shadow_words[at + 1u]);
+    uint triangle = shadow_words[at];
     if (triangle == EMPTY_HALF) {
         return uvec4(0u);
     }
@@ -297,7 +292,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
 // writes them (zeros where no triangle covers it).
 RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint at = 2u * word_index(m.range_stride, pixel);
-    uint t = word_triangle(range_words[at], range_words[at + 1u]);
+    uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {
         range = range_pixel(d, t, vec2(pixel));

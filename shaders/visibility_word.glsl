@@ -4,7 +4,9 @@
 // depths the first in the mesh, as the graphics pipeline's LESS depth test does. All ones where
 // no triangle covers the pixel (the host fills the words with ones before the raster pass). A
 // view's words are stored row by row. A shader without 64-bit integers reads a word as two
-// 32-bit halves, the triangle's first.
+// 32-bit halves, the triangle's first; that half alone says whether a triangle covers the
+// pixel (meshes have fewer than 2^29 triangles: src/mesh/adjacency.rs), so a shader that needs
+// only the triangle reads only it.
 
 // Each half of a word where no triangle covers the pixel.
 const uint EMPTY_HALF = 0xffffffffu;
