@@ -9,8 +9,9 @@ struct DrawData {
     vec4 grid;               // x0, y0, dx, dy: the view's pixel (0, 0) centre and pitch
     vec2 size;               // width, height in pixels
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
-    uvec2 positions;         // device addresses of the mesh's packed xyz positions,
-    uvec2 indices;           // its triangle indices,
+    uvec2 corners;           // device addresses of the mesh's triangles' corners (xyz,
+                             // nine floats a triangle: src/render/gpu_mesh.rs),
+    uvec2 pad;               // (unused)
     uvec2 surface_ids;       // its per-triangle surface ids,
     uvec2 normals;           // and its per-triangle unit normals (model frame, f64-derived)
     uint label_base;         // label = label_base + surface id
@@ -53,9 +54,9 @@ float tie_depth(DrawData d) {
 // Corner k (0, 1, 2) of a triangle as the mesh stores it (model frame): one read that views
 // of the same mesh can share (shaders/raster.comp renders both views from it).
 vec3 mesh_corner(DrawData d, uint triangle, uint k) {
-    uint v = Words(d.indices).word[3u * triangle + k];
-    Floats p = Floats(d.positions);
-    return vec3(p.value[3u * v], p.value[3u * v + 1u], p.value[3u * v + 2u]);
+    uint at = 9u * triangle + 3u * k;
+    Floats p = Floats(d.corners);
+    return vec3(p.value[at], p.value[at + 1u], p.value[at + 2u]);
 }
 
 // A triangle's unit normal as the mesh stores it (model frame).

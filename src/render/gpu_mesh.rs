@@ -1,8 +1,14 @@
-//! A mesh uploaded once into device-local memory: vertex positions, triangle indices,
-//! per-triangle surface ids, unit normals and edge links; and whether the mesh bounds a
-//! solid, found once here, so that both rasterizers may skip the triangles facing away.
-//! The fragment shader reads them through buffer device addresses, indexed by gl_PrimitiveID,
-//! to label the pixel and evaluate its triangle's plane exactly.
+//! A mesh uploaded once into device-local memory: vertex positions and triangle indices (the
+//! graphics pipeline's vertex input), each triangle's corners, per-triangle surface ids, unit
+//! normals and edge links; and whether the mesh bounds a solid, found once here, so that both
+//! rasterizers may skip the triangles facing away. The shaders read them through buffer
+//! device addresses, indexed by triangle (gl_PrimitiveID in the fragment shader), to label the
+//! pixel and evaluate its triangle's plane exactly.
+//!
+//! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
+//! triangle's corner then reads it directly, not an index first and then the position it
+//! names. The depth test's walks read a corner at every step, and took 15% less time
+//! (dense sphere, 256²: 23.0–23.7 → 19.3–20.4 ms), for 36 bytes a triangle.
 //!
 //! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its
@@ -17,6 +23,8 @@ use std::sync::Arc;
 pub struct GpuMesh {
     pub(crate) vertices: Buffer,
     pub(crate) indices: Buffer,
+    /// xyz of each triangle's three corners, nine floats a triangle.
+    pub(crate) corners: Buffer,
     pub(crate) surface_ids: Buffer,
     /// xyz of each triangle's unit normal (model frame), three floats a triangle.
     pub(crate) normals: Buffer,
@@ -41,18 +49,25 @@ impl GpuMesh {
             });
         }
         let links = mesh.edge_links();
+        let corners: Vec<[f32; 3]> = indices.iter().map(|&v| mesh.positions[v as usize]).collect();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
                 ctx,
-                vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
                 &mesh.positions,
                 &format!("{name} vertices"),
             )?,
             indices: Buffer::device_local_with_data(
                 ctx,
-                vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                vk::BufferUsageFlags::INDEX_BUFFER,
                 &indices,
                 &format!("{name} indices"),
+            )?,
+            corners: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                &corners,
+                &format!("{name} corners"),
             )?,
             surface_ids: Buffer::device_local_with_data(
                 ctx,
