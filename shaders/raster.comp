@@ -4,20 +4,25 @@
 // read once for both (reading them is most of a small triangle's set-up). Corners go to window
 // coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
-// edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact 64-bit
-// integer arithmetic, stepped in 32 bits across a box where every value fits. Each covered
-// pixel keeps the nearest triangle by atomicMin on its view's visibility word, ordered by the
-// depth of the triangle's plane, affine in the pixel's column and row in an orthographic view
-// (two multiply-adds a pixel where evaluating the plane afresh took two divisions). That depth
-// only orders the triangles at a pixel; the z the range view holds is the plane's at the exact
-// pixel centre (range_pixel, draw.glsl).
+// edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact integer
+// arithmetic (raster_edges.glsl). Each covered pixel keeps the nearest triangle by atomicMin
+// on its view's visibility word, ordered by the depth of the triangle's plane, affine in the
+// pixel's column and row in an orthographic view (two multiply-adds a pixel where evaluating
+// the plane afresh took two divisions). That depth only orders the triangles at a pixel; the
+// z the range view holds is the plane's at the exact pixel centre (range_pixel, draw.glsl).
 //
-// Small triangles: one invocation per triangle walks its bounding box in each view (a box of
-// at most 8 × 8 pixels first as coverage bits, then keeping each covered pixel). A
-// triangle whose box in a view holds more than LARGE_PIXELS pixels is queued for that view
-// instead (up to the queue's capacity), and LARGE_TRIANGLES, dispatched indirectly, gives each
-// queued (triangle, view) a workgroup whose 64 invocations share its rows: one invocation
-// never serialises thousands of pixels.
+// Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
+// arithmetic (a box of at most 8 × 8 pixels first as coverage bits, then keeping each covered
+// pixel). A triangle whose box in a view holds more than LARGE_PIXELS pixels, or whose
+// corners lie too far from its box for 32 bits, is queued for that view instead, and
+// LARGE_TRIANGLES, dispatched indirectly, gives each queued (triangle, view) a workgroup whose
+// 64 invocations share its rows, in 64-bit arithmetic: one invocation never serialises
+// thousands of pixels.
+//
+// A software rasterizer runs every instruction of a shader for every group of invocations,
+// whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
+// as much as this one doing its work), so the small triangles' pass holds no 64-bit path of
+// its own: dense sphere at 256², 5.2–5.5 → 4.85–5.0 ms.
 layout(local_size_x = 64) in;
 #include "raster_compute.glsl"
 
@@ -28,17 +33,18 @@ layout(set = 0, binding = 1, std430) readonly buffer ShadowDraws { DrawData shad
 layout(set = 0, binding = 2, std430) buffer RangeWords { uint64_t range_words[]; };
 layout(set = 0, binding = 3, std430) buffer ShadowWords { uint64_t shadow_words[]; };
 // The queue of large (triangle, view) pairs, a view's bit above the triangle's index (meshes
-// have fewer than 2^29 triangles: src/mesh/adjacency.rs), and the indirect dispatch's
-// (x, y, z), x its length.
+// have fewer than 2^29 triangles: src/mesh/adjacency.rs), with room for every triangle in
+// every view; and its indirect dispatch's (x, y, z), x its length up to MAX_GROUPS, then its
+// length.
 layout(set = 0, binding = 4, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 5, std430) buffer LargeCount { uint large_count; uint large_y; uint large_z; };
+layout(set = 0, binding = 5, std430) buffer LargeArgs { uvec4 large_args; };
 
 // Matches `CoverageConstants` in src/render/compute_raster.rs.
 layout(push_constant, std430) uniform Coverage {
     RasterView views[2];
     uint view_count;     // 1: the range view alone; 2: and the shadow view
     uint triangles;      // the mesh's triangle count
-    uint large_capacity; // room in the queue of large triangles
+    uint pad;
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
 } r;
 
@@ -46,6 +52,14 @@ const uint VIEW_BIT = 31u;
 
 // A triangle with more pixels in its bounding box than this is queued.
 const int LARGE_PIXELS = 256;
+
+// Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
+// their box then spans at most 33) keep every edge function in the box below 2^30.
+const float NEAR = 8192.0;
+
+// Workgroups an indirect dispatch is given at most (every device allows 65,535 along x); its
+// workgroups stride over the rest of the queue.
+const uint MAX_GROUPS = 65535u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -57,21 +71,25 @@ vec3 window(DrawData d, vec3 v) {
     return vec3(w, depth);
 }
 
-i64vec2 snap(vec2 w) {
-    return i64vec2(roundEven(w * 256.0));
+// Window coordinates snapped to 1/256 pixel, in those units: whole numbers.
+vec2 snap(vec2 w) {
+    return roundEven(w * 256.0);
 }
 
-// Twice the signed area of (a, b, p), in 1/256² pixel units.
-int64_t edge(i64vec2 a, i64vec2 b, i64vec2 p) {
-    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
-
-// Whether a point on edge a → b (interior on its positive side) is covered: the edge is a top
-// edge (horizontal, interior below) or a left edge (interior to its right).
-bool top_left(i64vec2 a, i64vec2 b) {
-    i64vec2 e = b - a;
-    return e.y < 0 || (e.y == 0 && e.x > 0);
-}
+#define EDGE_INT int
+#define EDGE_IVEC2 ivec2
+#define EDGE_IVEC3 ivec3
+#define EDGES Edges32
+#include "raster_edges.glsl"
+#undef EDGE_INT
+#undef EDGE_IVEC2
+#undef EDGE_IVEC3
+#undef EDGES
+#define EDGE_INT int64_t
+#define EDGE_IVEC2 i64vec2
+#define EDGE_IVEC3 i64vec3
+#define EDGES Edges64
+#include "raster_edges.glsl"
 
 // A triangle as the mesh stores it: read once, rendered in each view.
 struct MeshTriangle {
@@ -95,14 +113,12 @@ bool culled(DrawData d, vec3 model_normal) {
     return r.cull != 0 && float(r.cull) * rotate_to_view(d, model_normal).z < 0.0;
 }
 
-// A triangle set up for coverage tests in one view: snapped corners with positive area,
-// which edges are top or left, and the pixels of its bounding box within the view's area
-// (empty when degenerate).
+// A triangle set up for coverage tests in one view: its snapped corners, the pixels of its
+// bounding box within the view's area, and its plane's depth.
 struct Setup {
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
-    i64vec2 a, b, c;
-    bool ab, bc, ca;
+    vec2 a, b, c;           // snapped corners (snap)
     ivec2 first, last;
 };
 
@@ -115,22 +131,10 @@ Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     s.a = snap(v0.xy);
     s.b = snap(v1.xy);
     s.c = snap(v2.xy);
-    int64_t area = edge(s.a, s.b, s.c);
-    if (area < 0) {
-        i64vec2 swap = s.b;
-        s.b = s.c;
-        s.c = swap;
-    }
-    s.ab = top_left(s.a, s.b);
-    s.bc = top_left(s.b, s.c);
-    s.ca = top_left(s.c, s.a);
     // Pixel centres (col + ½, row + ½) inside the bounding box and the area.
     vec2 lo = min(min(v0.xy, v1.xy), v2.xy), hi = max(max(v0.xy, v1.xy), v2.xy);
     s.first = max(ivec2(floor(lo - 0.5)), ivec2(view.area.xy));
     s.last = min(ivec2(ceil(hi - 0.5)), ivec2(view.area.xy + view.area.zw) - 1);
-    if (area == 0) {
-        s.last = s.first - 1;
-    }
     // In an orthographic view the plane's depth is affine in the pixel's column and row.
     float span = d.z_range.y - d.z_range.x;
     s.depth_first = (d.z_range.y - plane_z(d, corner, normal, vec2(s.first))) / span;
@@ -138,27 +142,13 @@ Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
     return s;
 }
 
-// The edge functions of b–c, c–a and a–b at the centre of a pixel, each less one where its
-// edge is neither top nor left, so that the pixel is covered exactly when all three are at
-// least 0 (on such an edge, 0 becomes −1): one sign test for the top-left rule.
-i64vec3 edges_at(Setup s, ivec2 pixel) {
-    i64vec2 p = i64vec2(pixel) * 256 + 128;
-    i64vec3 e = i64vec3(edge(s.b, s.c, p), edge(s.c, s.a, p), edge(s.a, s.b, p));
-    return e - i64vec3(s.bc ? 0 : 1, s.ca ? 0 : 1, s.ab ? 0 : 1);
-}
-
-// From pixel to pixel the edge functions change by constants: exact integer steps, where
-// evaluating them afresh takes 64-bit products. One pixel right, and one pixel down:
-i64vec3 step_right(Setup s) {
-    return -256 * i64vec3(s.c.y - s.b.y, s.a.y - s.c.y, s.b.y - s.a.y);
-}
-
-i64vec3 step_down(Setup s) {
-    return 256 * i64vec3(s.c.x - s.b.x, s.a.x - s.c.x, s.b.x - s.a.x);
+// The centre of the box's first pixel, in snapped units: where the edge functions start.
+vec2 box_origin(Setup s) {
+    return vec2(s.first) * 256.0 + 128.0;
 }
 
 // Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
-void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
+void keep(uint v, uint t, Setup s, ivec2 pixel) {
     vec2 from_first = vec2(pixel - s.first);
     float depth = fma(from_first.x, s.depth_step.x, fma(from_first.y, s.depth_step.y, s.depth_first));
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
@@ -174,50 +164,46 @@ void keep(uint v, DrawData d, uint t, Setup s, ivec2 pixel) {
     }
 }
 
-// Tests the pixels of one row of the box, `e` the edge functions at its first.
-void cover_row(uint v, DrawData d, uint t, Setup s, int row, i64vec3 e) {
-    i64vec3 right = step_right(s);
+#ifdef LARGE_TRIANGLES
+// Tests the pixels of one row of the box, `e` the edge functions at its first, in 64 bits.
+void cover_row(uint v, uint t, Setup s, int row, i64vec3 e, i64vec3 right) {
     for (int col = s.first.x; col <= s.last.x; col++) {
         if ((e.x | e.y | e.z) >= 0) {
-            keep(v, d, t, s, ivec2(col, row));
+            keep(v, t, s, ivec2(col, row));
         }
         e += right;
     }
 }
 
-#ifdef LARGE_TRIANGLES
 void main() {
-    if (gl_WorkGroupID.x >= large_count) {
-        return;
-    }
-    uint entry = large[gl_WorkGroupID.x];
-    uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
-    DrawData d;
-    if (v == 0u) {
-        d = range_draws[r.views[0].draw];
-    } else {
-        d = shadow_draws[r.views[1].draw];
-    }
-    Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal(d, t)));
-    // The workgroup's invocations share the box's rows.
-    for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
-        cover_row(v, d, t, s, row, edges_at(s, ivec2(s.first.x, row)));
+    // The workgroups stride over the queue, which may be longer than a dispatch's groups.
+    for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
+        uint entry = large[queued];
+        uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
+        DrawData d;
+        if (v == 0u) {
+            d = range_draws[r.views[0].draw];
+        } else {
+            d = shadow_draws[r.views[1].draw];
+        }
+        Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal(d, t)));
+        // Exact anywhere in the view: 64-bit edge functions, relative to the box.
+        i64vec2 origin = i64vec2(box_origin(s));
+        Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
+        // The workgroup's invocations share the box's rows.
+        for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
+            cover_row(v, t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
+        }
     }
 }
 #else
-// Queues (t, v) unless the queue is full; the queue's length never exceeds its capacity, so
-// the indirect dispatch stays within the device's limits.
-bool queue_large(uint t, uint v) {
-    uint length = large_count;
-    while (length < r.large_capacity) {
-        uint before = atomicCompSwap(large_count, length, length + 1u);
-        if (before == length) {
-            large[length] = t | (v << VIEW_BIT);
-            return true;
-        }
-        length = before;
+// Queues (t, v): the queue has room for every triangle in every view.
+void queue_large(uint t, uint v) {
+    uint at = atomicAdd(large_args.w, 1u);
+    large[at] = t | (v << VIEW_BIT);
+    if (at < MAX_GROUPS) {
+        atomicAdd(large_args.x, 1u);
     }
-    return false;
 }
 
 // A box of at most 8 × 8 pixels, its edge functions stepped in 32 bits: the pixels it covers
@@ -227,21 +213,21 @@ bool queue_large(uint t, uint v) {
 // a keep for every lane of every round, covered or not.) Dense sphere at 256²: coverage pass
 // 6.5–6.8 → 5.2–5.5 ms; at 1024², where its triangles cover half their boxes, 2–5% slower;
 // taking the bits only for boxes up to 9 or 16 pixels was slower at both.
-void cover_small_box(uint v, DrawData d, uint t, Setup s, ivec3 first, ivec3 right, ivec3 down) {
+void cover_small_box(uint v, uint t, Setup s, Edges32 e) {
     uvec2 covered = uvec2(0u);
-    ivec3 row_start = first;
+    ivec3 row_start = e.first;
     for (int row = 0; row <= s.last.y - s.first.y; row++) {
-        ivec3 e = row_start;
+        ivec3 at = row_start;
         for (int col = 0; col <= s.last.x - s.first.x; col++) {
-            uint bit = ((e.x | e.y | e.z) >= 0 ? 1u : 0u) << uint(((row & 3) << 3) | col);
+            uint bit = ((at.x | at.y | at.z) >= 0 ? 1u : 0u) << uint(((row & 3) << 3) | col);
             if (row < 4) {
                 covered.x |= bit;
             } else {
                 covered.y |= bit;
             }
-            e += right;
+            at += e.right;
         }
-        row_start += down;
+        row_start += e.down;
     }
     while (covered != uvec2(0u)) {
         bool low = covered.x != 0u;
@@ -253,44 +239,41 @@ void cover_small_box(uint v, DrawData d, uint t, Setup s, ivec3 first, ivec3 rig
         } else {
             covered.y = bits;
         }
-        keep(v, d, t, s, s.first + ivec2(k & 7, (k >> 3) + (low ? 0 : 4)));
+        keep(v, t, s, s.first + ivec2(k & 7, (k >> 3) + (low ? 0 : 4)));
     }
 }
 
-// Covers a triangle's pixels in view v, or queues it there if its box is large.
+// Covers a triangle's pixels in view v, or queues it there if its box is large or its
+// corners far.
 void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     Setup s = set_up(d, r.views[v], m);
     ivec2 box = s.last - s.first + 1;
-    if (box.x <= 0 || box.y <= 0 || (box.x * box.y > LARGE_PIXELS && queue_large(t, v))) {
+    if (box.x <= 0 || box.y <= 0) {
         return;
     }
-    i64vec3 first = edges_at(s, s.first), right = step_right(s), down = step_down(s);
-    // Where every edge function in the box fits in 32 bits (as for any small triangle near
-    // the view), the steps are taken in 32-bit arithmetic, which a software rasterizer does
-    // in half the lanes' width.
-    i64vec3 reach = abs(first) + abs(right) * int64_t(box.x) + abs(down) * int64_t(box.y);
-    bool narrow = all(lessThan(reach, i64vec3(0x7fffffffl)));
-    if (narrow && all(lessThanEqual(box, ivec2(8)))) {
-        cover_small_box(v, d, t, s, ivec3(first), ivec3(right), ivec3(down));
+    // Relative to the box's first pixel centre the corners are exact where both are whole
+    // numbers below 2^24 (as floats) and near each other.
+    vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
+    bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
+    if (box.x * box.y > LARGE_PIXELS || !near) {
+        queue_large(t, v);
         return;
     }
-    if (narrow) {
-        ivec3 row_start = ivec3(first), narrow_right = ivec3(right), narrow_down = ivec3(down);
-        for (int row = s.first.y; row <= s.last.y; row++) {
-            ivec3 e = row_start;
-            for (int col = s.first.x; col <= s.last.x; col++) {
-                if ((e.x | e.y | e.z) >= 0) {
-                    keep(v, d, t, s, ivec2(col, row));
-                }
-                e += narrow_right;
-            }
-            row_start += narrow_down;
-        }
+    Edges32 e = edges_of(ivec2(a), ivec2(b), ivec2(c));
+    if (all(lessThanEqual(box, ivec2(8)))) {
+        cover_small_box(v, t, s, e);
         return;
     }
+    ivec3 row_start = e.first;
     for (int row = s.first.y; row <= s.last.y; row++) {
-        cover_row(v, d, t, s, row, first);
-        first += down;
+        ivec3 at = row_start;
+        for (int col = s.first.x; col <= s.last.x; col++) {
+            if ((at.x | at.y | at.z) >= 0) {
+                keep(v, t, s, ivec2(col, row));
+            }
+            at += e.right;
+        }
+        row_start += e.down;
     }
 }
 

@@ -115,7 +115,7 @@ struct CoverageConstants {
     views: [RasterView; 2],
     view_count: u32,
     triangles: u32,
-    large_capacity: u32,
+    _pad: u32,
     cull: i32,
 }
 
@@ -199,10 +199,10 @@ struct ViewWords<'a> {
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
     shadow: Option<ViewWords<'a>>,
-    /// The queue of large triangles, and its length as an indirect dispatch's (x, 1, 1).
+    /// The queue of large (triangle, view) pairs, room for every triangle in every view, and
+    /// its indirect dispatch's (x, y, z), then its length.
     large: Buffer,
     large_args: Buffer,
-    large_capacity: u32,
     coverage: StorageSet,
     resolve: StorageSet,
 }
@@ -235,13 +235,13 @@ impl<'a> ComputeViews<'a> {
             &[range.draw_table, &range.nearest],
             &format!("{name} resolve bindings"),
         )?;
+        // A triangle is queued in a view at most once.
         let views = if shadow.is_some() { 2 } else { 1 };
-        let large_capacity = max_triangles.saturating_mul(views).clamp(1, MAX_GROUPS);
-        let large_bytes = u64::from(large_capacity) * 4;
+        let large_bytes = (u64::from(max_triangles) * views * 4).max(4);
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
         let args = BufferDesc {
             usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(12)
+            ..BufferDesc::gpu_storage(16)
         };
         let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
         // Without a shadow view, the range view's table and words fill its bindings too.
@@ -253,7 +253,7 @@ impl<'a> ComputeViews<'a> {
             &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
             &format!("{name} coverage bindings"),
         )?;
-        Ok(Self { range, shadow, large, large_args, large_capacity, coverage, resolve })
+        Ok(Self { range, shadow, large, large_args, coverage, resolve })
     }
 
     /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
@@ -307,7 +307,8 @@ impl<'a> ComputeViews<'a> {
             for &(view, offset, size) in &emptied {
                 d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
             }
-            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
+            // No workgroups, an empty queue: (x, y, z, length).
+            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
         }
         let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
             area: [area.col, area.row, area.width, area.height],
@@ -322,7 +323,7 @@ impl<'a> ComputeViews<'a> {
             views: [range, shadow.unwrap_or(range)],
             view_count: 1 + u32::from(shadow.is_some()),
             triangles,
-            large_capacity: self.large_capacity,
+            _pad: 0,
             cull: cull_sign(draw.mesh.solidity),
         };
         let coverage_uses = |queue: Access, args: Access| {
