@@ -55,11 +55,12 @@ pub enum Raster {
 
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
-/// compute against graphics in the same run; three runs): spheres of 0.015 triangles per
-/// footprint pixel ran 0.68–1.37× as fast, 0.071 1.23–1.66× (1.09–1.16× in an earlier
-/// session; once 0.93×), 0.17 1.17–1.68×, 0.31 1.02–1.73×, 0.70 1.45–1.55×, 1.3 1.51–2.14×,
-/// 3.1 2.57–2.92×, 32 4.68–6.76×; the box, 0.001, 0.79–0.99×. Compute starts to win between
-/// 0.015 and 0.071. No other device has been measured yet; they use the same rule.
+/// compute against graphics in the same run; three runs, 2026-11-23): spheres of 0.015
+/// triangles per footprint pixel ran 0.92–1.02× as fast (0.68–1.37× a session before), 0.071
+/// 1.20–1.43× (1.09–1.66× in earlier sessions; once 0.93×), 0.17 1.22–1.68×, 0.31
+/// 1.52–1.67×, 0.70 1.74–2.21×, 1.3 1.87–2.31×, 3.1 2.89–3.51×, 32 6.35–9.18×; the box,
+/// 0.001, 0.73–0.97×. Compute starts to win between 0.015 and 0.071. No other device has been
+/// measured yet; they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.05;
 
 impl Raster {
