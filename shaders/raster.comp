@@ -14,7 +14,8 @@
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic (a box of at most 8 × 8 pixels first as coverage bits, then keeping each covered
 // pixel). A triangle whose box in a view holds more than LARGE_PIXELS pixels, or whose
-// corners lie too far from its box for 32 bits, is queued for that view instead, and
+// corners lie more than 32 pixels from its box's first pixel centre (beyond 32-bit edge
+// functions; so is any box over 33 pixels a side), is queued for that view instead, and
 // LARGE_TRIANGLES, dispatched indirectly, gives each queued (triangle, view) a workgroup whose
 // 64 invocations share its rows, in 64-bit arithmetic: one invocation never serialises
 // thousands of pixels.
@@ -57,9 +58,9 @@ const int LARGE_PIXELS = 256;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
 const float NEAR = 8192.0;
 
-// Workgroups an indirect dispatch is given at most (every device allows 65,535 along x); its
-// workgroups stride over the rest of the queue.
-const uint MAX_GROUPS = 65535u;
+// Workgroups a dispatch is given at most along x (every device allows 65,535), given by the
+// host (compute_raster.rs): the large triangles' workgroups stride over the rest of the queue.
+layout(constant_id = 0) const uint MAX_GROUPS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -76,19 +77,19 @@ vec2 snap(vec2 w) {
     return roundEven(w * 256.0);
 }
 
-#define EDGE_INT int
-#define EDGE_IVEC2 ivec2
-#define EDGE_IVEC3 ivec3
-#define EDGES Edges32
-#include "raster_edges.glsl"
-#undef EDGE_INT
-#undef EDGE_IVEC2
-#undef EDGE_IVEC3
-#undef EDGES
+// The edge functions in the width each pass steps them in: 64 bits for the queued triangles,
+// 32 for the others.
+#ifdef LARGE_TRIANGLES
 #define EDGE_INT int64_t
 #define EDGE_IVEC2 i64vec2
 #define EDGE_IVEC3 i64vec3
 #define EDGES Edges64
+#else
+#define EDGE_INT int
+#define EDGE_IVEC2 ivec2
+#define EDGE_IVEC3 ivec3
+#define EDGES Edges32
+#endif
 #include "raster_edges.glsl"
 
 // A triangle as the mesh stores it: read once, rendered in each view.
@@ -190,6 +191,10 @@ void main() {
         // Exact anywhere in the view: 64-bit edge functions, relative to the box.
         i64vec2 origin = i64vec2(box_origin(s));
         Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
+        // A triangle of no area covers nothing (edges_of): no rows to walk.
+        if (e.right == i64vec3(0) && e.down == i64vec3(0)) {
+            continue;
+        }
         // The workgroup's invocations share the box's rows.
         for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
             cover_row(v, t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
@@ -251,8 +256,9 @@ void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     if (box.x <= 0 || box.y <= 0) {
         return;
     }
-    // Relative to the box's first pixel centre the corners are exact where both are whole
-    // numbers below 2^24 (as floats) and near each other.
+    // Relative to the box's first pixel centre, a corner's rounded difference below NEAR is
+    // its exact one, where that centre is exact: a whole number below 2^24 (views under 65,536
+    // pixels a side; beyond, the triangle is queued).
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
     if (box.x * box.y > LARGE_PIXELS || !near) {

@@ -1,6 +1,7 @@
-// A triangle's edge functions in one integer width, included by raster.comp once for 32-bit
-// and once for 64-bit arithmetic: EDGE_INT, EDGE_IVEC2 and EDGE_IVEC3 name the types, EDGES the
-// struct. The one definition of the coverage rule's integer arithmetic for both widths.
+// A triangle's edge functions in one integer width, included by raster.comp with 32-bit
+// types for the small triangles' pass and 64-bit ones for the large triangles': EDGE_INT,
+// EDGE_IVEC2 and EDGE_IVEC3 name the types, EDGES the struct. The one definition of the
+// coverage rule's integer arithmetic for both widths.
 
 // Twice the signed area of (a, b, p), in 1/256² pixel units.
 EDGE_INT edge(EDGE_IVEC2 a, EDGE_IVEC2 b, EDGE_IVEC2 p) {

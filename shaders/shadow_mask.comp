@@ -59,7 +59,6 @@ layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 
-
 #ifdef FROM_WORDS
 // The shadow view's one draw, read in main with the range view's.
 DrawData shadow_draw;

@@ -3,8 +3,8 @@
 //! should give the same images. The allowance is stated here: none. Measured on lavapipe:
 //! every label, shadowed label and z bit identical on every case below. (Outside these cases:
 //! where triangles with corners tens of thousands of pixels outside the view overlap at nearly
-//! equal depths, a few pixels keep a different one: see a_queue_longer_than_a_dispatch_is_
-//! covered_whole.) (Both skip a solid's
+//! equal depths, a few pixels keep a different one; see
+//! `a_queue_longer_than_a_dispatch_is_covered_whole`.) (Both skip a solid's
 //! triangles facing away, the graphics pipeline judging by the snapped corners, the compute
 //! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on.)
 
@@ -298,9 +298,9 @@ fn spikes_from_far_outside_the_view_render_as_the_graphics_pipeline_renders_them
 /// More queued triangles than one indirect dispatch has workgroups (65,535): the large
 /// triangles' workgroups stride over the rest of the queue. Tips 54 pixels left of the view,
 /// not 57,000: 5,000 spikes that far away, their depths 0.001 apart, kept a different
-/// spike at 3 of 2,477 pixels (z differs, labels equal) with either build of the compute
-/// rasterizer; the graphics pipeline interpolates depth across so distant a corner, the
-/// compute rasterizer takes it from the plane (README, "Rasterizers").
+/// spike at 3 of 2,477 pixels (z differs, labels equal) with this build of the compute
+/// rasterizer and the one before it; not analysed further, likely the depth each path
+/// computes across so distant a corner (README, "Rasterizers").
 #[test]
 fn a_queue_longer_than_a_dispatch_is_covered_whole() {
     let (sc, graphics) = spikes(70_000, -3.0);

@@ -138,10 +138,14 @@ fn cull_sign(solidity: Solidity) -> i32 {
 
 /// Bytes of a pixel's visibility word (shaders/visibility_word.glsl), in each view.
 pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
+/// Bytes of an entry of the queue of large triangles (a triangle and its view's bit).
+pub(crate) const LARGE_QUEUE_ENTRY_BYTES: u64 = 4;
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
 const COVERAGE_GROUP: u32 = 64;
-/// Most workgroups along one dispatch dimension that every device allows.
+/// Most workgroups along one dispatch dimension that every device allows: the coverage pass's
+/// rows of workgroups, and the most the large triangles' indirect dispatch is given (the
+/// shader's MAX_GROUPS, a specialization constant).
 const MAX_GROUPS: u32 = 65_535;
 
 pub struct ComputeRasterPipelines {
@@ -159,19 +163,17 @@ impl ComputeRasterPipelines {
         // and its words.
         let coverage = (0, 6);
         let coverage_push = size_of::<CoverageConstants>();
-        let pipeline = |bindings, push, code, name| ComputePipeline::new(ctx, bindings, push, code, &[], name);
+        // The coverage shader's one specialization constant: MAX_GROUPS.
+        let covering = |code, name| ComputePipeline::new(ctx, coverage, coverage_push, code, &[MAX_GROUPS], name);
         Ok(Self {
-            coverage: pipeline(coverage, coverage_push, shaders::RASTER_COMP, "compute raster coverage")?,
-            large: pipeline(
-                coverage,
-                coverage_push,
-                shaders::RASTER_LARGE_COMP,
-                "compute raster coverage (large triangles)",
-            )?,
-            resolve: pipeline(
+            coverage: covering(shaders::RASTER_COMP, "compute raster coverage")?,
+            large: covering(shaders::RASTER_LARGE_COMP, "compute raster coverage (large triangles)")?,
+            resolve: ComputePipeline::new(
+                ctx,
                 (ViewKind::Range.colour_attachments().len(), 2),
                 size_of::<RasterView>(),
                 shaders::RASTER_RESOLVE_COMP,
+                &[],
                 "compute raster resolve",
             )?,
             mask: MaskPipelines::new(ctx, true)?,
@@ -239,7 +241,7 @@ impl<'a> ComputeViews<'a> {
         )?;
         // A triangle is queued in a view at most once.
         let views = if shadow.is_some() { 2 } else { 1 };
-        let large_bytes = (u64::from(max_triangles) * views * 4).max(4);
+        let large_bytes = (u64::from(max_triangles) * views * LARGE_QUEUE_ENTRY_BYTES).max(4);
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
         let args = BufferDesc {
             usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,

@@ -8,7 +8,7 @@
 //! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
 //! triangle's corner then reads it directly, not an index first and then the position it
 //! names. The depth test's walks read a corner at every step, and took 15% less time
-//! (dense sphere, 256²: 23.0–23.7 → 19.3–20.4 ms), for 36 bytes a triangle.
+//! (dense sphere, 256²: 22.7–23.7 → 19.3–20.4 ms), for 36 bytes a triangle.
 //!
 //! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its

@@ -19,8 +19,8 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
-pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER};
+pub(crate) use compute_raster::{LARGE_QUEUE_ENTRY_BYTES, VISIBILITY_WORD_BYTES};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -168,11 +168,16 @@ impl Renderer {
     /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, over
     /// `footprint_pixels` (compute_raster.rs), into visibility words for views of at most
     /// `view_pixels`. Words this device cannot bind as one storage buffer (its
-    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe) leave the view to the
-    /// graphics pipeline.
+    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), or a queue of large
+    /// triangles with room for every triangle in both views (16.7 million triangles there),
+    /// leave the view to the graphics pipeline.
     pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64, view_pixels: u64) -> bool {
-        let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= self.ctx.max_storage_buffer_range();
-        words_fit && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
+        let range = self.ctx.max_storage_buffer_range();
+        let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= range;
+        let queue_fits = triangles.saturating_mul(2 * LARGE_QUEUE_ENTRY_BYTES) <= range;
+        words_fit
+            && queue_fits
+            && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
     }
 
     /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the

@@ -193,7 +193,15 @@ pub(crate) fn count_batch(
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-        compute_raster: range_table.as_ref().zip(items.iter().map(|i| i.mesh.index_count / 3).max()),
+        // The most triangles of a hypothesis the compute rasterizer renders (its queue's room).
+        compute_raster: range_table.as_ref().zip(
+            items
+                .iter()
+                .zip(&jobs)
+                .filter(|(_, job)| job.as_ref().is_some_and(|j| j.compute))
+                .map(|(i, _)| i.mesh.index_count / 3)
+                .max(),
+        ),
         from_host: !host_views.is_empty(),
     };
     let slots: Vec<Slot> =
