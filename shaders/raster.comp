@@ -45,7 +45,6 @@ layout(push_constant, std430) uniform Coverage {
     RasterView views[2];
     uint view_count;     // 1: the range view alone; 2: and the shadow view
     uint triangles;      // the mesh's triangle count
-    uint pad;
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
 } r;
 

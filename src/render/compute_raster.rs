@@ -117,13 +117,12 @@ struct CoverageConstants {
     views: [RasterView; 2],
     view_count: u32,
     triangles: u32,
-    _pad: u32,
     cull: i32,
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
 const _: () = assert!(std::mem::offset_of!(CoverageConstants, view_count) == 64);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 76);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 72);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -138,8 +137,11 @@ fn cull_sign(solidity: Solidity) -> i32 {
 
 /// Bytes of a pixel's visibility word (shaders/visibility_word.glsl), in each view.
 pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
-/// Bytes of an entry of the queue of large triangles (a triangle and its view's bit).
-pub(crate) const LARGE_QUEUE_ENTRY_BYTES: u64 = 4;
+/// Bytes of the queue of large triangles for meshes of up to `triangles` in `views` views:
+/// room for every triangle in every view, an entry (a triangle and its view's bit) 4 bytes.
+pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
+    triangles.saturating_mul(views).saturating_mul(4)
+}
 
 /// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
 const COVERAGE_GROUP: u32 = 64;
@@ -241,7 +243,7 @@ impl<'a> ComputeViews<'a> {
         )?;
         // A triangle is queued in a view at most once.
         let views = if shadow.is_some() { 2 } else { 1 };
-        let large_bytes = (u64::from(max_triangles) * views * LARGE_QUEUE_ENTRY_BYTES).max(4);
+        let large_bytes = large_queue_bytes(u64::from(max_triangles), views).max(4);
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
         let args = BufferDesc {
             usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
@@ -327,7 +329,6 @@ impl<'a> ComputeViews<'a> {
             views: [range, shadow.unwrap_or(range)],
             view_count: 1 + u32::from(shadow.is_some()),
             triangles,
-            _pad: 0,
             cull: cull_sign(draw.mesh.solidity),
         };
         let coverage_uses = |queue: Access, args: Access| {

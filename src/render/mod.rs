@@ -19,8 +19,8 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
+pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER};
-pub(crate) use compute_raster::{LARGE_QUEUE_ENTRY_BYTES, VISIBILITY_WORD_BYTES};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -174,7 +174,7 @@ impl Renderer {
     pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64, view_pixels: u64) -> bool {
         let range = self.ctx.max_storage_buffer_range();
         let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= range;
-        let queue_fits = triangles.saturating_mul(2 * LARGE_QUEUE_ENTRY_BYTES) <= range;
+        let queue_fits = compute_raster::large_queue_bytes(triangles, 2) <= range;
         words_fit
             && queue_fits
             && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
