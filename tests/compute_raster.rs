@@ -187,14 +187,22 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             .collect()
     };
     // Chunks of 5 hypotheses of three models; the shadow mask resolves each one's range view,
-    // or without shadows the resolve pass does.
-    for mode in [ShadowMode::Depth, ShadowMode::None] {
+    // or without shadows the resolve pass does. Scoring the unshadowed labels as well reads
+    // the range view's labels, and so do effects (the grazing angle its gradient, the edges
+    // its labels); without either, the mask writes only its z (MaskVariant).
+    let effects: Effects = toml::from_str("[grazing]\nmax_incidence_deg = 70\n[edges]\njump = 0.2").unwrap();
+    let plain = || [true, false].map(|compare_shadow| (compare_shadow, Effects::default()));
+    let cases = [ShadowMode::Depth, ShadowMode::Label, ShadowMode::None]
+        .into_iter()
+        .flat_map(|mode| plain().map(|case| (mode, case)))
+        .chain([(ShadowMode::Depth, (false, effects))]);
+    for (mode, (compare_shadow, effects)) in cases {
         let settings = VerifySettings {
             sensor: s,
             shadow: ShadowSettings::of(mode),
-            effects: Default::default(),
+            effects,
             tolerance: 0.05,
-            compare_shadow: true,
+            compare_shadow,
             chunk_size: 5,
         };
         let counts = |verifier: &Verifier| {
@@ -204,9 +212,9 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             out.into_iter().map(|v| (v.counts, v.unshadowed.map(|(c, _)| c))).collect::<Vec<_>>()
         };
         let graphics = counts(&VERIFIER);
-        assert_eq!(counts(&COMPUTE), graphics, "{mode:?}");
+        assert_eq!(counts(&COMPUTE), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
         // Auto mixes both in one batch: the sphere by compute, the step and the box by graphics.
-        assert_eq!(counts(&AUTO), graphics, "{mode:?}");
+        assert_eq!(counts(&AUTO), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
     }
 }
 

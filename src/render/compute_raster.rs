@@ -30,7 +30,7 @@
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
 //! renders, the graphics pipeline elsewhere.
 
-use super::shadow_pass::{MaskPipelines, WordsToMask};
+use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
@@ -154,8 +154,10 @@ pub struct ComputeRasterPipelines {
     coverage: ComputePipeline,
     large: ComputePipeline,
     resolve: ComputePipeline,
-    /// The shadow mask reading the shadow view's words (shadow_pass.rs).
+    /// The shadow mask reading the shadow view's words (shadow_pass.rs), writing the range
+    /// view's attachments whole, or only its z for a score pass.
     pub mask: MaskPipelines,
+    pub mask_for_scoring: MaskPipelines,
 }
 
 impl ComputeRasterPipelines {
@@ -178,7 +180,8 @@ impl ComputeRasterPipelines {
                 &[],
                 "compute raster resolve",
             )?,
-            mask: MaskPipelines::new(ctx, true)?,
+            mask: MaskPipelines::new(ctx, MaskVariant::Words)?,
+            mask_for_scoring: MaskPipelines::new(ctx, MaskVariant::WordsForScoring)?,
         })
     }
 }

@@ -171,8 +171,19 @@ pub(crate) enum Sink<'a> {
     /// Copies of the range view's labels and z (the masked labels stay in the slot).
     Readback { label: &'a Buffer, z: &'a Buffer },
     /// A caller's compute pass over the job's images, recorded after the passes: it states
-    /// its own accesses to the encoder.
-    Compute(&'a dyn Fn(&mut Encoder, &JobImages)),
+    /// its own accesses to the encoder. `reads_range_label`: whether it reads the range view's
+    /// label image (a score of the unshadowed labels), not only the shadowed labels and z.
+    Compute { record: &'a dyn Fn(&mut Encoder, &JobImages), reads_range_label: bool },
+}
+
+impl Sink<'_> {
+    /// Whether the sink reads the range view's label or gradient images.
+    fn reads_range_label(&self) -> bool {
+        match self {
+            Sink::Readback { .. } => true,
+            Sink::Compute { reads_range_label, .. } => *reads_range_label,
+        }
+    }
 }
 
 /// A job's images, as a compute sink finds them.
@@ -314,10 +325,13 @@ impl Passes<'_> {
             let words = slot.compute.as_ref().and_then(|c| c.to_mask());
             let constants = MaskConstants::new(sensor, views, grid, job.area);
             // The variant reading words where it runs: one choice for the pipeline and for the
-            // range view's use.
+            // range view's use. It writes the range view's label and gradient only where a
+            // pass after it reads them: an effect, or the sink.
             let reading_words = match (compute, &words) {
                 (Some((_, rp, (index, _))), Some((_, strides))) => {
-                    Some((&rp.mask, constants.reading_words(index, *strides)))
+                    let read_later = slot.effects.is_some() || sink.reads_range_label();
+                    let mask = if read_later { &rp.mask } else { &rp.mask_for_scoring };
+                    Some((mask, constants.reading_words(index, *strides)))
                 }
                 _ => None,
             };
@@ -431,7 +445,7 @@ impl Passes<'_> {
                 host.extend([shadowed_labels, losses, measured_z].into_iter().flatten().map(|b| (b, Access::HostRead)));
                 enc.access(&[], &host);
             }
-            Sink::Compute(record) => {
+            Sink::Compute { record, .. } => {
                 let images =
                     JobImages { label: slot.range.label(), z: slot.range.z(), shadowed_labels, losses, measured_z };
                 record(enc, &images);

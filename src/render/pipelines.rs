@@ -6,7 +6,7 @@
 use super::compute_raster::ComputeRasterPipelines;
 use super::draw::DrawConstants;
 use super::effect_pass::EffectPipelines;
-use super::shadow_pass::MaskPipelines;
+use super::shadow_pass::{MaskPipelines, MaskVariant};
 use super::targets::ViewKind;
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
@@ -43,7 +43,7 @@ impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
-        let mask = MaskPipelines::new(ctx, false)?;
+        let mask = MaskPipelines::new(ctx, MaskVariant::Attachments)?;
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),

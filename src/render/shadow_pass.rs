@@ -8,7 +8,10 @@
 //! resolve pass would and testing what it wrote. On lavapipe the shadow view's resolve cost
 //! about 0.9 ms of the box's 3.7 ms a hypothesis in label mode; the range view's pass cost
 //! 0.65–0.75 ms of the box's 1.2 ms of compute raster at 256², of which the mask now spends
-//! about 0.5 ms more, so a render saves 0.1–0.3 ms (README, "Rasterizers").
+//! about 0.5 ms more, so a render saves 0.1–0.3 ms (README, "Rasterizers"). Where no pass
+//! after it reads the range view's label or gradient, a variant writes only its z
+//! ([`MaskVariant::WordsForScoring`]): 3% of the dense sphere's verification at 256², 9% of
+//! the box's.
 
 use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
@@ -75,12 +78,23 @@ impl MaskConstants {
     }
 }
 
-/// The mask pipelines, one per [`ShadowTest`], the test a specialization constant, of one of
-/// the shader's two variants: reading the views' attachments, or the compute rasterizer's
-/// words. Their descriptor-set layouts are defined identically, so one set serves them all.
-/// On lavapipe, which runs both sides of a branch on a uniform value, the label test alone ran
-/// in a quarter of the time of the shader that switched on a push constant (256², 1.0 ms
-/// against 4.5 ms).
+/// What a mask pipeline reads the views from, and what it writes of the range view.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum MaskVariant {
+    /// The views' attachments, which the graphics pipeline rendered.
+    Attachments,
+    /// The compute rasterizer's words; it writes the range view's attachments whole.
+    Words,
+    /// The compute rasterizer's words, for passes after it that read only the range view's z
+    /// (a score pass of the shadowed labels): it writes no label or gradient there.
+    WordsForScoring,
+}
+
+/// The mask pipelines of one [`MaskVariant`], one per [`ShadowTest`], the test a
+/// specialization constant. Their descriptor-set layouts are defined identically, so one set
+/// serves them all. On lavapipe, which runs both sides of a branch on a uniform value, the
+/// label test alone ran in a quarter of the time of the shader that switched on a push
+/// constant (256², 1.0 ms against 4.5 ms).
 pub struct MaskPipelines {
     label: ComputePipeline,
     label_square: ComputePipeline,
@@ -88,13 +102,13 @@ pub struct MaskPipelines {
 }
 
 impl MaskPipelines {
-    /// The pipelines reading the views' attachments, or, `from_words`, the compute
-    /// rasterizer's words.
-    pub fn new(ctx: &Arc<GpuContext>, from_words: bool) -> Result<Self> {
-        let (code, source) = match from_words {
-            true => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words"),
-            false => (shaders::SHADOW_MASK_COMP, ""),
+    pub fn new(ctx: &Arc<GpuContext>, variant: MaskVariant) -> Result<Self> {
+        let (code, source) = match variant {
+            MaskVariant::Attachments => (shaders::SHADOW_MASK_COMP, ""),
+            MaskVariant::Words => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words"),
+            MaskVariant::WordsForScoring => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words, for scoring"),
         };
+        let write_label_and_gradient = u32::from(variant != MaskVariant::WordsForScoring);
         let pipeline = |test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
@@ -108,6 +122,7 @@ impl MaskPipelines {
                     LINK_INDEX_SHIFT,
                     LINK_SAME_WAY,
                     LINK_EDGE_MASK,
+                    write_label_and_gradient,
                 ],
                 &format!("{name}{source}"),
             )

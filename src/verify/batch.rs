@@ -280,7 +280,9 @@ pub(crate) fn count_batch(
                     bindings.record(enc.cmd, score_pass, &ScoreConstants { counts_offset: offset as u32, ..effects });
                 }
             };
-            passes.record(&mut enc, &slots[recorded % slots.len()], job, &Sink::Compute(&record_scores), None);
+            // The unshadowed labels are the range view's.
+            let sink = Sink::Compute { record: &record_scores, reads_range_label: item.unshadowed_offset.is_some() };
+            passes.record(&mut enc, &slots[recorded % slots.len()], job, &sink, None);
         }
         enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
         let region = [vk::BufferCopy::default().size(bytes)];
