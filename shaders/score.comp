@@ -27,12 +27,9 @@ layout(set = 0, binding = 7, std430) readonly buffer MeasuredZ { float measured_
 
 layout(push_constant, std430) uniform Score {
     uint counts_offset;     // this hypothesis' first counter word
-    uint use_shadowed;      // 1: labels from the shadow mask's output; 0: range_label
     uint width;
     uint height;
     float z_origin;         // the range view's z is stored as an offset from this
-    uint use_losses;        // 1: drop the pixels an effect lost
-    uint use_measured_z;    // 1: z from measured_z, not the range view
     uvec4 region;           // the pixels that may hold the model: first column, first row, width, height
     uint surfaces;          // M
     uint segments;          // K
@@ -50,11 +47,16 @@ layout(constant_id = 2) const uint N0 = 0xffffffffu;
 layout(constant_id = 3) const uint POPULATIONS = 0xffffffffu;
 // Pixels an invocation scores, consecutive in a row (given by the host, score_pass.rs).
 layout(constant_id = 4) const uint RUN = 1u;
+// What the pass counts from (ScoreSources, score_pass.rs), one pipeline each: lavapipe runs
+// both sides of a branch on a uniform value, so each read not needed would still be made.
+layout(constant_id = 5) const bool USE_SHADOWED = false;   // labels from the shadow mask's output, not range_label
+layout(constant_id = 6) const bool USE_LOSSES = false;     // drop the pixels an effect lost
+layout(constant_id = 7) const bool USE_MEASURED_Z = false; // z from measured_z, not the range view
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
 float synthetic_z(ivec2 p) {
-    if (s.use_measured_z != 0u) {
+    if (USE_MEASURED_Z) {
         return measured_z[uint(p.y) * s.width + uint(p.x)];
     }
     precise float z = imageLoad(range_z, p).r + s.z_origin;
@@ -66,10 +68,10 @@ uint synthetic(ivec2 p) {
     if (any(greaterThanEqual(uvec2(p) - s.region.xy, s.region.zw))) {
         return 0u;
     }
-    if (s.use_losses != 0u && loss[uint(p.y) * s.width + uint(p.x)] != 0u) {
+    if (USE_LOSSES && loss[uint(p.y) * s.width + uint(p.x)] != 0u) {
         return 0u;
     }
-    if (s.use_shadowed == 0u) {
+    if (!USE_SHADOWED) {
         return imageLoad(range_label, p).r;
     }
     return shadowed_label[uint(p.y) * s.width + uint(p.x)];

@@ -13,7 +13,7 @@
 //! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
 //! device-local buffer, zeroed first, copied to host memory at the end.
 
-use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass};
+use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass, ScoreSources};
 use crate::effects::Effects;
 use crate::error::Result;
 use crate::exact::{render_exact, ExactObject};
@@ -240,13 +240,9 @@ pub(crate) fn count_batch(
         for (recorded, (item, job)) in items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate() {
             let score = |offset: usize| ScoreConstants {
                 counts_offset: offset as u32,
-                use_shadowed: 0,
                 width: sensor.width,
                 height: sensor.height,
                 z_origin: job.views.origin.z as f32,
-                use_losses: 0,
-                use_measured_z: 0,
-                _pad: 0,
                 region: [job.area.col, job.area.row, job.area.width, job.area.height],
                 surfaces: item.surfaces,
                 segments: settings.sensed.segment_count,
@@ -266,18 +262,18 @@ pub(crate) fn count_batch(
                 let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
                 buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
                 enc.access(&range_reads, &buffers);
-                let effects = ScoreConstants {
-                    use_losses: u32::from(images.losses.is_some()),
-                    use_measured_z: u32::from(images.measured_z.is_some()),
-                    ..score(item.counts_offset)
+                let sources = ScoreSources {
+                    shadowed: images.shadowed_labels.is_some(),
+                    losses: images.losses.is_some(),
+                    measured_z: images.measured_z.is_some(),
                 };
-                let use_shadowed = u32::from(images.shadowed_labels.is_some());
-                bindings.record(enc.cmd, score_pass, &ScoreConstants { use_shadowed, ..effects });
+                bindings.record(enc.cmd, score_pass, sources, &score(item.counts_offset));
                 // Counted again unshadowed only where a shadow pass ran; else the verifier
                 // copies the counts. The counts are written again: ordered after the first.
                 if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
                     enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-                    bindings.record(enc.cmd, score_pass, &ScoreConstants { counts_offset: offset as u32, ..effects });
+                    let unshadowed = ScoreSources { shadowed: false, ..sources };
+                    bindings.record(enc.cmd, score_pass, unshadowed, &score(offset));
                 }
             };
             // The unshadowed labels are the range view's.
