@@ -43,7 +43,6 @@ layout(set = 0, binding = 5, std430) buffer LargeArgs { uvec4 large_args; };
 // Matches `CoverageConstants` in src/render/compute_raster.rs.
 layout(push_constant, std430) uniform Coverage {
     RasterView views[2];
-    uint view_count;     // 1: the range view alone; 2: and the shadow view
     uint triangles;      // the mesh's triangle count
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
 } r;
@@ -60,6 +59,9 @@ const float NEAR = 8192.0;
 // Workgroups a dispatch is given at most along x (every device allows 65,535), given by the
 // host (compute_raster.rs): the large triangles' workgroups stride over the rest of the queue.
 layout(constant_id = 0) const uint MAX_GROUPS = 1u;
+// 1: the range view alone; 2: and the shadow view. One pipeline each (compute_raster.rs): a
+// software rasterizer would run the shadow view's code even where it has none.
+layout(constant_id = 1) const uint VIEW_COUNT = 2u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -295,7 +297,7 @@ void main() {
     // The normal first: a triangle culled in every view needs no corners.
     vec3 normal = mesh_normal(range_draw, t);
     bool in_range = !culled(range_draw, normal);
-    bool in_shadow = r.view_count > 1u && !culled(shadow_draw, normal);
+    bool in_shadow = VIEW_COUNT > 1u && !culled(shadow_draw, normal);
     if (!in_range && !in_shadow) {
         return;
     }

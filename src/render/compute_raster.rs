@@ -115,14 +115,13 @@ struct RasterView {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CoverageConstants {
     views: [RasterView; 2],
-    view_count: u32,
     triangles: u32,
     cull: i32,
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, view_count) == 64);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 72);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, triangles) == 64);
+const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 68);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -151,7 +150,9 @@ const COVERAGE_GROUP: u32 = 64;
 const MAX_GROUPS: u32 = 65_535;
 
 pub struct ComputeRasterPipelines {
-    coverage: ComputePipeline,
+    /// The small triangles' coverage of the range view alone, and of both views.
+    coverage_range: ComputePipeline,
+    coverage_both: ComputePipeline,
     large: ComputePipeline,
     resolve: ComputePipeline,
     /// The shadow mask reading the shadow view's words (shadow_pass.rs), writing the range
@@ -167,11 +168,15 @@ impl ComputeRasterPipelines {
         // and its words.
         let coverage = (0, 6);
         let coverage_push = size_of::<CoverageConstants>();
-        // The coverage shader's one specialization constant: MAX_GROUPS.
-        let covering = |code, name| ComputePipeline::new(ctx, coverage, coverage_push, code, &[MAX_GROUPS], name);
+        // The coverage shader's specialization constants: MAX_GROUPS, and the views it covers
+        // (the large triangles' pass reads each queued triangle's view).
+        let covering = |code, views: u32, name| {
+            ComputePipeline::new(ctx, coverage, coverage_push, code, &[MAX_GROUPS, views], name)
+        };
         Ok(Self {
-            coverage: covering(shaders::RASTER_COMP, "compute raster coverage")?,
-            large: covering(shaders::RASTER_LARGE_COMP, "compute raster coverage (large triangles)")?,
+            coverage_range: covering(shaders::RASTER_COMP, 1, "compute raster coverage (range view)")?,
+            coverage_both: covering(shaders::RASTER_COMP, 2, "compute raster coverage (both views)")?,
+            large: covering(shaders::RASTER_LARGE_COMP, 2, "compute raster coverage (large triangles)")?,
             resolve: ComputePipeline::new(
                 ctx,
                 (ViewKind::Range.colour_attachments().len(), 2),
@@ -257,7 +262,7 @@ impl<'a> ComputeViews<'a> {
         let second = shadow.as_ref().unwrap_or(&range);
         let coverage = StorageSet::new(
             ctx,
-            pipelines.coverage.set_layout,
+            pipelines.coverage_both.set_layout,
             &[],
             &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
             &format!("{name} coverage bindings"),
@@ -330,7 +335,6 @@ impl<'a> ComputeViews<'a> {
         let triangles = draw.mesh.index_count / 3;
         let constants = CoverageConstants {
             views: [range, shadow.unwrap_or(range)],
-            view_count: 1 + u32::from(shadow.is_some()),
             triangles,
             cull: cull_sign(draw.mesh.solidity),
         };
@@ -345,7 +349,8 @@ impl<'a> ComputeViews<'a> {
         enc.access(&[], &coverage_uses(Access::ComputeWrite, Access::ComputeWrite));
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
-        self.coverage.dispatch(cmd, &pipelines.coverage, bytemuck::bytes_of(&constants), coverage_groups);
+        let coverage = if shadow.is_some() { &pipelines.coverage_both } else { &pipelines.coverage_range };
+        self.coverage.dispatch(cmd, coverage, bytemuck::bytes_of(&constants), coverage_groups);
         enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
         self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
         if shadow.is_some() {
