@@ -13,12 +13,11 @@
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic, by tiles of at most 8 × 8 pixels, each first as coverage bits, then keeping
-// each covered pixel. A triangle whose box in a view holds more than LARGE_PIXELS pixels, or whose
-// corners lie more than 32 pixels from its box's first pixel centre (beyond 32-bit edge
-// functions; so is any box over 33 pixels a side), is queued for that view instead, and
-// LARGE_TRIANGLES, dispatched indirectly, gives each queued (triangle, view) a workgroup whose
-// 64 invocations share its rows, in 64-bit arithmetic: one invocation never serialises
-// thousands of pixels.
+// each covered pixel, up to 33 × 33 pixels (25 tiles). A triangle whose corners lie more than
+// 32 pixels from its box's first pixel centre (beyond 32-bit edge functions; so does any box
+// over 33 pixels a side) is queued for that view instead, and LARGE_TRIANGLES, dispatched
+// indirectly, gives each queued (triangle, view) a workgroup whose 64 invocations share its
+// rows, in 64-bit arithmetic: one invocation never serialises thousands of pixels.
 //
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
@@ -48,9 +47,6 @@ layout(push_constant, std430) uniform Coverage {
 } r;
 
 const uint VIEW_BIT = 31u;
-
-// A triangle with more pixels in its bounding box than this is queued.
-const int LARGE_PIXELS = 256;
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -250,11 +246,14 @@ void cover_tile(uint v, uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e
     }
 }
 
-// A box wider or taller than 8 pixels (at most LARGE_PIXELS), tile by tile. Walking such a
-// box pixel by pixel with a keep at each took the dense sphere's coverage at 1024², where
-// many of its triangles' boxes are 9 pixels or more on a side, 31–32 ms; by tiles, 21–23 ms.
-// (Every box by tiles, the one-tile boxes too, cost 12% more at 256².) The edge functions at
-// a tile's first pixel lie in the box, below 2^30: the sum wraps to them exactly.
+// A box wider or taller than 8 pixels (at most 33), tile by tile. Walking such a box pixel
+// by pixel with a keep at each took the dense sphere's coverage at 1024², where many of its
+// triangles' boxes are 9 pixels or more on a side, 31–32 ms; by tiles, 21–23 ms. (Every box
+// by tiles, the one-tile boxes too, cost 12% more at 256².) Boxes of more than 256 pixels had
+// been queued for the large triangles' pass; covered here, by tiles, a 9,800-triangle sphere's
+// coverage at 1024² went from 38 to 18–21 ms, a 960-triangle sphere's at 256² from 2.9 to
+// 0.9 ms. The edge functions at a tile's first pixel lie in the box, below 2^30: the sum
+// wraps to them exactly.
 void cover_tiles(uint v, uint t, Setup s, Edges32 e) {
     ivec2 box = s.last - s.first + 1;
     for (int ty = 0; ty < box.y; ty += 8) {
@@ -264,8 +263,7 @@ void cover_tiles(uint v, uint t, Setup s, Edges32 e) {
     }
 }
 
-// Covers a triangle's pixels in view v, or queues it there if its box is large or its
-// corners far.
+// Covers a triangle's pixels in view v, or queues it there if its corners are far.
 void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     Setup s = set_up(d, r.views[v], m);
     ivec2 box = s.last - s.first + 1;
@@ -277,7 +275,7 @@ void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     // pixels a side; beyond, the triangle is queued).
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
-    if (box.x * box.y > LARGE_PIXELS || !near) {
+    if (!near) {
         queue_large(t, v);
         return;
     }

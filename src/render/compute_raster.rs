@@ -7,10 +7,10 @@
 //!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
 //!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle) on that
-//!   view's words. A triangle whose bounding box in a view holds more than 256
-//!   pixels, or whose corners lie too far from its box for 32 bits, is queued for that view
-//!   instead, and a second, indirect dispatch gives each queued (triangle, view) a workgroup of
-//!   64 invocations, in 64-bit arithmetic. Where the mesh bounds a solid (src/mesh/solid.rs), a
+//!   view's words, by tiles of 8 × 8 pixels. A triangle whose corners lie too far from its
+//!   box for 32 bits (more than 32 pixels) is queued for that view instead, and a second,
+//!   indirect dispatch gives each queued (triangle, view) a workgroup of 64 invocations, in
+//!   64-bit arithmetic. Where the mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
 //! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
