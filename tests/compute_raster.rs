@@ -149,15 +149,17 @@ fn a_view_of_several_objects_stays_on_the_graphics_path() {
 fn auto_takes_the_compute_rasterizer_for_dense_models_only() {
     assert_eq!(Raster::default(), Raster::Auto);
     let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 45.0);
+    let wide = centred_sensor(160, 160, 0.05, [0.0, 0.0], 45.0);
     // Footprints with their 2-pixel margins: the sphere's about 33² pixels, so 3,968 triangles
-    // are 3.6 a pixel; the box's about 54² pixels, so 12 triangles are 0.004 a pixel. The
-    // crossover is 0.05.
-    for (objects, expected) in [
-        (vec![("builtin:sphere:64", DMat4::IDENTITY)], Raster::Compute),
-        (vec![("builtin:box", turned())], Raster::Graphics),
-        (vec![("builtin:sphere:64", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)], Raster::Graphics),
+    // are 3.6 a pixel; the box's about 54² pixels, so 12 triangles are 0.004 a pixel; the
+    // plane's 2 triangles fill the wide image, 0.00008 a pixel. The crossover is 0.0001.
+    for (sensor, objects, expected) in [
+        (s, vec![("builtin:sphere:64", DMat4::IDENTITY)], Raster::Compute),
+        (s, vec![("builtin:box", turned())], Raster::Compute),
+        (wide, vec![("builtin:plane:10", DMat4::IDENTITY)], Raster::Graphics),
+        (s, vec![("builtin:sphere:64", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)], Raster::Graphics),
     ] {
-        let sc = scene(s, ShadowMode::Depth, &objects);
+        let sc = scene(sensor, ShadowMode::Depth, &objects);
         let auto = render_with(&AUTO, &sc);
         assert_eq!(auto.raster, expected, "{objects:?}");
         assert!(auto.label == render(&sc).label, "{objects:?}: the same image as the graphics pipeline's");
@@ -166,22 +168,24 @@ fn auto_takes_the_compute_rasterizer_for_dense_models_only() {
 
 #[test]
 fn verification_counts_are_the_same_bits_with_either_rasterizer() {
-    let s = centred_sensor(96, 96, 0.045, [0.0, 0.0], 45.0);
+    let s = centred_sensor(160, 160, 0.045, [0.0, 0.0], 45.0);
     let step = DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44);
     let sensed_image =
         rangesynth::io::RangeImage::from(&render(&scene(s, ShadowMode::Depth, &[("builtin:step", step)])));
     let sensed = SensedImage::new(&sensed_image, &s).unwrap();
     let hypotheses = |verifier: &Verifier| -> Vec<Hypothesis> {
-        ["builtin:step", "builtin:sphere:100", "builtin:box"]
+        // The plane fills the image: 2 triangles over 25,600 pixels, below `auto`'s crossover.
+        ["builtin:step", "builtin:sphere:100", "builtin:box", "builtin:plane:8"]
             .iter()
             .enumerate()
             .flat_map(|(m, model)| {
                 let model = verifier.model(model, Path::new(".")).unwrap();
+                let bindings = if model.mesh.surface_count() > 1 { vec![(1, 1), (2, 1)] } else { vec![(1, 1)] };
                 (0..4).map(move |k| Hypothesis {
                     id: format!("{m}-{k}"),
                     model: model.clone(),
                     pose: step * DMat4::from_rotation_z(0.05 * f64::from(k)),
-                    bindings: vec![(1, 1), (2, 1)],
+                    bindings: bindings.clone(),
                 })
             })
             .collect()
@@ -213,7 +217,7 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         };
         let graphics = counts(&VERIFIER);
         assert_eq!(counts(&COMPUTE), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
-        // Auto mixes both in one batch: the sphere by compute, the step and the box by graphics.
+        // Auto mixes both in one batch: the plane by graphics, the others by compute.
         assert_eq!(counts(&AUTO), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
     }
 }

@@ -7,7 +7,8 @@
 //! verified with the graphics pipeline and with the compute rasterizer, in the same run, for
 //! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
 //! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024², with
-//! label-mode and depth-mode shadows.
+//! label-mode and depth-mode shadows. Both take the fastest of five batches per rasterizer,
+//! the rasterizers in turn (`fastest_in_turn`).
 //! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
 //! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these three.
 //!
@@ -135,7 +136,7 @@ fn resident_kib(field: &str) -> Option<f64> {
 
 /// Milliseconds per hypothesis with each rasterizer for a model filling the image: its own
 /// render as the sensed image, 16 poses about the true one, with label-mode and depth-mode
-/// shadows (the best of three batches).
+/// shadows (the fastest of five batches each, the rasterizers in turn).
 fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
     println!("\nrasterizers, a model filling the image: batches of 16, ms per hypothesis");
     println!(
@@ -152,8 +153,8 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
         for mode in [ShadowMode::Label, ShadowMode::Depth] {
             let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
             let settings = settings(sensor, mode);
-            let mut millis = Vec::new();
             let mut triangles = 0;
+            let mut inputs = Vec::new();
             for verifier in verifiers {
                 let model = verifier.model(model_name, Path::new("."))?;
                 triangles = model.mesh.triangles.len();
@@ -180,14 +181,17 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
                     })
                     .collect();
                 verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
-                let mut best = f64::INFINITY;
-                for _ in 0..3 {
-                    let start = Instant::now();
-                    verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})?;
-                    best = best.min(start.elapsed().as_secs_f64() * 1e3 / hypotheses.len() as f64);
-                }
-                millis.push(best);
+                inputs.push((sensed, hypotheses));
             }
+            let jobs: Vec<_> = verifiers
+                .iter()
+                .zip(&inputs)
+                .map(|(verifier, (sensed, hypotheses))| {
+                    move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop)
+                })
+                .collect();
+            let seconds = fastest_in_turn(ROUNDS, &jobs)?;
+            let millis: Vec<f64> = seconds.iter().map(|s| s * 1e3 / 16.0).collect();
             let name = format!("{model_name} ({triangles}), {side}²");
             println!(
                 "{name:<34} {:>6} {:>12.2} {:>12.2} {:>9.2}×",
@@ -225,9 +229,9 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
     };
     for model_name in models {
         let settings = settings(scene.sensor, ShadowMode::Depth);
-        let mut rates = Vec::new();
         let mut triangles = 0;
         let mut density = 0.0;
+        let mut batches = Vec::new();
         for verifier in verifiers {
             let model = verifier.model(model_name, Path::new("."))?;
             triangles = model.mesh.triangles.len();
@@ -239,18 +243,36 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             density = triangles as f64 / (f64::from(area.width) * f64::from(area.height));
             let hypotheses = hypotheses(&model, 64);
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
-            let mut best = 0.0f64;
-            for _ in 0..3 {
-                let start = Instant::now();
-                verifier.verify(sensed, &settings, &hypotheses, &mut |_| {})?;
-                best = best.max(hypotheses.len() as f64 / start.elapsed().as_secs_f64());
-            }
-            rates.push(best);
+            batches.push(hypotheses);
         }
+        let jobs: Vec<_> = verifiers
+            .iter()
+            .zip(&batches)
+            .map(|(verifier, hypotheses)| move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop))
+            .collect();
+        let rates: Vec<f64> = fastest_in_turn(ROUNDS, &jobs)?.iter().map(|s| 64.0 / s).collect();
         let name = format!("{model_name} ({triangles})");
         println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
+}
+
+/// Batches each rasterizer verifies in the rasterizer tables, in turn.
+const ROUNDS: usize = 5;
+
+/// The fastest of `rounds` timings (seconds) of each job, the jobs taken in turn (the first,
+/// the second, the first, …), so that a change in this shared machine's load touches each
+/// alike: timed one after the other, a ratio moved by up to ±30% from run to run.
+fn fastest_in_turn(rounds: usize, jobs: &[impl Fn() -> rangesynth::Result<()>]) -> anyhow::Result<Vec<f64>> {
+    let mut fastest = vec![f64::INFINITY; jobs.len()];
+    for _ in 0..rounds {
+        for (job, fastest) in jobs.iter().zip(&mut fastest) {
+            let start = Instant::now();
+            job()?;
+            *fastest = fastest.min(start.elapsed().as_secs_f64());
+        }
+    }
+    Ok(fastest)
 }
 
 /// Verification in shadow mode `mode` without effects, τ = 0.1, in chunks of 1,024.

@@ -37,8 +37,8 @@ pub struct Cli {
     memory_budget: Option<String>,
     /// Render with the graphics pipeline or the compute rasterizer, which renders views of one
     /// object (every verify hypothesis) and leaves the others to the graphics pipeline; auto
-    /// (the default) takes the compute rasterizer for models of at least 0.05 triangles per
-    /// pixel of their footprint, where the device has it.
+    /// (the default) takes the compute rasterizer for models of at least 0.0001 triangles per
+    /// pixel of their footprint (render::COMPUTE_CROSSOVER), where the device has it.
     #[arg(long, global = true, value_name = "auto|graphics|compute", default_value = "auto")]
     raster: Raster,
     #[command(subcommand)]

@@ -54,14 +54,16 @@ pub enum Raster {
 }
 
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
-/// lavapipe with `bench_verify --rasters` (depth-mode verification at 256², batches of 64,
-/// compute against graphics in the same run; three runs, 2026-11-23): spheres of 0.015
-/// triangles per footprint pixel ran 0.92–1.02× as fast (0.68–1.37× a session before), 0.071
-/// 1.20–1.43× (1.09–1.66× in earlier sessions; once 0.93×), 0.17 1.22–1.68×, 0.31
-/// 1.52–1.67×, 0.70 1.74–2.21×, 1.3 1.87–2.31×, 3.1 2.89–3.51×, 32 6.35–9.18×; the box,
-/// 0.001, 0.73–0.97×. Compute starts to win between 0.015 and 0.071. No other device has been
-/// measured yet; they use the same rule.
-pub const COMPUTE_CROSSOVER: f64 = 0.05;
+/// lavapipe with `bench_verify --rasters` (compute against graphics in the same run, batches
+/// taken in turn; three runs, 2026-11-23): in depth-mode verification at 256², batches of 64,
+/// the box, 0.001 triangles per footprint pixel, ran 1.13–1.16× as fast (0.73–0.97× before
+/// its coverage and the score pass were reworked that day), spheres of 0.015 1.20–1.45×,
+/// 0.071 1.34–1.60×, 0.17 1.38–1.65×, 0.31 1.61–1.67×, 0.70 1.74–2.21×, 1.3 1.97–2.41×, 3.1
+/// 2.88–3.50×, 32 7.33–8.12×; the box filling a 256² image, 0.00018, 1.06–1.32× in label
+/// mode and 1.03–1.13× in depth mode. Filling 512², 0.000046, it ran 0.70–0.80× (label) and
+/// 0.90–0.95× (depth) as fast (two runs of batches of 16). Compute starts to win between
+/// 0.000046 and 0.00018. No other device has been measured yet; they use the same rule.
+pub const COMPUTE_CROSSOVER: f64 = 0.0001;
 
 impl Raster {
     pub fn as_str(self) -> &'static str {
