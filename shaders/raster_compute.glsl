@@ -8,7 +8,8 @@
 // One view as the passes see it; matches `RasterView` in src/render/compute_raster.rs.
 struct RasterView {
     uvec4 area;        // the pixels to draw: first column, first row, width, height
-    uint draw;         // the draw's entry in the view's draw table
+    uint draw;         // the draw's entry in the view's draw table (the coverage passes
+                       // read a copy of that entry; raster.comp)
     uint stride;       // pixels per row of the view's words (the attachments' width)
     uint pad0, pad1;
 };

@@ -17,6 +17,8 @@ pub enum Access {
     ComputeRead,
     /// Written (or atomically updated) in a compute shader.
     ComputeWrite,
+    /// Read in a compute shader as a uniform buffer.
+    UniformRead,
     TransferRead,
     TransferWrite,
     /// Mapped memory read by the host after the fence.
@@ -33,6 +35,7 @@ impl Access {
         matches!(
             self,
             Access::ComputeRead
+                | Access::UniformRead
                 | Access::TransferRead
                 | Access::HostRead
                 | Access::DrawAndComputeRead
@@ -56,6 +59,7 @@ fn describe(access: Access) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::I
         ),
         Access::ComputeRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
         Access::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL),
+        Access::UniformRead => (S::COMPUTE_SHADER, A::UNIFORM_READ, L::GENERAL),
         Access::TransferRead => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
         Access::TransferWrite => (S::COPY | S::CLEAR, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL),

@@ -1,6 +1,7 @@
 //! A compute pipeline with its descriptor-set layout (one binding per resource, compute stage)
 //! and push constants, owning all three: what each compute pass of the product is built on.
 
+use super::descriptors::SetShape;
 use super::shaders::ShaderModule;
 use super::GpuContext;
 use crate::error::{Error, Result, VkResultExt};
@@ -15,23 +16,21 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// A compute pipeline whose set 0 binds `images` storage images then `buffers` storage
-    /// buffers, from binding 0 (compute stage; the order a [`StorageSet`](super::StorageSet)
-    /// writes them in), whose push constants are `push_size` bytes, and whose u32 specialization constants
+    /// A compute pipeline whose set 0 binds the resources of `shape`, from binding 0 (compute
+    /// stage; the order a [`StorageSet`](super::StorageSet) writes them in), whose push constants are `push_size` bytes, and whose u32 specialization constants
     /// `constant_id = 0, 1, …` take the values of `constants`: codes the host defines once
     /// (such as the shadow tests) reach the shader from that one definition.
     pub fn new(
         ctx: &Arc<GpuContext>,
-        (images, buffers): (usize, usize),
+        shape: SetShape,
         push_size: usize,
         spirv: &[u8],
         constants: &[u32],
         name: &str,
     ) -> Result<Self> {
         let d = &ctx.device;
-        let types = std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, images)
-            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, buffers));
-        let bindings: Vec<_> = types
+        let bindings: Vec<_> = shape
+            .types()
             .enumerate()
             .map(|(b, ty)| {
                 vk::DescriptorSetLayoutBinding::default()

@@ -1,11 +1,36 @@
-//! An owned descriptor set of storage images (GENERAL layout) followed by storage buffers,
-//! bound in that order from binding 0, with its own pool so dropping it frees everything;
-//! and the one way compute passes are recorded with it.
+//! An owned descriptor set of storage images (GENERAL layout), then uniform buffers, then
+//! storage buffers, bound in that order from binding 0, with its own pool so dropping it frees
+//! everything; and the one way compute passes are recorded with it.
 
 use super::{Buffer, ComputePipeline, GpuContext, Image};
 use crate::error::{Result, VkResultExt};
 use ash::vk;
 use std::sync::Arc;
+
+/// How many resources of each kind a set binds, in binding order.
+#[derive(Debug, Clone, Copy)]
+pub struct SetShape {
+    pub images: usize,
+    /// Read-only blocks a dispatch reads at offsets the same for every invocation: a software
+    /// rasterizer loads such a value once for all its lanes, where it loads a storage buffer's
+    /// lane by lane.
+    pub uniform_buffers: usize,
+    pub storage_buffers: usize,
+}
+
+impl SetShape {
+    /// Storage images and storage buffers only.
+    pub fn storage(images: usize, storage_buffers: usize) -> Self {
+        Self { images, uniform_buffers: 0, storage_buffers }
+    }
+
+    /// The descriptor type of each binding, from binding 0.
+    pub(crate) fn types(self) -> impl Iterator<Item = vk::DescriptorType> {
+        std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, self.images)
+            .chain(std::iter::repeat_n(vk::DescriptorType::UNIFORM_BUFFER, self.uniform_buffers))
+            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, self.storage_buffers))
+    }
+}
 
 pub struct StorageSet {
     ctx: Arc<GpuContext>,
@@ -18,23 +43,21 @@ impl StorageSet {
         ctx: &Arc<GpuContext>,
         layout: vk::DescriptorSetLayout,
         images: &[&Image],
-        buffers: &[&Buffer],
+        (uniforms, buffers): (&[&Buffer], &[&Buffer]),
         name: &str,
     ) -> Result<Self> {
         let d = &ctx.device;
-        let mut sizes = Vec::new();
-        if !images.is_empty() {
-            sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_IMAGE,
-                descriptor_count: images.len() as u32,
-            });
-        }
-        if !buffers.is_empty() {
-            sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_BUFFER,
-                descriptor_count: buffers.len() as u32,
-            });
-        }
+        let shape = SetShape { images: images.len(), uniform_buffers: uniforms.len(), storage_buffers: buffers.len() };
+        let kinds = [
+            (vk::DescriptorType::STORAGE_IMAGE, shape.images),
+            (vk::DescriptorType::UNIFORM_BUFFER, shape.uniform_buffers),
+            (vk::DescriptorType::STORAGE_BUFFER, shape.storage_buffers),
+        ];
+        let sizes: Vec<_> = kinds
+            .iter()
+            .filter(|(_, count)| *count > 0)
+            .map(|&(ty, count)| vk::DescriptorPoolSize { ty, descriptor_count: count as u32 })
+            .collect();
         // SAFETY: valid device.
         let pool = unsafe {
             d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
@@ -54,16 +77,26 @@ impl StorageSet {
             .iter()
             .map(|i| [vk::DescriptorImageInfo::default().image_view(i.view).image_layout(vk::ImageLayout::GENERAL)])
             .collect();
-        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-            buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
-        let write = |binding: usize| vk::WriteDescriptorSet::default().dst_set(owned.set).dst_binding(binding as u32);
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = uniforms
+            .iter()
+            .chain(buffers)
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)])
+            .collect();
+        let write = |binding: usize, ty| {
+            vk::WriteDescriptorSet::default().dst_set(owned.set).dst_binding(binding as u32).descriptor_type(ty)
+        };
+        let buffer_types = shape.types().skip(images.len());
         let writes: Vec<_> = image_infos
             .iter()
             .enumerate()
-            .map(|(b, info)| write(b).descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(info))
-            .chain(buffer_infos.iter().enumerate().map(|(b, info)| {
-                write(images.len() + b).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info)
-            }))
+            .map(|(b, info)| write(b, vk::DescriptorType::STORAGE_IMAGE).image_info(info))
+            .chain(
+                buffer_infos
+                    .iter()
+                    .zip(buffer_types)
+                    .enumerate()
+                    .map(|(b, (info, ty))| write(images.len() + b, ty).buffer_info(info)),
+            )
             .collect();
         // SAFETY: the set, views and buffers are alive.
         unsafe { d.update_descriptor_sets(&writes, &[]) };

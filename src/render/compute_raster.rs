@@ -10,7 +10,8 @@
 //!   view's words, by tiles of 8 × 8 pixels. A triangle whose corners lie too far from its
 //!   box for 32 bits (more than 32 pixels) is queued for that view instead, and a second,
 //!   indirect dispatch gives each queued (triangle, view) a workgroup of 64 invocations, in
-//!   64-bit arithmetic. Where the mesh bounds a solid (src/mesh/solid.rs), a
+//!   64-bit arithmetic. Each view's draw reaches both as a uniform block, copied from its draw
+//!   table before them. Where the mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
 //! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
@@ -30,11 +31,14 @@
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
 //! renders, the graphics pipeline elsewhere.
 
+use super::draw::DrawConstants;
 use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
-use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, StorageSet};
+use crate::gpu::{
+    shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, SetShape, StorageSet,
+};
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
 use ash::vk;
@@ -165,10 +169,10 @@ pub struct ComputeRasterPipelines {
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        // Coverage binds both views' draw tables and visibility words, the large-triangle
+        // Coverage binds both views' draws, then their visibility words, the large-triangle
         // queue and its dispatch arguments; resolve the range view's attachments, its table
         // and its words.
-        let coverage = (0, 6);
+        let coverage = SetShape { images: 0, uniform_buffers: 1, storage_buffers: 4 };
         let coverage_push = size_of::<CoverageConstants>();
         // The coverage shader's specialization constants: MAX_GROUPS, and the views it covers
         // (the large triangles' pass reads each queued triangle's view).
@@ -181,7 +185,7 @@ impl ComputeRasterPipelines {
             large: covering(shaders::RASTER_LARGE_COMP, 2, "compute raster coverage (large triangles)")?,
             resolve: ComputePipeline::new(
                 ctx,
-                (ViewKind::Range.colour_attachments().len(), 2),
+                SetShape::storage(ViewKind::Range.colour_attachments().len(), 2),
                 size_of::<RasterView>(),
                 shaders::RASTER_RESOLVE_COMP,
                 &[],
@@ -219,6 +223,8 @@ pub(crate) struct ComputeViews<'a> {
     /// its indirect dispatch's (x, y, z), then its length.
     large: Buffer,
     large_args: Buffer,
+    /// The draw each view renders, copied from its draw table before each coverage pass.
+    draws: Buffer,
     coverage: StorageSet,
     resolve: StorageSet,
 }
@@ -248,7 +254,7 @@ impl<'a> ComputeViews<'a> {
             ctx,
             pipelines.resolve.set_layout,
             &images,
-            &[range.draw_table, &range.nearest],
+            (&[], &[range.draw_table, &range.nearest]),
             &format!("{name} resolve bindings"),
         )?;
         // A triangle is queued in a view at most once.
@@ -260,16 +266,21 @@ impl<'a> ComputeViews<'a> {
             ..BufferDesc::gpu_storage(16)
         };
         let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
+        let draws = BufferDesc {
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            ..BufferDesc::gpu_storage(2 * size_of::<DrawConstants>() as u64)
+        };
+        let draws = Buffer::new(ctx, draws, &format!("{name} coverage draws"))?;
         // Without a shadow view, the range view's table and words fill its bindings too.
         let second = shadow.as_ref().unwrap_or(&range);
         let coverage = StorageSet::new(
             ctx,
             pipelines.coverage_both.set_layout,
             &[],
-            &[range.draw_table, second.draw_table, &range.nearest, &second.nearest, &large, &large_args],
+            (&[&draws], &[&range.nearest, &second.nearest, &large, &large_args]),
             &format!("{name} coverage bindings"),
         )?;
-        Ok(Self { range, shadow, large, large_args, coverage, resolve })
+        Ok(Self { range, shadow, large, large_args, draws, coverage, resolve })
     }
 
     /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
@@ -314,8 +325,10 @@ impl<'a> ComputeViews<'a> {
             })
             .collect();
         let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
-        cleared.push((&self.large_args, Access::TransferWrite));
+        cleared.extend([(&self.large_args, Access::TransferWrite), (&self.draws, Access::TransferWrite)]);
+        cleared.extend(self.views().map(|view| (view.draw_table, Access::TransferRead)));
         enc.access(&[], &cleared);
+        let entry = size_of::<DrawConstants>() as u64;
         // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
         // rows lie within the view's words, and their bytes are a multiple of 4.
         unsafe {
@@ -325,6 +338,12 @@ impl<'a> ComputeViews<'a> {
             }
             // No workgroups, an empty queue: (x, y, z, length).
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+            // Each view's draw; without a shadow view, the second is never read.
+            for (slot, view) in (0..).zip(self.views()) {
+                let copy =
+                    vk::BufferCopy { src_offset: u64::from(index) * entry, dst_offset: slot * entry, size: entry };
+                d.cmd_copy_buffer(cmd, view.draw_table.raw, self.draws.raw, &[copy]);
+            }
         }
         let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
             area: [area.col, area.row, area.width, area.height],
@@ -341,11 +360,8 @@ impl<'a> ComputeViews<'a> {
             cull: cull_sign(draw.mesh.solidity),
         };
         let coverage_uses = |queue: Access, args: Access| {
-            let mut uses: Vec<_> = self
-                .views()
-                .flat_map(|v| [(&v.nearest, Access::ComputeWrite), (v.draw_table, Access::ComputeRead)])
-                .collect();
-            uses.extend([(&self.large, queue), (&self.large_args, args)]);
+            let mut uses: Vec<_> = self.views().map(|v| (&v.nearest, Access::ComputeWrite)).collect();
+            uses.extend([(&self.large, queue), (&self.large_args, args), (&self.draws, Access::UniformRead)]);
             uses
         };
         enc.access(&[], &coverage_uses(Access::ComputeWrite, Access::ComputeWrite));

@@ -7,7 +7,7 @@
 use super::targets::ViewKind;
 use crate::effects::{Effect, Effects, EFFECT_ORDER, MAX_NOISE_INCIDENCE_DEG};
 use crate::error::Result;
-use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::sensor::{PixelRect, Sensor};
 use ash::vk;
 use std::sync::Arc;
@@ -123,7 +123,7 @@ impl EffectPipelines {
                 let name = format!("{} effect", effect.pass_name());
                 ComputePipeline::new(
                     ctx,
-                    (Self::IMAGES, Self::BUFFERS),
+                    SetShape::storage(Self::IMAGES, Self::BUFFERS),
                     size_of::<EffectConstants>(),
                     spirv,
                     &[reason, max_incidence],
@@ -183,7 +183,8 @@ impl EffectBuffers {
             measured_z.as_ref().unwrap_or(&placeholder),
             shape.reflectivities.unwrap_or(&placeholder),
         ];
-        let set = StorageSet::new(ctx, pipelines.set_layout(), &images, &buffers, &format!("{name} effect bindings"))?;
+        let set =
+            StorageSet::new(ctx, pipelines.set_layout(), &images, (&[], &buffers), &format!("{name} effect bindings"))?;
         Ok(Self { losses, measured_z, set, _placeholder: placeholder })
     }
 

@@ -487,6 +487,10 @@ pub(crate) fn draw_table<'a>(
     let name = format!("{kind:?} view draw table");
     match entries.is_empty() {
         true => Ok(None),
-        false => Ok(Some(Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, &name)?)),
+        false => {
+            // Read by the shadow mask, and copied entry by entry for the compute rasterizer.
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+            Ok(Some(Buffer::with_data(ctx, usage, &entries, &name)?))
+        }
     }
 }

@@ -17,7 +17,7 @@ use super::pipelines::Pipelines;
 use super::targets::{ViewKind, ViewTargets};
 use super::Views;
 use crate::error::Result;
-use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowTest, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
@@ -112,7 +112,7 @@ impl MaskPipelines {
         let pipeline = |test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
-                (MaskBindings::IMAGES, MaskBindings::BUFFERS),
+                SetShape::storage(MaskBindings::IMAGES, MaskBindings::BUFFERS),
                 size_of::<MaskConstants>(),
                 code,
                 &[
@@ -183,7 +183,7 @@ impl MaskBindings {
             None => [masked, draw_table, draw_table, draw_table, draw_table],
         };
         let set_layout = pipelines.mask.for_test(ShadowTest::Label).set_layout;
-        Ok(Self { set: StorageSet::new(ctx, set_layout, &images, &buffers, "shadow mask bindings")? })
+        Ok(Self { set: StorageSet::new(ctx, set_layout, &images, (&[], &buffers), "shadow mask bindings")? })
     }
 
     /// Records `test` with one of `pipelines` over the constants' region (8×8 workgroups).

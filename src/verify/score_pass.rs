@@ -3,7 +3,7 @@
 
 use super::counts::{N0_WORD, N1_MINUS_WORD, N1_PLUS_WORD, SCALARS};
 use crate::error::Result;
-use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use ash::vk;
 use std::sync::Arc;
 
@@ -77,7 +77,7 @@ impl ScorePass {
             // The range view's label and z; the buffers of ScoreInputs.
             ComputePipeline::new(
                 ctx,
-                (2, 6),
+                SetShape::storage(2, 6),
                 size_of::<ScoreConstants>(),
                 shaders::SCORE_COMP,
                 &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS, SCORE_RUN, flags[0], flags[1], flags[2]],
@@ -102,7 +102,7 @@ impl ScorePass {
             reads.measured_z,
         ];
         let set_layout = self.pipelines[0].set_layout;
-        let set = StorageSet::new(ctx, set_layout, &[reads.label, reads.z], &buffers, "score bindings")?;
+        let set = StorageSet::new(ctx, set_layout, &[reads.label, reads.z], (&[], &buffers), "score bindings")?;
         Ok(ScoreBindings { set })
     }
 }
