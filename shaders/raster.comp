@@ -47,6 +47,7 @@ layout(push_constant, std430) uniform Coverage {
     RasterView views[2];
     uint triangles;      // the mesh's triangle count
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
+    uint dealt_rows;     // blocks of the workgroups dealt over the stripes, per stripe (main)
 } r;
 
 const uint VIEW_BIT = 31u;
@@ -61,6 +62,9 @@ layout(constant_id = 0) const uint MAX_GROUPS = 1u;
 // 1: the range view alone; 2: and the shadow view. One pipeline each (compute_raster.rs): a
 // software rasterizer would run the shadow view's code even where it has none.
 layout(constant_id = 1) const uint VIEW_COUNT = 2u;
+// Workgroups a block, and stripes the blocks are dealt over (powers of two; main).
+layout(constant_id = 2) const uint DEAL_BLOCK = 1u;
+layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -288,8 +292,20 @@ void cover(uint v, DrawData d, uint t, MeshTriangle m) {
 void main() {
     DrawData range_draw = draws[0];
     DrawData shadow_draw = draws[1];
-    // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs).
-    uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs). A software
+    // rasterizer hands each of its threads a contiguous range of a dispatch's workgroups
+    // (lavapipe: the count over the threads), and a mesh's triangles lie in its file's order,
+    // near ones together: one range may hold every triangle facing the camera and another
+    // none (a UV sphere seen along its poles: the front half first). So the workgroups' blocks
+    // are dealt like cards: block b of the first DEAL_STRIPES × dealt_rows goes to the triangles
+    // of block (b mod DEAL_STRIPES) × dealt_rows + b / DEAL_STRIPES, and every range of blocks
+    // takes its share of each stripe of the mesh; the last blocks keep their place.
+    uint group = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
+    uint block = group / DEAL_BLOCK;
+    if (block < DEAL_STRIPES * r.dealt_rows) {
+        block = (block % DEAL_STRIPES) * r.dealt_rows + block / DEAL_STRIPES;
+    }
+    uint t = (block * DEAL_BLOCK + group % DEAL_BLOCK) * gl_WorkGroupSize.x + gl_LocalInvocationIndex;
     if (t >= r.triangles) {
         return;
     }
