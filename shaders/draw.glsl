@@ -9,11 +9,12 @@ struct DrawData {
     vec4 grid;               // x0, y0, dx, dy: the view's pixel (0, 0) centre and pitch
     vec2 size;               // width, height in pixels
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
-    uvec2 corners;           // device addresses of the mesh's triangles' corners (xyz,
-                             // nine floats a triangle: src/render/gpu_mesh.rs),
+    uvec2 triangles;         // device addresses of the mesh's triangles (TRIANGLE_FLOATS
+                             // each: corners' xyz, then the unit normal's, model frame,
+                             // f64-derived; src/render/gpu_mesh.rs, TriangleRecord),
     uvec2 pad;               // (unused)
-    uvec2 surface_ids;       // its per-triangle surface ids,
-    uvec2 normals;           // and its per-triangle unit normals (model frame, f64-derived)
+    uvec2 surface_ids;       // and of its per-triangle surface ids
+    uvec2 pad2;              // (unused)
     uint label_base;         // label = label_base + surface id
     uint draw_index;         // this draw's entry in the draw table (shadow view)
     uvec2 links;             // device address of what lies across each triangle's edges
@@ -51,18 +52,22 @@ float tie_depth(DrawData d) {
     return TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x);
 }
 
-// Corner k (0, 1, 2) of a triangle as the mesh stores it (model frame): one read that views
-// of the same mesh can share (shaders/raster.comp renders both views from it).
+// Floats of a triangle's record (TriangleRecord, src/render/gpu_mesh.rs): its corners' xyz,
+// then its unit normal's.
+const uint TRIANGLE_FLOATS = 12u;
+
+// Corner k (0, 1, 2) of a triangle as the mesh stores it (model frame).
 vec3 mesh_corner(DrawData d, uint triangle, uint k) {
-    uint at = 9u * triangle + 3u * k;
-    Floats p = Floats(d.corners);
+    uint at = TRIANGLE_FLOATS * triangle + 3u * k;
+    Floats p = Floats(d.triangles);
     return vec3(p.value[at], p.value[at + 1u], p.value[at + 2u]);
 }
 
 // A triangle's unit normal as the mesh stores it (model frame).
 vec3 mesh_normal(DrawData d, uint triangle) {
-    Floats n = Floats(d.normals);
-    return vec3(n.value[3u * triangle], n.value[3u * triangle + 1u], n.value[3u * triangle + 2u]);
+    uint at = TRIANGLE_FLOATS * triangle + 9u;
+    Floats p = Floats(d.triangles);
+    return vec3(p.value[at], p.value[at + 1u], p.value[at + 2u]);
 }
 
 // Corner k (0, 1, 2) of a triangle, in the view's frame.
@@ -101,15 +106,21 @@ struct RangePixel {
     vec2 gradient;
 };
 
+// The range view at pixel (c, r), given as floats, of a triangle with this first corner and
+// unit normal (model frame, as the mesh stores them) and label: see range_pixel.
+RangePixel range_pixel_of(DrawData d, vec3 corner, vec3 normal, uint label, vec2 pixel) {
+    vec3 n = rotate_to_view(d, normal);
+    return RangePixel(label, plane_z(d, to_view(d, corner), n, pixel), vec2(-n.x / n.z, -n.y / n.z));
+}
+
 // The range view at pixel (c, r), given as floats, that triangle t of draw d covers: its label, and the view-frame z
 // and gradient of the triangle's plane at the exact pixel centre rather than interpolated
 // (interpolation error grows with a facet's slope, the plane does not). The plane's normal is
 // the triangle's unit normal, computed once in f64 on the host (src/render/gpu_mesh.rs): a
 // cross product of a sliver's nearly parallel edges here, in f32, would lose most of its
 // digits. The one definition for the graphics path (raster.frag) and the compute rasterizer's
-// resolve (raster_resolve.comp, shadow_mask.comp), so that both write the same bits.
+// resolve (raster_resolve.comp, shadow_mask.comp, through triangle_words.glsl), so that both
+// write the same bits.
 RangePixel range_pixel(DrawData d, uint t, vec2 pixel) {
-    vec3 n = triangle_normal(d, t);
-    return RangePixel(triangle_label(d, t), plane_z(d, triangle_corner(d, t, 0u), n, pixel),
-                      vec2(-n.x / n.z, -n.y / n.z));
+    return range_pixel_of(d, mesh_corner(d, t, 0u), mesh_normal(d, t), triangle_label(d, t), pixel);
 }

@@ -105,9 +105,7 @@ struct MeshTriangle {
 // Its corners, the normal already read.
 MeshTriangle read_triangle(DrawData d, uint t, vec3 normal) {
     MeshTriangle m;
-    for (uint k = 0u; k < 3u; k++) {
-        m.corner[k] = mesh_corner(d, t, k);
-    }
+    mesh_corners_by_words(d, t, m.corner);
     m.normal = normal;
     return m;
 }
@@ -186,7 +184,7 @@ void main() {
         uint entry = large[queued];
         uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
         DrawData d = draws[v];
-        Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal(d, t)));
+        Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal_by_words(d, t)));
         // Exact anywhere in the view: 64-bit edge functions, relative to the box.
         i64vec2 origin = i64vec2(box_origin(s));
         Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
@@ -310,7 +308,7 @@ void main() {
         return;
     }
     // The normal first: a triangle culled in every view needs no corners.
-    vec3 normal = mesh_normal(range_draw, t);
+    vec3 normal = mesh_normal_by_words(range_draw, t);
     bool in_range = !culled(range_draw, normal);
     bool in_shadow = VIEW_COUNT > 1u && !culled(shadow_draw, normal);
     if (!in_range && !in_shadow) {

@@ -3,6 +3,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #include "draw.glsl"
+#include "triangle_words.glsl"
 #include "visibility_word.glsl"
 
 // One view as the passes see it; matches `RasterView` in src/render/compute_raster.rs.

@@ -30,7 +30,7 @@ void main() {
     uint64_t word = nearest[word_index(r.view.stride, pixel)];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (word != EMPTY) {
-        range = range_pixel(d, uint(word & 0xffffffffUL), vec2(pixel));
+        range = range_pixel_by_words(d, uint(word & 0xffffffffUL), vec2(pixel));
     }
     imageStore(label, pixel, uvec4(range.label));
     imageStore(z, pixel, vec4(range.z));

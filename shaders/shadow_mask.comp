@@ -10,6 +10,9 @@
 // of its own.
 #include "draw.glsl"
 #include "visibility_word.glsl"
+#ifdef FROM_WORDS
+#include "triangle_words.glsl"
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -300,7 +303,7 @@ RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {
-        range = range_pixel(d, t, vec2(pixel));
+        range = range_pixel_by_words(d, t, vec2(pixel));
     }
     imageStore(range_z, pixel, vec4(range.z));
     if (WRITE_LABEL_AND_GRADIENT != 0u) {

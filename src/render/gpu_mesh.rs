@@ -1,14 +1,18 @@
 //! A mesh uploaded once into device-local memory: vertex positions and triangle indices (the
-//! graphics pipeline's vertex input), each triangle's corners, per-triangle surface ids, unit
-//! normals and edge links; and whether the mesh bounds a solid, found once here, so that both
-//! rasterizers may skip the triangles facing away. The shaders read them through buffer
-//! device addresses, indexed by triangle (gl_PrimitiveID in the fragment shader), to label the
-//! pixel and evaluate its triangle's plane exactly.
+//! graphics pipeline's vertex input), a record of each triangle's corners and unit normal,
+//! per-triangle surface ids and edge links; and whether the mesh bounds a solid, found once
+//! here, so that both rasterizers may skip the triangles facing away. The shaders read them
+//! through buffer device addresses, indexed by triangle (gl_PrimitiveID in the fragment
+//! shader), to label the pixel and evaluate its triangle's plane exactly.
 //!
 //! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
 //! triangle's corner then reads it directly, not an index first and then the position it
 //! names. The depth test's walks read a corner at every step, and took 15% less time
-//! (dense sphere, 256²: 22.7–23.7 → 19.3–20.4 ms), for 36 bytes a triangle.
+//! (dense sphere, 256²: 22.7–23.7 → 19.3–20.4 ms), for 36 bytes a triangle. With the normal
+//! they make one 48-byte record ([`TriangleRecord`]), which the compute rasterizer's shaders
+//! read in 64-bit words, half as many loads (shaders/triangle_words.glsl): the dense sphere's
+//! coverage at 256² took 3.30–3.38 ms instead of 3.71–3.81, at 1024² 16.2–16.3 instead of
+//! 17.3–17.9, and its mask at 1024² 16.0 instead of 18.3–19.2 (three alternations).
 //!
 //! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its
@@ -23,11 +27,9 @@ use std::sync::Arc;
 pub struct GpuMesh {
     pub(crate) vertices: Buffer,
     pub(crate) indices: Buffer,
-    /// xyz of each triangle's three corners, nine floats a triangle.
-    pub(crate) corners: Buffer,
+    /// Each triangle's [`TriangleRecord`].
+    pub(crate) triangles: Buffer,
     pub(crate) surface_ids: Buffer,
-    /// xyz of each triangle's unit normal (model frame), three floats a triangle.
-    pub(crate) normals: Buffer,
     /// What lies across each triangle's three edges (`Mesh::edge_links`).
     pub(crate) links: Buffer,
     pub(crate) index_count: u32,
@@ -49,7 +51,12 @@ impl GpuMesh {
             });
         }
         let links = mesh.edge_links();
-        let corners: Vec<[f32; 3]> = indices.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let records: Vec<TriangleRecord> = mesh
+            .triangles
+            .iter()
+            .zip(unit_normals(mesh))
+            .map(|(corners, normal)| TriangleRecord { corners: corners.map(|v| mesh.positions[v as usize]), normal })
+            .collect();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
                 ctx,
@@ -63,23 +70,17 @@ impl GpuMesh {
                 &indices,
                 &format!("{name} indices"),
             )?,
-            corners: Buffer::device_local_with_data(
+            triangles: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
-                &corners,
-                &format!("{name} corners"),
+                &records,
+                &format!("{name} triangles"),
             )?,
             surface_ids: Buffer::device_local_with_data(
                 ctx,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 &mesh.triangle_surfaces,
                 &format!("{name} surface ids"),
-            )?,
-            normals: Buffer::device_local_with_data(
-                ctx,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                &unit_normals(mesh),
-                &format!("{name} normals"),
             )?,
             links: Buffer::device_local_with_data(
                 ctx,
@@ -92,6 +93,19 @@ impl GpuMesh {
         })
     }
 }
+
+/// A triangle as the shaders read it (draw.glsl: mesh_corner, mesh_normal): its corners'
+/// xyz, then its unit normal's (model frame), twelve floats. 48 bytes, so that each record
+/// starts on 8 bytes: the compute rasterizer's shaders read it in 64-bit words (a software
+/// rasterizer loads each word read through a device address on its own, lane by lane).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct TriangleRecord {
+    corners: [[f32; 3]; 3],
+    normal: [f32; 3],
+}
+
+const _: () = assert!(size_of::<TriangleRecord>() == 48);
 
 /// Each triangle's unit normal (counter-clockwise winding), from its corners in f64.
 fn unit_normals(mesh: &Mesh) -> Vec<[f32; 3]> {
