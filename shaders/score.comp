@@ -148,11 +148,13 @@ void main() {
     Tally n0 = Tally(N0, 0u), n1_plus = Tally(N1_PLUS, 0u), n1_minus = Tally(N1_MINUS, 0u);
     AreaTally area = AreaTally(areas, 0u, 0u);
     uint end = min(start.x + RUN, s.region.z);
-    // Each label is read once: a pixel's right and across neighbours, which its 2×2 block
-    // reads, are the next pixel and the one below it.
+    // Each label and z is read once: a pixel's right and across neighbours, which its 2×2
+    // block reads, are the next pixel and the one below it. (A z is read wherever its label
+    // may be, and used only where the label is a surface's.)
     ivec2 first = ivec2(s.region.xy + start);
     bool has_down = uint(first.y) + 1u < s.height;
     uint label = synthetic(first), label_below = has_down ? synthetic(first + ivec2(0, 1)) : 0u;
+    float z_next = synthetic_z(first), z_next_below = has_down ? synthetic_z(first + ivec2(0, 1)) : 0.0;
     for (uint x = start.x; x < end; x++) {
         ivec2 p = ivec2(s.region.xy + uvec2(x, start.y));
         ivec2 right = p + ivec2(1, 0), down = p + ivec2(0, 1), across = p + ivec2(1, 1);
@@ -162,6 +164,11 @@ void main() {
         uint m_across = has_right && has_down ? synthetic(across) : 0u;
         label = m_right;
         label_below = m_across;
+        float z = z_next, z01 = z_next_below;
+        float z10 = has_right ? synthetic_z(right) : 0.0;
+        float z11 = has_right && has_down ? synthetic_z(across) : 0.0;
+        z_next = z10;
+        z_next_below = z11;
         uint index = uint(p.y) * s.width + uint(p.x);
         uint k = sensed_segment[index];
         // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
@@ -170,7 +177,6 @@ void main() {
             continue;
         }
         count_pixel(population, populations + m - 1u);
-        float z = synthetic_z(p);
         if (k == 0u) {
             n0.pixels += 1u;
         } else {
@@ -184,9 +190,6 @@ void main() {
         }
         // The 2×2 block whose top-left pixel this is, if all four carry surface m.
         if (has_right && has_down && m_right == m && m_below == m && m_across == m) {
-            float z10 = synthetic_z(right);
-            float z01 = synthetic_z(down);
-            float z11 = synthetic_z(across);
             precise float a = z10 - z;
             precise float b = z11 - z;
             precise float e = z01 - z;
