@@ -15,15 +15,14 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
 layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
 layout(set = 0, binding = 2, std430) readonly buffer ShadowedLabels { uint shadowed_label[]; };
-// Per pixel: dense segment index + 1, 0 = no data.
-layout(set = 0, binding = 3, std430) readonly buffer SensedSegments { uint sensed_segment[]; };
-layout(set = 0, binding = 4, std430) readonly buffer SensedZ { float sensed_z[]; };
+// Per pixel: dense segment index + 1 (0 = no data), and z's bits (src/verify/sensed.rs).
+layout(set = 0, binding = 3, std430) readonly buffer Sensed { uvec2 sensed_pixel[]; };
 // The batch's counters; this hypothesis' start at counts_offset.
-layout(set = 0, binding = 5, std430) buffer Counts { uint count[]; };
+layout(set = 0, binding = 4, std430) buffer Counts { uint count[]; };
 // Where effects are named (src/effects.rs): per pixel, the reason an effect lost it (0 if none
 // did), and the measured z where an effect changes z.
-layout(set = 0, binding = 6, std430) readonly buffer Losses { uint loss[]; };
-layout(set = 0, binding = 7, std430) readonly buffer MeasuredZ { float measured_z[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Losses { uint loss[]; };
+layout(set = 0, binding = 6, std430) readonly buffer MeasuredZ { float measured_z[]; };
 
 layout(push_constant, std430) uniform Score {
     uint counts_offset;     // this hypothesis' first counter word
@@ -170,7 +169,8 @@ void main() {
         z_next = z10;
         z_next_below = z11;
         uint index = uint(p.y) * s.width + uint(p.x);
-        uint k = sensed_segment[index];
+        uvec2 sensed = sensed_pixel[index];
+        uint k = sensed.x;
         // N1 (sensed valid, synthetic not) is N_i − Σ t, which the host works out: the region
         // need not cover the whole image.
         if (m == 0u) {
@@ -181,7 +181,7 @@ void main() {
             n0.pixels += 1u;
         } else {
             count_pixel(overlap, overlaps + (k - 1u) * s.surfaces + (m - 1u));
-            precise float d = z - sensed_z[index];
+            precise float d = z - uintBitsToFloat(sensed.y);
             if (abs(d) <= s.tolerance) {
                 n1_plus.pixels += 1u;
             } else if (d > s.tolerance) {

@@ -33,9 +33,8 @@ pub const SLOTS: usize = 4;
 
 /// The sensed image as the score pass reads it (uploaded once per `SensedImage`).
 pub struct SensedBuffers<'a> {
-    /// Per pixel: dense segment index + 1, or 0.
-    pub segments: &'a Buffer,
-    pub z: &'a Buffer,
+    /// Per pixel: dense segment index + 1 (0: no data), and z's bits.
+    pub pixels: &'a Buffer,
     pub segment_count: u32,
 }
 
@@ -220,8 +219,7 @@ pub(crate) fn count_batch(
                 label,
                 z,
                 shadowed_labels: slot.masked().unwrap_or(&placeholder),
-                sensed_segments: settings.sensed.segments,
-                sensed_z: settings.sensed.z,
+                sensed: settings.sensed.pixels,
                 counts: &counts,
                 losses: losses.unwrap_or(&placeholder),
                 measured_z: measured_z.unwrap_or(&placeholder),
@@ -254,11 +252,7 @@ pub(crate) fn count_batch(
             let bindings = &score_bindings[recorded % slots.len()];
             let record_scores = |enc: &mut Encoder, images: &JobImages| {
                 let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-                let mut buffers = vec![
-                    (settings.sensed.segments, Access::ComputeRead),
-                    (settings.sensed.z, Access::ComputeRead),
-                    (&counts, Access::ComputeWrite),
-                ];
+                let mut buffers = vec![(settings.sensed.pixels, Access::ComputeRead), (&counts, Access::ComputeWrite)];
                 let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
                 buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
                 enc.access(&range_reads, &buffers);

@@ -77,7 +77,7 @@ impl ScorePass {
             // The range view's label and z; the buffers of ScoreInputs.
             ComputePipeline::new(
                 ctx,
-                SetShape::storage(2, 6),
+                SetShape::storage(2, 5),
                 size_of::<ScoreConstants>(),
                 shaders::SCORE_COMP,
                 &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS, SCORE_RUN, flags[0], flags[1], flags[2]],
@@ -93,27 +93,20 @@ impl ScorePass {
     /// counts, and the effects' losses and measured z (any buffer where there are none: then
     /// they are not read).
     pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
-        let buffers = [
-            reads.shadowed_labels,
-            reads.sensed_segments,
-            reads.sensed_z,
-            reads.counts,
-            reads.losses,
-            reads.measured_z,
-        ];
+        let buffers = [reads.shadowed_labels, reads.sensed, reads.counts, reads.losses, reads.measured_z];
         let set_layout = self.pipelines[0].set_layout;
         let set = StorageSet::new(ctx, set_layout, &[reads.label, reads.z], (&[], &buffers), "score bindings")?;
         Ok(ScoreBindings { set })
     }
 }
 
-/// What a score pass binds (shaders/score.comp, bindings 0 to 7).
+/// What a score pass binds (shaders/score.comp, bindings 0 to 6).
 pub(crate) struct ScoreInputs<'a> {
     pub label: &'a Image,
     pub z: &'a Image,
     pub shadowed_labels: &'a Buffer,
-    pub sensed_segments: &'a Buffer,
-    pub sensed_z: &'a Buffer,
+    /// Per pixel: segment index + 1 (0: no data), and z's bits.
+    pub sensed: &'a Buffer,
     pub counts: &'a Buffer,
     pub losses: &'a Buffer,
     pub measured_z: &'a Buffer,

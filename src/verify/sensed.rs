@@ -31,12 +31,15 @@ pub struct SensedImage {
     on_gpu: Arc<OnceLock<SensedGpu>>,
 }
 
-/// The sensed image's per-pixel segment indices and z in device-local memory.
+/// The sensed image's per-pixel segment indices and z in device-local memory, one pair of
+/// words a pixel (segment index + 1 or 0, z's bits): the score pass reads both with one load
+/// where a software rasterizer makes a load of each buffer invocation by invocation (dense
+/// sphere's verification at 1024², label mode, compute rasterizer: 35.5 → 34.8 ms a
+/// hypothesis, medians of eight alternations, every quantile lower).
 pub(crate) struct SensedGpu {
-    /// The context the buffers belong to.
+    /// The context the buffer belongs to.
     context: Arc<GpuContext>,
-    pub segments: Buffer,
-    pub z: Buffer,
+    pub pixels: Buffer,
 }
 
 impl std::fmt::Debug for SensedGpu {
@@ -139,8 +142,7 @@ impl SensedImage {
             let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
             Ok(SensedGpu {
                 context: ctx.clone(),
-                segments: Buffer::device_local_with_data(ctx, usage, &self.segment_index, "sensed segments")?,
-                z: Buffer::device_local_with_data(ctx, usage, &self.z, "sensed z")?,
+                pixels: Buffer::device_local_with_data(ctx, usage, &self.gpu_pixels(), "sensed pixels")?,
             })
         };
         if self.on_gpu.get().is_none() {
@@ -152,6 +154,11 @@ impl SensedImage {
             Some(kept) if Arc::ptr_eq(&kept.context, ctx) => Ok(SensedOnGpu::Kept(kept)),
             _ => Ok(SensedOnGpu::Fresh(Box::new(upload()?))),
         }
+    }
+
+    /// What [`SensedGpu::pixels`] holds.
+    fn gpu_pixels(&self) -> Vec<[u32; 2]> {
+        self.segment_index.iter().zip(&self.z).map(|(&k, z)| [k, z.to_bits()]).collect()
     }
 
     /// Dense index of a segment label, if the image holds it.

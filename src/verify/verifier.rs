@@ -237,11 +237,7 @@ impl Verifier {
             effects: &settings.effects,
             tolerance: settings.tolerance as f32,
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
-            sensed: SensedBuffers {
-                segments: &on_gpu.segments,
-                z: &on_gpu.z,
-                segment_count: sensed.segments.len() as u32,
-            },
+            sensed: SensedBuffers { pixels: &on_gpu.pixels, segment_count: sensed.segments.len() as u32 },
         };
         let mut results = Vec::with_capacity(hypotheses.len());
         let chunk_cap = match settings.shadow.mode {
