@@ -1,6 +1,8 @@
 // One posed mesh in one view: what the raster shaders get as push constants and what the
 // shadow mask reads back from the draw table (src/render/draw.rs, DrawConstants: 128 bytes,
-// std430 either way). Also the one way any shader reaches a mesh's triangles.
+// std430 either way), and what the compute rasterizer's coverage passes read as a uniform
+// block (std140: the same offsets, as DrawData has no vec3 and no array of scalars or vec2;
+// draw.rs asserts them). Also the one way any shader reaches a mesh's triangles.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
@@ -9,9 +11,8 @@ struct DrawData {
     vec4 grid;               // x0, y0, dx, dy: the view's pixel (0, 0) centre and pitch
     vec2 size;               // width, height in pixels
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
-    uvec2 triangles;         // device addresses of the mesh's triangles (TRIANGLE_FLOATS
-                             // each: corners' xyz, then the unit normal's, model frame,
-                             // f64-derived; src/render/gpu_mesh.rs, TriangleRecord),
+    uvec2 triangles;         // device addresses of the mesh's triangles (TriangleRecord:
+                             // corners, then the unit normal, model frame, f64-derived),
     uvec2 pad;               // (unused)
     uvec2 surface_ids;       // and of its per-triangle surface ids
     uvec2 pad2;              // (unused)
@@ -25,9 +26,6 @@ const uint NO_NEIGHBOUR = 0xffffffffu;
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words {
     uint word[];
-};
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Floats {
-    float value[];
 };
 
 vec3 to_view(DrawData d, vec3 model) {
@@ -52,22 +50,28 @@ float tie_depth(DrawData d) {
     return TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x);
 }
 
-// Floats of a triangle's record (TriangleRecord, src/render/gpu_mesh.rs): its corners' xyz,
-// then its unit normal's.
-const uint TRIANGLE_FLOATS = 12u;
+// A triangle as the mesh stores it (model frame); matches TriangleRecord in
+// src/render/gpu_mesh.rs (48 bytes). Indexed as a record, its address is worked out in 64
+// bits, whatever the mesh's size.
+struct TriangleRecord {
+    float corner[9]; // xyz of each corner
+    float normal[3]; // the unit normal
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TriangleRecords {
+    TriangleRecord record[];
+};
 
 // Corner k (0, 1, 2) of a triangle as the mesh stores it (model frame).
 vec3 mesh_corner(DrawData d, uint triangle, uint k) {
-    uint at = TRIANGLE_FLOATS * triangle + 3u * k;
-    Floats p = Floats(d.triangles);
-    return vec3(p.value[at], p.value[at + 1u], p.value[at + 2u]);
+    TriangleRecords p = TriangleRecords(d.triangles);
+    return vec3(p.record[triangle].corner[3u * k], p.record[triangle].corner[3u * k + 1u],
+                p.record[triangle].corner[3u * k + 2u]);
 }
 
 // A triangle's unit normal as the mesh stores it (model frame).
 vec3 mesh_normal(DrawData d, uint triangle) {
-    uint at = TRIANGLE_FLOATS * triangle + 9u;
-    Floats p = Floats(d.triangles);
-    return vec3(p.value[at], p.value[at + 1u], p.value[at + 2u]);
+    TriangleRecords p = TriangleRecords(d.triangles);
+    return vec3(p.record[triangle].normal[0], p.record[triangle].normal[1], p.record[triangle].normal[2]);
 }
 
 // Corner k (0, 1, 2) of a triangle, in the view's frame.

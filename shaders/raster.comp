@@ -102,10 +102,10 @@ struct MeshTriangle {
     vec3 normal;
 };
 
-// Its corners, the normal already read.
-MeshTriangle read_triangle(DrawData d, uint t, vec3 normal) {
+// Its corners, the normal (and the third corner's z: triangle_words.glsl) already read.
+MeshTriangle read_triangle(DrawData d, uint t, vec3 normal, float third_z) {
     MeshTriangle m;
-    mesh_corners_by_words(d, t, m.corner);
+    mesh_corners_by_words(d, t, third_z, m.corner);
     m.normal = normal;
     return m;
 }
@@ -184,7 +184,9 @@ void main() {
         uint entry = large[queued];
         uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
         DrawData d = draws[v];
-        Setup s = set_up(d, r.views[v], read_triangle(d, t, mesh_normal_by_words(d, t)));
+        float third_z;
+        vec3 normal = mesh_normal_by_words(d, t, third_z);
+        Setup s = set_up(d, r.views[v], read_triangle(d, t, normal, third_z));
         // Exact anywhere in the view: 64-bit edge functions, relative to the box.
         i64vec2 origin = i64vec2(box_origin(s));
         Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
@@ -308,13 +310,14 @@ void main() {
         return;
     }
     // The normal first: a triangle culled in every view needs no corners.
-    vec3 normal = mesh_normal_by_words(range_draw, t);
+    float third_z;
+    vec3 normal = mesh_normal_by_words(range_draw, t, third_z);
     bool in_range = !culled(range_draw, normal);
     bool in_shadow = VIEW_COUNT > 1u && !culled(shadow_draw, normal);
     if (!in_range && !in_shadow) {
         return;
     }
-    MeshTriangle m = read_triangle(range_draw, t, normal);
+    MeshTriangle m = read_triangle(range_draw, t, normal, third_z);
     if (in_range) {
         cover(0u, range_draw, t, m);
     }

@@ -190,7 +190,7 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             })
             .collect()
     };
-    // Chunks of 5 hypotheses of three models; the shadow mask resolves each one's range view,
+    // Chunks of 5 hypotheses of four models; the shadow mask resolves each one's range view,
     // or without shadows the resolve pass does. Scoring the unshadowed labels as well reads
     // the range view's labels, and so do effects (the grazing angle its gradient, the edges
     // its labels); without either, the mask writes only its z (MaskVariant).

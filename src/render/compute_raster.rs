@@ -355,7 +355,7 @@ impl<'a> ComputeViews<'a> {
             }
             // No workgroups, an empty queue: (x, y, z, length).
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
-            // Each view's draw; without a shadow view, the second is never read.
+            // Each view's draw; without a shadow view, the second is loaded but never used.
             for (slot, view) in (0..).zip(self.views()) {
                 let copy =
                     vk::BufferCopy { src_offset: u64::from(index) * entry, dst_offset: slot * entry, size: entry };

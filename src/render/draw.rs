@@ -32,6 +32,15 @@ pub struct DrawConstants {
 
 // The struct's std430 size; also the push-constant size every Vulkan device supports.
 const _: () = assert!(size_of::<DrawConstants>() == 128);
+// Each member where std140 puts it as well (the coverage passes read DrawData as a uniform
+// block): a vec4 array's stride is 16 either way, and a vec2 or uvec2 aligns to 8.
+const _: () = {
+    use std::mem::offset_of;
+    assert!(offset_of!(DrawConstants, grid) == 48 && offset_of!(DrawConstants, size) == 64);
+    assert!(offset_of!(DrawConstants, z_range) == 72 && offset_of!(DrawConstants, triangles) == 80);
+    assert!(offset_of!(DrawConstants, surface_ids) == 96 && offset_of!(DrawConstants, label_base) == 112);
+    assert!(offset_of!(DrawConstants, draw_index) == 116 && offset_of!(DrawConstants, links) == 120);
+};
 
 /// One posed mesh in a view.
 pub struct Draw<'a> {

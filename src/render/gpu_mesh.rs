@@ -94,10 +94,9 @@ impl GpuMesh {
     }
 }
 
-/// A triangle as the shaders read it (draw.glsl: mesh_corner, mesh_normal): its corners'
-/// xyz, then its unit normal's (model frame), twelve floats. 48 bytes, so that each record
-/// starts on 8 bytes: the compute rasterizer's shaders read it in 64-bit words (a software
-/// rasterizer loads each word read through a device address on its own, lane by lane).
+/// A triangle as the shaders read it (`TriangleRecord` in shaders/draw.glsl, and as six 64-bit
+/// words in shaders/triangle_words.glsl): its corners' xyz, then its unit normal's (model
+/// frame), twelve floats. 48 bytes, so that each record starts on 8 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct TriangleRecord {

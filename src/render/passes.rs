@@ -37,6 +37,8 @@ pub(crate) struct Slot<'a> {
     /// The shadow mask's output labels.
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
+    /// The shadow view's draw table, which the mask reads.
+    shadow_table: Option<&'a Buffer>,
     /// The effect passes' outputs, where effects are named.
     effects: Option<EffectBuffers>,
     /// The reflectivity table the effect passes read, where the reflectivity effect is named.
@@ -125,7 +127,8 @@ impl<'a> Slot<'a> {
             _ => None,
         };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
-        Ok(Self { range, shadow, masked, mask_bindings, effects, reflectivities, compute })
+        let shadow_table = shape.shadow.map(|(_, table)| table);
+        Ok(Self { range, shadow, masked, mask_bindings, shadow_table, effects, reflectivities, compute })
     }
 
     /// The range view's label and z attachments, which a compute sink reads.
@@ -339,6 +342,7 @@ impl Passes<'_> {
             let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, range_use)).collect();
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
             let mut buffers = vec![(masked, Access::ComputeWrite)];
+            buffers.extend(slot.shadow_table.map(|table| (table, Access::ComputeRead)));
             if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }

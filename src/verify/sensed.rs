@@ -66,8 +66,8 @@ impl std::ops::Deref for SensedOnGpu<'_> {
 
 impl SensedImage {
     /// Host bytes a sensed image holds per pixel: its segment index and z (8), and the label
-    /// copy sorted while it is built (4).
-    pub const HOST_BYTES_PER_PIXEL: u64 = 12;
+    /// copy sorted while it is built (4) or the pairs built to upload it (8).
+    pub const HOST_BYTES_PER_PIXEL: u64 = 16;
     /// Device bytes per pixel once a verification uploads it: segment index and z.
     pub const GPU_BYTES_PER_PIXEL: u64 = 8;
 
