@@ -61,14 +61,14 @@ pub enum Raster {
 
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (compute against graphics in the same run, batches
-/// taken in turn; three runs, 2026-11-23): in depth-mode verification at 256², batches of 64,
-/// the box, 0.001 triangles per footprint pixel, ran 1.13–1.16× as fast (0.73–0.97× before
-/// its coverage and the score pass were reworked that day), spheres of 0.015 1.20–1.45×,
-/// 0.071 1.34–1.60×, 0.17 1.38–1.65×, 0.31 1.61–1.67×, 0.70 1.74–2.21×, 1.3 1.97–2.41×, 3.1
-/// 2.88–3.50×, 32 7.33–8.12×; the box filling a 256² image, 0.00018, 1.06–1.32× in label
-/// mode and 1.03–1.13× in depth mode. Filling 512², 0.000046, it ran 0.70–0.80× (label) and
-/// 0.90–0.95× (depth) as fast (two runs of batches of 16). Compute starts to win between
-/// 0.000046 and 0.00018. No other device has been measured yet; they use the same rule.
+/// taken in turn; three runs, 2026-11-24): in depth-mode verification at 256², batches of 64,
+/// the box, 0.001 triangles per footprint pixel, ran 1.00–1.12× as fast, spheres of 0.015
+/// 1.35–1.43×, 0.071 1.39–1.48×, 0.17 1.56–1.68×, 0.31 1.63–1.81×, 0.70 1.90–2.07×, 1.3
+/// 2.33–2.42×, 3.1 3.17–3.30×, 32 9.93–10.24×; the box filling a 256² image, 0.00018,
+/// 1.05–1.22× in label mode and 1.05–1.23× in depth mode. Filling 512², 0.000046, it ran
+/// 0.70–0.80× (label) and 0.90–0.95× (depth) as fast (two runs of batches of 16,
+/// 2026-11-23). Compute starts to win between 0.000046 and 0.00018. No other device has been
+/// measured yet; they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.0001;
 
 impl Raster {
