@@ -206,8 +206,8 @@ fn work_beyond_the_memory_budget_is_refused_with_its_figure() {
     let hyps = write_scene(&d, "h.json", &hypotheses(ids(&["a"])).to_string());
     let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--memory-budget", "32K"]);
     refused(&out, "verify", "verifying against a 32×24 image needs about");
-    // Reading the 32×24 image (12 KiB decoded) fits 16 KiB; preparing it (28 bytes a pixel,
-    // 21 KiB) does not.
+    // Reading the 32×24 image (12 KiB decoded) fits 16 KiB; preparing it (32 bytes a pixel,
+    // 24 KiB) does not.
     let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--memory-budget", "16K"]);
     refused(&out, "verify", "preparing the 32×24 sensed image");
 }
