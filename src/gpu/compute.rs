@@ -17,7 +17,8 @@ pub struct ComputePipeline {
 
 impl ComputePipeline {
     /// A compute pipeline whose set 0 binds the resources of `shape`, from binding 0 (compute
-    /// stage; the order a [`StorageSet`](super::StorageSet) writes them in), whose push constants are `push_size` bytes, and whose u32 specialization constants
+    /// stage; the order a [`StorageSet`](super::StorageSet) writes them in), whose push
+    /// constants are `push_size` bytes, and whose u32 specialization constants
     /// `constant_id = 0, 1, …` take the values of `constants`: codes the host defines once
     /// (such as the shadow tests) reach the shader from that one definition.
     pub fn new(

@@ -24,11 +24,18 @@ impl SetShape {
         Self { images, uniform_buffers: 0, storage_buffers }
     }
 
+    /// Each kind's descriptor type and count, in binding order.
+    fn kinds(self) -> [(vk::DescriptorType, usize); 3] {
+        [
+            (vk::DescriptorType::STORAGE_IMAGE, self.images),
+            (vk::DescriptorType::UNIFORM_BUFFER, self.uniform_buffers),
+            (vk::DescriptorType::STORAGE_BUFFER, self.storage_buffers),
+        ]
+    }
+
     /// The descriptor type of each binding, from binding 0.
     pub(crate) fn types(self) -> impl Iterator<Item = vk::DescriptorType> {
-        std::iter::repeat_n(vk::DescriptorType::STORAGE_IMAGE, self.images)
-            .chain(std::iter::repeat_n(vk::DescriptorType::UNIFORM_BUFFER, self.uniform_buffers))
-            .chain(std::iter::repeat_n(vk::DescriptorType::STORAGE_BUFFER, self.storage_buffers))
+        self.kinds().into_iter().flat_map(|(ty, count)| std::iter::repeat_n(ty, count))
     }
 }
 
@@ -48,15 +55,11 @@ impl StorageSet {
     ) -> Result<Self> {
         let d = &ctx.device;
         let shape = SetShape { images: images.len(), uniform_buffers: uniforms.len(), storage_buffers: buffers.len() };
-        let kinds = [
-            (vk::DescriptorType::STORAGE_IMAGE, shape.images),
-            (vk::DescriptorType::UNIFORM_BUFFER, shape.uniform_buffers),
-            (vk::DescriptorType::STORAGE_BUFFER, shape.storage_buffers),
-        ];
-        let sizes: Vec<_> = kinds
-            .iter()
-            .filter(|(_, count)| *count > 0)
-            .map(|&(ty, count)| vk::DescriptorPoolSize { ty, descriptor_count: count as u32 })
+        let sizes: Vec<_> = shape
+            .kinds()
+            .into_iter()
+            .filter(|&(_, count)| count > 0)
+            .map(|(ty, count)| vk::DescriptorPoolSize { ty, descriptor_count: count as u32 })
             .collect();
         // SAFETY: valid device.
         let pool = unsafe {
