@@ -26,31 +26,55 @@
 layout(local_size_x = 64) in;
 #include "raster_compute.glsl"
 
-// Each view's draw, copied from its draw table before the pass (compute_raster.rs), and its
-// visibility words: draws[0] and views[0] are the range view's, draws[1] and views[1] the
-// shadow view's (where there is none, the range view's words are bound again, and neither is
-// used). The draws are a uniform block, not a storage buffer: a software rasterizer loads a
-// uniform block's value once for all the invocations it runs together, a storage buffer's
-// invocation by invocation (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
-layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2]; };
-layout(set = 0, binding = 1, std430) buffer RangeWords { uint64_t range_words[]; };
-layout(set = 0, binding = 2, std430) buffer ShadowWords { uint64_t shadow_words[]; };
-// The queue of large (triangle, view) pairs, a view's bit above the triangle's index (meshes
-// have fewer than 2^29 triangles: src/mesh/adjacency.rs), with room for every triangle in
-// every view; and its indirect dispatch's (x, y, z), x its length up to MAX_GROUPS, then its
-// length.
-layout(set = 0, binding = 3, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 4, std430) buffer LargeArgs { uvec4 large_args; };
+// Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
+// dispatch covers up to MAX_MEMBERS jobs, one a z slice of its workgroups (the large
+// triangles' pass reads each queued triangle's member from the queue), so that a GPU pays a
+// dispatch and a barrier per group rather than per hypothesis. MEMBERS, the members this
+// pipeline covers, is a specialization constant: with one, the member is the constant 0 and
+// every read of its constants is at a constant offset, as a software rasterizer needs (it
+// gathers a uniform read at an index it cannot prove the same for all its lanes, lane by lane:
+// dense sphere at 256², coverage 3.29 → 4.58 ms). Matches COVERAGE_MEMBERS in
+// src/render/compute_raster.rs.
+#define MAX_MEMBERS 4
 
-// Matches `CoverageConstants` in src/render/compute_raster.rs.
-layout(push_constant, std430) uniform Coverage {
-    RasterView views[2];
-    uint triangles;      // the mesh's triangle count
+// Each member's draw in each view, copied from the draw tables before the pass
+// (compute_raster.rs): draws[2m] the range view's of member m, draws[2m + 1] its shadow
+// view's (where there is none, never read). A uniform block, not a storage buffer: a software
+// rasterizer loads a uniform block's value once for all the invocations it runs together, a
+// storage buffer's invocation by invocation (dense sphere at 256², coverage 4.7–4.8 →
+// 4.45–4.55 ms).
+layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMBERS]; };
+
+// What a member's pass needs beside its draws; matches `MemberConstants` in
+// src/render/compute_raster.rs.
+struct Member {
+    RasterView views[2]; // range view, shadow view (a copy of the range view's where none)
+    uint triangles;      // the mesh's triangle count; 0 for a member with nothing to cover
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
     uint dealt_rows;     // blocks of the workgroups dealt over the stripes, per stripe (main)
-} r;
+    uint pad;
+};
+layout(set = 0, binding = 1, std140) uniform Members { Member members[MAX_MEMBERS]; };
+
+// Each member's visibility words in each view (where a view or a member is missing, another
+// member's are bound, never written).
+layout(set = 0, binding = 2, std430) buffer RangeWords0 { uint64_t words[]; } range_words0;
+layout(set = 0, binding = 3, std430) buffer RangeWords1 { uint64_t words[]; } range_words1;
+layout(set = 0, binding = 4, std430) buffer RangeWords2 { uint64_t words[]; } range_words2;
+layout(set = 0, binding = 5, std430) buffer RangeWords3 { uint64_t words[]; } range_words3;
+layout(set = 0, binding = 6, std430) buffer ShadowWords0 { uint64_t words[]; } shadow_words0;
+layout(set = 0, binding = 7, std430) buffer ShadowWords1 { uint64_t words[]; } shadow_words1;
+layout(set = 0, binding = 8, std430) buffer ShadowWords2 { uint64_t words[]; } shadow_words2;
+layout(set = 0, binding = 9, std430) buffer ShadowWords3 { uint64_t words[]; } shadow_words3;
+// The queue of large (triangle, member, view) entries: the view's bit, then the member's two
+// bits, above the triangle's index (meshes have fewer than 2^29 triangles:
+// src/mesh/adjacency.rs), with room for every triangle of every member in every view; and its
+// indirect dispatch's (x, y, z), x its length up to MAX_GROUPS, then its length.
+layout(set = 0, binding = 10, std430) buffer Large { uint large[]; };
+layout(set = 0, binding = 11, std430) buffer LargeArgs { uvec4 large_args; };
 
 const uint VIEW_BIT = 31u;
+const uint MEMBER_SHIFT = 29u;
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -65,6 +89,8 @@ layout(constant_id = 1) const uint VIEW_COUNT = 2u;
 // Workgroups a block, and stripes the blocks are dealt over (powers of two; main).
 layout(constant_id = 2) const uint DEAL_BLOCK = 1u;
 layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
+// The members a dispatch covers (1 to MAX_MEMBERS; see above).
+layout(constant_id = 4) const uint MEMBERS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them.
@@ -112,21 +138,26 @@ MeshTriangle read_triangle(DrawData d, uint t, vec3 normal, float third_z) {
 
 // A solid's triangles facing away from the camera are never the first hit
 // (src/mesh/solid.rs).
-bool culled(DrawData d, vec3 model_normal) {
-    return r.cull != 0 && float(r.cull) * rotate_to_view(d, model_normal).z < 0.0;
+bool culled(int cull, DrawData d, vec3 model_normal) {
+    return cull != 0 && float(cull) * rotate_to_view(d, model_normal).z < 0.0;
 }
 
-// A triangle set up for coverage tests in one view: its snapped corners, the pixels of its
-// bounding box within the view's area, and its plane's depth.
+// A triangle set up for coverage tests in one view of one member: its snapped corners, the
+// pixels of its bounding box within the view's area, and its plane's depth.
 struct Setup {
+    uint member, view;      // whose words it keeps (keep_word)
+    uint stride;            // the view's pixels a row
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
     vec2 a, b, c;           // snapped corners (snap)
     ivec2 first, last;
 };
 
-Setup set_up(DrawData d, RasterView view, MeshTriangle m) {
+Setup set_up(uint member, uint v, DrawData d, RasterView view, MeshTriangle m) {
     Setup s;
+    s.member = member;
+    s.view = v;
+    s.stride = view.stride;
     vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
     precise vec3 v0 = window(d, corner);
     precise vec3 v1 = window(d, to_view(d, m.corner[1]));
@@ -150,8 +181,29 @@ vec2 box_origin(Setup s) {
     return vec2(s.first) * 256.0 + 128.0;
 }
 
-// Keeps the triangle at a covered pixel of view v if it is the nearest there so far.
-void keep(uint v, uint t, Setup s, ivec2 pixel) {
+// Keeps the nearer of `word` and member m's word at `at` in view v. A member's words are a
+// binding of their own, so it is picked by branches, the same for a whole workgroup (with one
+// member, constant: a software rasterizer runs every branch).
+void keep_word(uint m, uint v, uint at, uint64_t word) {
+    if (v == 0u) {
+        switch (m) {
+            case 0u: atomicMin(range_words0.words[at], word); break;
+            case 1u: atomicMin(range_words1.words[at], word); break;
+            case 2u: atomicMin(range_words2.words[at], word); break;
+            default: atomicMin(range_words3.words[at], word); break;
+        }
+    } else {
+        switch (m) {
+            case 0u: atomicMin(shadow_words0.words[at], word); break;
+            case 1u: atomicMin(shadow_words1.words[at], word); break;
+            case 2u: atomicMin(shadow_words2.words[at], word); break;
+            default: atomicMin(shadow_words3.words[at], word); break;
+        }
+    }
+}
+
+// Keeps the triangle at a covered pixel of its view if it is the nearest there so far.
+void keep(uint t, Setup s, ivec2 pixel) {
     vec2 from_first = vec2(pixel - s.first);
     float depth = fma(from_first.x, s.depth_step.x, fma(from_first.y, s.depth_step.y, s.depth_first));
     // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
@@ -159,20 +211,15 @@ void keep(uint v, uint t, Setup s, ivec2 pixel) {
         return;
     }
     uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-    uint at = word_index(r.views[v].stride, pixel);
-    if (v == 0u) {
-        atomicMin(range_words[at], word);
-    } else {
-        atomicMin(shadow_words[at], word);
-    }
+    keep_word(s.member, s.view, word_index(s.stride, pixel), word);
 }
 
 #ifdef LARGE_TRIANGLES
 // Tests the pixels of one row of the box, `e` the edge functions at its first, in 64 bits.
-void cover_row(uint v, uint t, Setup s, int row, i64vec3 e, i64vec3 right) {
+void cover_row(uint t, Setup s, int row, i64vec3 e, i64vec3 right) {
     for (int col = s.first.x; col <= s.last.x; col++) {
         if ((e.x | e.y | e.z) >= 0) {
-            keep(v, t, s, ivec2(col, row));
+            keep(t, s, ivec2(col, row));
         }
         e += right;
     }
@@ -182,11 +229,12 @@ void main() {
     // The workgroups stride over the queue, which may be longer than a dispatch's groups.
     for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
         uint entry = large[queued];
-        uint v = entry >> VIEW_BIT, t = entry & ~(1u << VIEW_BIT);
-        DrawData d = draws[v];
+        uint v = entry >> VIEW_BIT, t = entry & ((1u << MEMBER_SHIFT) - 1u);
+        uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & 3u;
+        DrawData d = draws[2u * member + v];
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
-        Setup s = set_up(d, r.views[v], read_triangle(d, t, normal, third_z));
+        Setup s = set_up(member, v, d, members[member].views[v], read_triangle(d, t, normal, third_z));
         // Exact anywhere in the view: 64-bit edge functions, relative to the box.
         i64vec2 origin = i64vec2(box_origin(s));
         Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
@@ -196,15 +244,16 @@ void main() {
         }
         // The workgroup's invocations share the box's rows.
         for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
-            cover_row(v, t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
+            cover_row(t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
         }
     }
 }
 #else
-// Queues (t, v): the queue has room for every triangle in every view.
-void queue_large(uint t, uint v) {
+// Queues (t, its member, its view): the queue has room for every triangle of every member in
+// every view.
+void queue_large(uint t, Setup s) {
     uint at = atomicAdd(large_args.w, 1u);
-    large[at] = t | (v << VIEW_BIT);
+    large[at] = t | (s.member << MEMBER_SHIFT) | (s.view << VIEW_BIT);
     if (at < MAX_GROUPS) {
         atomicAdd(large_args.x, 1u);
     }
@@ -217,7 +266,7 @@ void queue_large(uint t, uint v) {
 // the most pixels any of them covers, not as the largest box among them has pixels. (A
 // software rasterizer runs a keep for every lane of every round, covered or not.) Dense
 // sphere at 256², whose boxes fit one tile: coverage pass 6.5–6.8 → 5.2–5.5 ms.
-void cover_tile(uint v, uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e) {
+void cover_tile(uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e) {
     uvec2 covered = uvec2(0u);
     ivec3 row_start = tile_first;
     ivec2 size = min(s.last - s.first + 1 - tile, ivec2(8));
@@ -244,7 +293,7 @@ void cover_tile(uint v, uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e
         } else {
             covered.y = bits;
         }
-        keep(v, t, s, s.first + tile + ivec2(k & 7, (k >> 3) + (low ? 0 : 4)));
+        keep(t, s, s.first + tile + ivec2(k & 7, (k >> 3) + (low ? 0 : 4)));
     }
 }
 
@@ -256,18 +305,18 @@ void cover_tile(uint v, uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e
 // coverage at 1024² went from 38 to 18–21 ms, a 960-triangle sphere's at 256² from 2.9 to
 // 0.9 ms. The edge functions at a tile's first pixel lie in the box, below 2^30: the sum
 // wraps to them exactly.
-void cover_tiles(uint v, uint t, Setup s, Edges32 e) {
+void cover_tiles(uint t, Setup s, Edges32 e) {
     ivec2 box = s.last - s.first + 1;
     for (int ty = 0; ty < box.y; ty += 8) {
         for (int tx = 0; tx < box.x; tx += 8) {
-            cover_tile(v, t, s, ivec2(tx, ty), e.first + e.right * tx + e.down * ty, e);
+            cover_tile(t, s, ivec2(tx, ty), e.first + e.right * tx + e.down * ty, e);
         }
     }
 }
 
-// Covers a triangle's pixels in view v, or queues it there if its corners are far.
-void cover(uint v, DrawData d, uint t, MeshTriangle m) {
-    Setup s = set_up(d, r.views[v], m);
+// Covers a triangle's pixels in view v of a member, or queues it there if its corners are far.
+void cover(uint member, uint v, DrawData d, RasterView view, uint t, MeshTriangle m) {
+    Setup s = set_up(member, v, d, view, m);
     ivec2 box = s.last - s.first + 1;
     if (box.x <= 0 || box.y <= 0) {
         return;
@@ -278,20 +327,23 @@ void cover(uint v, DrawData d, uint t, MeshTriangle m) {
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
     if (!near) {
-        queue_large(t, v);
+        queue_large(t, s);
         return;
     }
     Edges32 e = edges_of(ivec2(a), ivec2(b), ivec2(c));
     if (all(lessThanEqual(box, ivec2(8)))) {
-        cover_tile(v, t, s, ivec2(0), e.first, e);
+        cover_tile(t, s, ivec2(0), e.first, e);
     } else {
-        cover_tiles(v, t, s, e);
+        cover_tiles(t, s, e);
     }
 }
 
 void main() {
-    DrawData range_draw = draws[0];
-    DrawData shadow_draw = draws[1];
+    // A member a z slice of the workgroups.
+    uint member = MEMBERS == 1u ? 0u : gl_WorkGroupID.z;
+    DrawData range_draw = draws[2u * member];
+    DrawData shadow_draw = draws[2u * member + 1u];
+    Member constants = members[member];
     // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs). A software
     // rasterizer hands each of its threads a contiguous range of a dispatch's workgroups
     // (lavapipe: the count over the threads), and a mesh's triangles lie in its file's order,
@@ -302,27 +354,27 @@ void main() {
     // takes its share of each stripe of the mesh; the last blocks keep their place.
     uint group = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
     uint block = group / DEAL_BLOCK;
-    if (block < DEAL_STRIPES * r.dealt_rows) {
-        block = (block % DEAL_STRIPES) * r.dealt_rows + block / DEAL_STRIPES;
+    if (block < DEAL_STRIPES * constants.dealt_rows) {
+        block = (block % DEAL_STRIPES) * constants.dealt_rows + block / DEAL_STRIPES;
     }
     uint t = (block * DEAL_BLOCK + group % DEAL_BLOCK) * gl_WorkGroupSize.x + gl_LocalInvocationIndex;
-    if (t >= r.triangles) {
+    if (t >= constants.triangles) {
         return;
     }
     // The normal first: a triangle culled in every view needs no corners.
     float third_z;
     vec3 normal = mesh_normal_by_words(range_draw, t, third_z);
-    bool in_range = !culled(range_draw, normal);
-    bool in_shadow = VIEW_COUNT > 1u && !culled(shadow_draw, normal);
+    bool in_range = !culled(constants.cull, range_draw, normal);
+    bool in_shadow = VIEW_COUNT > 1u && !culled(constants.cull, shadow_draw, normal);
     if (!in_range && !in_shadow) {
         return;
     }
     MeshTriangle m = read_triangle(range_draw, t, normal, third_z);
     if (in_range) {
-        cover(0u, range_draw, t, m);
+        cover(member, 0u, range_draw, constants.views[0], t, m);
     }
     if (in_shadow) {
-        cover(1u, shadow_draw, t, m);
+        cover(member, 1u, shadow_draw, constants.views[1], t, m);
     }
 }
 #endif

@@ -33,6 +33,16 @@ static COMPUTE: LazyLock<Verifier> = LazyLock::new(|| {
 static AUTO: LazyLock<Verifier> =
     LazyLock::new(|| Verifier::new(test_renderer(None).with_raster(Raster::Auto)).expect("verifier"));
 
+/// Both, covering four hypotheses a coverage dispatch, as a GPU does by default (on lavapipe
+/// the default is one).
+static GROUPED: LazyLock<[Verifier; 2]> = LazyLock::new(|| {
+    [Raster::Compute, Raster::Auto].map(|raster| {
+        let renderer = test_renderer(None).with_raster(raster).with_hypotheses_per_dispatch(4);
+        assert_eq!(renderer.hypotheses_per_dispatch(), 4);
+        Verifier::new(renderer).expect("verifier")
+    })
+});
+
 fn render_with(verifier: &Verifier, scene: &Scene) -> RenderOutput {
     let out = verifier.renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
     let messages = verifier.renderer().context().take_validation_messages();
@@ -190,7 +200,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             })
             .collect()
     };
-    // Chunks of 5 hypotheses of four models; the shadow mask resolves each one's range view,
+    // Chunks of 5 hypotheses of four models, the first four of a chunk in one coverage
+    // dispatch where it is grouped, the fifth alone; the shadow mask resolves each one's range view,
     // or without shadows the resolve pass does. Scoring the unshadowed labels as well reads
     // the range view's labels, and so do effects (the grazing angle its gradient, the edges
     // its labels); without either, the mask writes only its z (MaskVariant).
@@ -219,6 +230,12 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         assert_eq!(counts(&COMPUTE), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
         // Auto mixes both in one batch: the plane by graphics, the others by compute.
         assert_eq!(counts(&AUTO), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
+        // Hypotheses of different models in one coverage dispatch; with auto, some of a
+        // dispatch's members by graphics.
+        for grouped in GROUPED.iter() {
+            let raster = grouped.renderer().raster();
+            assert_eq!(counts(grouped), graphics, "{mode:?}, compare_shadow {compare_shadow}, {raster:?}, grouped");
+        }
     }
 }
 

@@ -46,7 +46,10 @@ impl ComputePipeline {
             d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
         }
         .vk(&format!("creating the {name} descriptor layout"))?;
-        let push = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32)];
+        // A shader without push constants (push_size 0) declares no range: a range may not be empty.
+        let push_range =
+            vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push_size as u32);
+        let push = if push_size == 0 { Vec::new() } else { vec![push_range] };
         let set_layouts = [set_layout];
         // SAFETY: valid device and set layout.
         let layout = unsafe {

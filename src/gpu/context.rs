@@ -73,6 +73,8 @@ pub struct GpuContext {
     /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
     pub(crate) timestamp_period: Option<f64>,
     device_name: String,
+    /// Whether the device is a CPU (a software rasterizer such as lavapipe), not a GPU.
+    is_cpu: bool,
     /// Whether shaders may use 64-bit integers and 64-bit atomics on storage buffers (the
     /// compute rasterizer needs both).
     int64_atomics: bool,
@@ -219,6 +221,7 @@ impl GpuContext {
             limits: properties.limits,
             timestamp_period,
             device_name,
+            is_cpu: properties.device_type == vk::PhysicalDeviceType::CPU,
             int64_atomics,
             recorders: Mutex::new(Vec::new()),
         }))
@@ -351,6 +354,11 @@ impl GpuContext {
 
     pub fn device_name(&self) -> &str {
         &self.device_name
+    }
+
+    /// Whether the device is a CPU (a software rasterizer such as lavapipe), not a GPU.
+    pub fn is_cpu(&self) -> bool {
+        self.is_cpu
     }
 
     pub fn validation_enabled(&self) -> bool {

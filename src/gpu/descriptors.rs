@@ -109,11 +109,23 @@ impl StorageSet {
 
 impl StorageSet {
     /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
-    /// `constants` pushed at offset 0. The set's resources must already be in GENERAL layout.
+    /// `constants` pushed at offset 0 (none where empty). The set's resources must already be in GENERAL layout.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
+        self.dispatch_slices(cmd, pipeline, constants, groups, 1);
+    }
+
+    /// As [`StorageSet::dispatch`], `slices` times over: `groups` workgroups for each z.
+    pub fn dispatch_slices(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &ComputePipeline,
+        constants: &[u8],
+        groups: [u32; 2],
+        slices: u32,
+    ) {
         self.bind(cmd, pipeline, constants);
         // SAFETY: cmd is recording with the pipeline and set bound.
-        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], 1) };
+        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], slices) };
     }
 
     /// As [`StorageSet::dispatch`], with the workgroup counts read from `args` (a
@@ -138,7 +150,9 @@ impl StorageSet {
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, layout, 0, &[self.set], &[]);
-            d.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, constants);
+            if !constants.is_empty() {
+                d.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, constants);
+            }
         }
     }
 }

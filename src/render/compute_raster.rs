@@ -16,6 +16,17 @@
 //!   mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
 //!   both is skipped before its corners are read.
+//! - Many hypotheses a dispatch ([`CoverageGroup`]): the jobs of up to [`COVERAGE_MEMBERS`]
+//!   consecutive slots of a batch are covered by one coverage dispatch (a z slice of workgroups
+//!   each, their draws and constants in uniform blocks, their words bound side by side) and
+//!   one large triangles' dispatch, so that a GPU pays a dispatch and a barrier per group
+//!   rather than per hypothesis. How many is the renderer's
+//!   ([`Renderer::with_hypotheses_per_dispatch`](super::Renderer::with_hypotheses_per_dispatch)):
+//!   by default all of them on a GPU, and one on a CPU device, where a dispatch costs next to
+//!   nothing and a group's reads of its members' constants cost more (dense sphere at 256²,
+//!   verification 3.5–3.9 → 4.8–4.9 ms a hypothesis on lavapipe). Pipelines for one member
+//!   are specialized to it (the member the constant 0), so a group of one runs the code a
+//!   coverage pass of one job always ran. The images and counts are the same either way.
 //! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
 //!   fragment shader would have written for that triangle. Where a shadow mask follows, the
 //!   mask does it as it tests each pixel, and reads the shadow view's words as they are
@@ -44,7 +55,7 @@ use crate::gpu::{
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
 use ash::vk;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Which rasterizer renders the views.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -118,20 +129,23 @@ struct RasterView {
     _pad: [u32; 2],
 }
 
-/// Push constants of the coverage passes; matches `Coverage` in shaders/raster.comp.
+/// One member's constants in the coverage passes' uniform block; matches `Member` in
+/// shaders/raster.comp (std140: the same offsets, as it holds no vec3 and no array of scalars).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CoverageConstants {
+struct MemberConstants {
     views: [RasterView; 2],
     triangles: u32,
     cull: i32,
     dealt_rows: u32,
+    _pad: u32,
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, triangles) == 64);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, cull) == 68);
-const _: () = assert!(std::mem::offset_of!(CoverageConstants, dealt_rows) == 72);
+const _: () = assert!(std::mem::offset_of!(MemberConstants, triangles) == 64);
+const _: () = assert!(std::mem::offset_of!(MemberConstants, cull) == 68);
+const _: () = assert!(std::mem::offset_of!(MemberConstants, dealt_rows) == 72);
+const _: () = assert!(size_of::<MemberConstants>() == 80);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -170,11 +184,44 @@ const DEAL_STRIPES: u32 = 16;
 /// shader's MAX_GROUPS, a specialization constant).
 const MAX_GROUPS: u32 = 65_535;
 
-pub struct ComputeRasterPipelines {
+/// Most jobs one coverage dispatch covers (`MAX_MEMBERS` in shaders/raster.comp, which binds
+/// each member's words).
+pub const COVERAGE_MEMBERS: usize = 4;
+
+/// The coverage passes' pipelines for dispatches of `members` jobs.
+struct CoveragePipelines {
     /// The small triangles' coverage of the range view alone, and of both views.
-    coverage_range: ComputePipeline,
-    coverage_both: ComputePipeline,
+    range: ComputePipeline,
+    both: ComputePipeline,
     large: ComputePipeline,
+}
+
+impl CoveragePipelines {
+    fn new(ctx: &Arc<GpuContext>, members: u32) -> Result<Self> {
+        // Both uniform blocks (the members' draws, then their constants), each member's words
+        // in each view, the large-triangle queue and its dispatch arguments.
+        let words = 2 * COVERAGE_MEMBERS;
+        let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: words + 2 };
+        // The coverage shader's specialization constants: MAX_GROUPS, the views it covers (the
+        // large triangles' pass reads each queued triangle's view), how it deals its
+        // workgroups, and the members of a dispatch.
+        let covering = |code, views: u32, name: &str| {
+            let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members];
+            ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {members} a dispatch"))
+        };
+        Ok(Self {
+            range: covering(shaders::RASTER_COMP, 1, "compute raster coverage (range view)")?,
+            both: covering(shaders::RASTER_COMP, 2, "compute raster coverage (both views)")?,
+            large: covering(shaders::RASTER_LARGE_COMP, 2, "compute raster coverage (large triangles)")?,
+        })
+    }
+}
+
+pub struct ComputeRasterPipelines {
+    ctx: Arc<GpuContext>,
+    /// Coverage a job a dispatch; coverage of several, built on first use.
+    single: CoveragePipelines,
+    grouped: OnceLock<CoveragePipelines>,
     resolve: ComputePipeline,
     /// The shadow mask reading the shadow view's words (shadow_pass.rs), writing the range
     /// view's attachments whole, or only its z for a score pass.
@@ -184,22 +231,11 @@ pub struct ComputeRasterPipelines {
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
-        // Coverage binds both views' draws, then their visibility words, the large-triangle
-        // queue and its dispatch arguments; resolve the range view's attachments, its table
-        // and its words.
-        let coverage = SetShape { images: 0, uniform_buffers: 1, storage_buffers: 4 };
-        let coverage_push = size_of::<CoverageConstants>();
-        // The coverage shader's specialization constants: MAX_GROUPS, the views it covers (the
-        // large triangles' pass reads each queued triangle's view), and how it deals its
-        // workgroups.
-        let covering = |code, views: u32, name| {
-            let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES];
-            ComputePipeline::new(ctx, coverage, coverage_push, code, &constants, name)
-        };
         Ok(Self {
-            coverage_range: covering(shaders::RASTER_COMP, 1, "compute raster coverage (range view)")?,
-            coverage_both: covering(shaders::RASTER_COMP, 2, "compute raster coverage (both views)")?,
-            large: covering(shaders::RASTER_LARGE_COMP, 2, "compute raster coverage (large triangles)")?,
+            ctx: ctx.clone(),
+            single: CoveragePipelines::new(ctx, 1)?,
+            grouped: OnceLock::new(),
+            // The range view's attachments, its table and its words.
             resolve: ComputePipeline::new(
                 ctx,
                 SetShape::storage(ViewKind::Range.colour_attachments().len(), 2),
@@ -211,6 +247,18 @@ impl ComputeRasterPipelines {
             mask: MaskPipelines::new(ctx, MaskVariant::Words)?,
             mask_for_scoring: MaskPipelines::new(ctx, MaskVariant::WordsForScoring)?,
         })
+    }
+
+    /// The coverage pipelines for dispatches of `members` jobs (1 to [`COVERAGE_MEMBERS`]).
+    fn coverage(&self, members: usize) -> Result<&CoveragePipelines> {
+        if members == 1 {
+            return Ok(&self.single);
+        }
+        if let Some(built) = self.grouped.get() {
+            return Ok(built);
+        }
+        let built = CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32)?;
+        Ok(self.grouped.get_or_init(|| built))
     }
 }
 
@@ -228,33 +276,25 @@ struct ViewWords<'a> {
     draw_table: &'a Buffer,
 }
 
-/// The range view's and (where a shadow pass runs) the shadow view's visibility words, the
-/// queue of large triangles the coverage pass fills for both, and the passes' bindings. The
-/// range view's words are resolved into its attachments, by the shadow mask where there is a
-/// shadow view and by the resolve pass where there is none; the shadow view's are read by the
-/// shadow mask as they are.
+/// One slot's visibility words: the range view's and (where a shadow pass runs) the shadow
+/// view's, which a [`CoverageGroup`] fills, and the binding that resolves the range view's.
+/// The range view's words are resolved into its attachments, by the shadow mask where there
+/// is a shadow view and by the resolve pass where there is none; the shadow view's are read by
+/// the shadow mask as they are.
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
     shadow: Option<ViewWords<'a>>,
-    /// The queue of large (triangle, view) pairs, room for every triangle in every view, and
-    /// its indirect dispatch's (x, y, z), then its length.
-    large: Buffer,
-    large_args: Buffer,
-    /// The draw each view renders, copied from its draw table before each coverage pass.
-    draws: Buffer,
-    coverage: StorageSet,
     resolve: StorageSet,
 }
 
 impl<'a> ComputeViews<'a> {
-    /// Visibility words for the views, rendering draws of no more than `max_triangles`, and
-    /// the bindings that resolve the range view's into `range_targets`.
+    /// Visibility words for the views, and the bindings that resolve the range view's into
+    /// `range_targets`.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
         (range, range_targets): (ComputeTarget<'a>, &ViewTargets),
         shadow: Option<ComputeTarget<'a>>,
-        max_triangles: u32,
         name: &str,
     ) -> Result<Self> {
         let words = |kind: ViewKind, view: ComputeTarget<'a>| -> Result<ViewWords<'a>> {
@@ -274,30 +314,7 @@ impl<'a> ComputeViews<'a> {
             (&[], &[range.draw_table, &range.nearest]),
             &format!("{name} resolve bindings"),
         )?;
-        // A triangle is queued in a view at most once.
-        let views = if shadow.is_some() { 2 } else { 1 };
-        let large_bytes = large_queue_bytes(u64::from(max_triangles), views).max(4);
-        let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), &format!("{name} large triangles"))?;
-        let args = BufferDesc {
-            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(16)
-        };
-        let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
-        let draws = BufferDesc {
-            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            ..BufferDesc::gpu_storage(2 * size_of::<DrawConstants>() as u64)
-        };
-        let draws = Buffer::new(ctx, draws, &format!("{name} coverage draws"))?;
-        // Without a shadow view, the range view's table and words fill its bindings too.
-        let second = shadow.as_ref().unwrap_or(&range);
-        let coverage = StorageSet::new(
-            ctx,
-            pipelines.coverage_both.set_layout,
-            &[],
-            (&[&draws], &[&range.nearest, &second.nearest, &large, &large_args]),
-            &format!("{name} coverage bindings"),
-        )?;
-        Ok(Self { range, shadow, large, large_args, draws, coverage, resolve })
+        Ok(Self { range, shadow, resolve })
     }
 
     /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
@@ -317,87 +334,210 @@ impl<'a> ComputeViews<'a> {
         std::iter::once(&self.range).chain(&self.shadow)
     }
 
-    /// Records the passes of one draw (number `index` in the draw tables) over the range
-    /// view's `range_area` and, where these words include the shadow view's, over its
-    /// `shadow_area`. With a shadow view, both views' words are left for the shadow mask, which
-    /// resolves the range view (shadow_pass.rs); without, the resolve pass writes the range
-    /// view's colour attachments, in GENERAL layout as a compute pass leaves them.
-    pub fn record(
+    fn raster_view(view: &ViewWords, area: PixelRect, draw: u32) -> RasterView {
+        RasterView { area: [area.col, area.row, area.width, area.height], draw, stride: view.stride, _pad: [0; 2] }
+    }
+
+    /// Records the resolve pass of the range view's words over `range_area`, draw `index`
+    /// having been covered there (where no shadow mask follows to resolve them): it writes the
+    /// range view's colour attachments, in GENERAL layout as a compute pass leaves them.
+    pub fn record_resolve(
         &self,
         enc: &mut Encoder,
         pipelines: &ComputeRasterPipelines,
         (range_targets, range_area): (&ViewTargets, PixelRect),
-        shadow_area: Option<PixelRect>,
-        (index, draw): (u32, &Draw),
+        index: u32,
     ) {
-        let cmd = enc.cmd;
-        // The rows of each view's area are emptied, not the whole view: a hypothesis costs its
-        // footprint, not the image. Nothing reads a word beyond the area's rows, as nothing
-        // reads the attachments beyond the area that the graphics pass clears (draw.rs).
-        let emptied: Vec<_> = std::iter::once((&self.range, range_area))
-            .chain(self.shadow.as_ref().zip(shadow_area))
-            .map(|(view, area)| {
-                let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
-                (view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes)
-            })
-            .collect();
-        let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
-        cleared.extend([(&self.large_args, Access::TransferWrite), (&self.draws, Access::TransferWrite)]);
-        cleared.extend(self.views().map(|view| (view.draw_table, Access::TransferRead)));
-        enc.access(&[], &cleared);
-        let entry = size_of::<DrawConstants>() as u64;
-        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
-        // rows lie within the view's words, and their bytes are a multiple of 4.
-        unsafe {
-            let d = &enc.ctx().device;
-            for &(view, offset, size) in &emptied {
-                d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
-            }
-            // No workgroups, an empty queue: (x, y, z, length).
-            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
-            // Each view's draw; without a shadow view, the second is loaded but never used.
-            for (slot, view) in (0..).zip(self.views()) {
-                let copy =
-                    vk::BufferCopy { src_offset: u64::from(index) * entry, dst_offset: slot * entry, size: entry };
-                d.cmd_copy_buffer(cmd, view.draw_table.raw, self.draws.raw, &[copy]);
-            }
-        }
-        let raster_view = |view: &ViewWords, area: PixelRect| RasterView {
-            area: [area.col, area.row, area.width, area.height],
-            draw: index,
-            stride: view.stride,
-            _pad: [0; 2],
-        };
-        let range = raster_view(&self.range, range_area);
-        let shadow = self.shadow.as_ref().zip(shadow_area).map(|(view, area)| raster_view(view, area));
-        let triangles = draw.mesh.index_count / 3;
-        let constants = CoverageConstants {
-            views: [range, shadow.unwrap_or(range)],
-            triangles,
-            cull: cull_sign(draw.mesh.solidity),
-            dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
-        };
-        let coverage_uses = |queue: Access, args: Access| {
-            let mut uses: Vec<_> = self.views().map(|v| (&v.nearest, Access::ComputeWrite)).collect();
-            uses.extend([(&self.large, queue), (&self.large_args, args), (&self.draws, Access::UniformRead)]);
-            uses
-        };
-        enc.access(&[], &coverage_uses(Access::ComputeWrite, Access::ComputeWrite));
-        let groups = triangles.div_ceil(COVERAGE_GROUP);
-        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
-        let coverage = if shadow.is_some() { &pipelines.coverage_both } else { &pipelines.coverage_range };
-        self.coverage.dispatch(cmd, coverage, bytemuck::bytes_of(&constants), coverage_groups);
-        enc.access(&[], &coverage_uses(Access::ComputeRead, Access::IndirectAndComputeRead));
-        self.coverage.dispatch_indirect(cmd, &pipelines.large, bytemuck::bytes_of(&constants), &self.large_args);
-        if shadow.is_some() {
-            return;
-        }
         let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
         enc.access(
             &writes,
             &[(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)],
         );
         let pixels = [range_area.width, range_area.height].map(|n| n.div_ceil(8));
-        self.resolve.dispatch(cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels);
+        let range = Self::raster_view(&self.range, range_area, index);
+        self.resolve.dispatch(enc.cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels);
+    }
+}
+
+/// One job of a coverage dispatch: its slot's words, the areas of its views to cover (the
+/// shadow view's where a shadow pass runs), and its draw (number `index` in the draw tables).
+pub(crate) struct CoverageMember<'v, 'a> {
+    pub views: &'v ComputeViews<'a>,
+    pub range_area: PixelRect,
+    pub shadow_area: Option<PixelRect>,
+    pub index: u32,
+    pub draw: &'v Draw<'v>,
+}
+
+/// The coverage passes of a submission's slots: jobs in consecutive slots share a dispatch,
+/// up to `members` of them (the slots in runs of `members`, each run with its bindings of its
+/// slots' words), and the queue of large triangles, the draws and the members' constants, all
+/// reused run after run.
+pub(crate) struct CoverageGroup {
+    members: usize,
+    /// The queue of large (triangle, member, view) entries, room for every triangle of every
+    /// member in every view, and its indirect dispatch's (x, y, z), then its length.
+    large: Buffer,
+    large_args: Buffer,
+    /// Each member's draw in each view, copied from the draw tables before each coverage pass,
+    /// and the members' constants.
+    draws: Buffer,
+    constants: Buffer,
+    /// The bindings of each run of slots.
+    runs: Vec<StorageSet>,
+}
+
+impl CoverageGroup {
+    /// The coverage of `slots` (their words, in slot order), `members` slots a dispatch (1 to
+    /// [`COVERAGE_MEMBERS`]), rendering draws of no more than `max_triangles`.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        pipelines: &ComputeRasterPipelines,
+        slots: &[&ComputeViews],
+        members: usize,
+        max_triangles: u32,
+    ) -> Result<Self> {
+        assert!((1..=COVERAGE_MEMBERS).contains(&members), "1 to {COVERAGE_MEMBERS} jobs a coverage dispatch");
+        let layout = pipelines.coverage(members)?.both.set_layout;
+        // A triangle is queued in a view of a member at most once.
+        let views = if slots.iter().any(|s| s.shadow.is_some()) { 2 } else { 1 };
+        let large_bytes = large_queue_bytes(u64::from(max_triangles) * members as u64, views).max(4);
+        let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), "coverage large triangles")?;
+        let args = BufferDesc {
+            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..BufferDesc::gpu_storage(16)
+        };
+        let large_args = Buffer::new(ctx, args, "coverage large-triangle dispatch")?;
+        let uniform = |bytes: usize| BufferDesc {
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            ..BufferDesc::gpu_storage(bytes as u64)
+        };
+        let draws = Buffer::new(ctx, uniform(2 * COVERAGE_MEMBERS * size_of::<DrawConstants>()), "coverage draws")?;
+        let constants = Buffer::new(ctx, uniform(COVERAGE_MEMBERS * size_of::<MemberConstants>()), "coverage members")?;
+        let runs = slots
+            .chunks(members)
+            .enumerate()
+            .map(|(run, slots)| {
+                // Each member's words in each view; where a member or a view is missing, the
+                // run's first range view's, never written.
+                let member_words = |m: usize, shadow: bool| {
+                    let views = slots.get(m).unwrap_or(&slots[0]);
+                    match (shadow, &views.shadow) {
+                        (true, Some(words)) => &words.nearest,
+                        _ => &views.range.nearest,
+                    }
+                };
+                let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
+                buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
+                buffers.extend([&large, &large_args]);
+                StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self { members, large, large_args, draws, constants, runs })
+    }
+
+    /// Jobs a coverage dispatch covers.
+    pub fn members(&self) -> usize {
+        self.members
+    }
+
+    /// Records the coverage passes of one run of slots (number `run`), `members[m]` the job of
+    /// its slot m, where the compute rasterizer renders it. Both views' words are left for the
+    /// shadow mask, which resolves the range view (shadow_pass.rs), or for the resolve pass
+    /// where there is no shadow view ([`ComputeViews::record_resolve`]).
+    pub fn record(
+        &self,
+        enc: &mut Encoder,
+        pipelines: &ComputeRasterPipelines,
+        run: usize,
+        members: &[Option<CoverageMember>],
+    ) -> Result<()> {
+        let covered: Vec<(usize, &CoverageMember)> =
+            members.iter().enumerate().filter_map(|(m, member)| Some((m, member.as_ref()?))).collect();
+        if covered.is_empty() {
+            return Ok(());
+        }
+        let coverage = pipelines.coverage(self.members)?;
+        let cmd = enc.cmd;
+        // Each view's words, where the job covers it: the rows of its area are emptied, not
+        // the whole view: a hypothesis costs its footprint, not the image. Nothing reads a
+        // word beyond the area's rows, as nothing reads the attachments beyond the area that
+        // the graphics pass clears (draw.rs).
+        let mut emptied = Vec::new();
+        for (_, member) in &covered {
+            let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
+            for (view, area) in std::iter::once((&member.views.range, member.range_area)).chain(shadow) {
+                let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
+                emptied.push((view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
+            }
+        }
+        let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
+        cleared.extend([&self.large_args, &self.draws, &self.constants].map(|b| (b, Access::TransferWrite)));
+        for (_, member) in &covered {
+            cleared.extend(member.views.views().map(|view| (view.draw_table, Access::TransferRead)));
+        }
+        enc.access(&[], &cleared);
+        let entry = size_of::<DrawConstants>() as u64;
+        let mut constants = [<MemberConstants as bytemuck::Zeroable>::zeroed(); COVERAGE_MEMBERS];
+        for &(m, member) in &covered {
+            let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);
+            let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
+            let triangles = member.draw.mesh.index_count / 3;
+            constants[m] = MemberConstants {
+                views: [
+                    range,
+                    shadow.map_or(range, |(view, area)| ComputeViews::raster_view(view, area, member.index)),
+                ],
+                triangles,
+                cull: cull_sign(member.draw.mesh.solidity),
+                dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
+                _pad: 0,
+            };
+        }
+        let d = &enc.ctx().device;
+        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
+        // rows lie within the views' words, and their bytes are a multiple of 4; the copies and
+        // updates lie within the uniform blocks.
+        unsafe {
+            for &(view, offset, size) in &emptied {
+                d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
+            }
+            // No workgroups, an empty queue: (x, y, z, length).
+            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+            d.cmd_update_buffer(cmd, self.constants.raw, 0, bytemuck::cast_slice(&constants));
+            // Each view's draw; without a shadow view, the second is loaded but never used.
+            for &(m, member) in &covered {
+                for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
+                    let copy = vk::BufferCopy {
+                        src_offset: u64::from(member.index) * entry,
+                        dst_offset: slot * entry,
+                        size: entry,
+                    };
+                    d.cmd_copy_buffer(cmd, view.draw_table.raw, self.draws.raw, &[copy]);
+                }
+            }
+        }
+        let uses = |queue: Access, args: Access| {
+            let mut uses: Vec<_> = covered
+                .iter()
+                .flat_map(|(_, member)| member.views.views().map(|v| (&v.nearest, Access::ComputeWrite)))
+                .collect();
+            uses.extend([(&self.large, queue), (&self.large_args, args)]);
+            uses.extend([&self.draws, &self.constants].map(|b| (b, Access::UniformRead)));
+            uses
+        };
+        enc.access(&[], &uses(Access::ComputeWrite, Access::ComputeWrite));
+        let triangles = covered.iter().map(|(_, member)| member.draw.mesh.index_count / 3).max().unwrap_or(0);
+        let groups = triangles.div_ceil(COVERAGE_GROUP);
+        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
+        let both = covered.iter().any(|(_, member)| member.shadow_area.is_some() && member.views.shadow.is_some());
+        let pipeline = if both { &coverage.both } else { &coverage.range };
+        // Slices up to the last member covered; the others' triangle counts are 0.
+        let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
+        let set = &self.runs[run];
+        set.dispatch_slices(cmd, pipeline, &[], coverage_groups, slices);
+        enc.access(&[], &uses(Access::ComputeRead, Access::IndirectAndComputeRead));
+        set.dispatch_indirect(cmd, &coverage.large, &[], &self.large_args);
+        Ok(())
     }
 }

@@ -11,21 +11,21 @@
 //! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
 //! resource and the [`Encoder`] derives the barriers.
 
-use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews};
+use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::host_view::HostView;
 use super::pipelines::Pipelines;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
-use super::targets::ViewKind;
+use super::targets::{ViewKind, ViewTargets};
 use super::Views;
 use crate::effects::{Effect, Effects, EFFECT_ORDER};
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
 use crate::render_output::PassTime;
-use crate::sensor::{PixelRect, Sensor};
-use crate::shadow::ShadowSettings;
+use crate::sensor::{PixelRect, Sensor, ViewGrid};
+use crate::shadow::{ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
@@ -58,9 +58,9 @@ pub(crate) struct SlotShape<'a> {
     pub sink: SinkKind,
     /// The effect buffers to make, where effects are named.
     pub effects: Option<EffectShape<'a>>,
-    /// The range view's draw table and the most triangles of any draw, where the compute
-    /// rasterizer renders (it reads the shadow view's table from `shadow`).
-    pub compute_raster: Option<(&'a Buffer, u32)>,
+    /// The range view's draw table, where the compute rasterizer renders (it reads the shadow
+    /// view's table from `shadow`).
+    pub compute_raster: Option<&'a Buffer>,
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
     pub from_host: bool,
@@ -98,12 +98,12 @@ impl<'a> Slot<'a> {
         };
         // Before the mask's bindings: the mask reads the compute rasterizer's shadow words.
         let compute = match (shape.compute_raster, raster_pipelines) {
-            (Some((range_table, max_triangles)), Some(rp)) => {
+            (Some(range_table), Some(rp)) => {
                 let range_view = ComputeTarget { size: (w, h), draw_table: range_table };
                 let shadow_view = shape
                     .shadow
                     .map(|(shadow_width, table)| ComputeTarget { size: (shadow_width, h), draw_table: table });
-                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, max_triangles, name)?)
+                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, name)?)
             }
             _ => None,
         };
@@ -134,6 +134,11 @@ impl<'a> Slot<'a> {
     /// The range view's label and z attachments, which a compute sink reads.
     pub fn range_label_and_z(&self) -> (&Image, &Image) {
         (self.range.label(), self.range.z())
+    }
+
+    /// The compute rasterizer's visibility words, where it renders.
+    pub fn compute_views(&self) -> Option<&ComputeViews<'a>> {
+        self.compute.as_ref()
     }
 
     /// The shadowed labels, where a shadow pass ran (host-visible for a readback slot).
@@ -217,7 +222,9 @@ impl<'t> PassClock<'t> {
         Self { timestamps, names: Vec::new() }
     }
 
-    fn start(&mut self, cmd: vk::CommandBuffer) {
+    /// Resets the clock and marks the start of the first pass: record before a job's
+    /// coverage (`Passes::record_coverage`) or its passes.
+    pub fn start(&mut self, cmd: vk::CommandBuffer) {
         self.timestamps.reset(cmd);
         self.timestamps.write(cmd, 0);
     }
@@ -248,20 +255,68 @@ pub(crate) struct Passes<'a> {
     pub effects: &'a Effects,
 }
 
-impl Passes<'_> {
-    /// Records one job's passes into the encoder's command buffer.
+/// A job's shadow pass, where the mode and θ ask for one and the job's rows reach it: the
+/// shadow view's targets, grid and area, the mask's output and bindings, and the test.
+type ShadowPass<'s> = (&'s ViewTargets, &'s ViewGrid, PixelRect, &'s Buffer, &'s MaskBindings, ShadowTest);
+
+impl<'p> Passes<'p> {
+    /// The compute rasterizer's state and pipelines for a job it renders (views of one draw,
+    /// compute_raster.rs), with the draw and its index in the draw tables.
+    fn compute_job<'s>(
+        &self,
+        slot: &'s Slot<'s>,
+        job: &'s Job<'s>,
+    ) -> Option<(&'s ComputeViews<'s>, &'p ComputeRasterPipelines, (u32, &'s Draw<'s>))> {
+        match (&slot.compute, self.raster_pipelines, job.draws, job.host_view) {
+            (Some(state), Some(rp), [draw], None) if job.compute => Some((state, rp, (job.first_draw_index, draw))),
+            _ => None,
+        }
+    }
+
+    fn shadow_pass<'s>(&self, slot: &'s Slot<'s>, job: &'s Job<'s>) -> Option<ShadowPass<'s>> {
+        match (&slot.shadow, &job.views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings) {
+            (Some(targets), Some(grid), Some(area), Some(masked), Some(bindings)) => {
+                self.shadow.test().map(|test| (&**targets, grid, area, masked, bindings, test))
+            }
+            _ => None,
+        }
+    }
+
+    /// Records the compute rasterizer's coverage of a run of jobs in one dispatch (`group`'s
+    /// run number `run`), `jobs[m]` the job in the run's slot m; before the jobs' own passes
+    /// ([`Passes::record`]). Jobs the graphics pipeline renders are left to those.
+    pub fn record_coverage(
+        &self,
+        enc: &mut Encoder,
+        group: &CoverageGroup,
+        run: usize,
+        jobs: &[(&Slot, &Job)],
+    ) -> Result<()> {
+        let Some(rp) = self.raster_pipelines else {
+            return Ok(());
+        };
+        let members: Vec<Option<CoverageMember>> = jobs
+            .iter()
+            .map(|&(slot, job)| {
+                let (views, _, (index, draw)) = self.compute_job(slot, job)?;
+                let shadow_area = self.shadow_pass(slot, job).map(|(_, _, area, ..)| area);
+                Some(CoverageMember { views, range_area: job.area, shadow_area, index, draw })
+            })
+            .collect();
+        group.record(enc, rp, run, &members)
+    }
+
+    /// Records one job's passes into the encoder's command buffer, after its coverage where
+    /// the compute rasterizer renders it ([`Passes::record_coverage`]). A clock given laps each
+    /// pass; its caller started it ([`PassClock::start`]) before the coverage.
     pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, mut clock: Option<&mut PassClock>) {
         let (p, sensor) = (self.pipelines, self.sensor);
         let cmd = enc.cmd;
         let views = job.views;
-        // The compute rasterizer renders views of one draw (compute_raster.rs).
-        let compute = match (&slot.compute, self.raster_pipelines, job.draws) {
-            (Some(state), Some(rp), [draw]) if job.compute => Some((state, rp, (job.first_draw_index, draw))),
-            _ => None,
-        };
         if let Some(host_view) = job.host_view {
             return self.record_from_host(enc, slot, job, host_view, sink, clock);
         }
+        let compute = self.compute_job(slot, job);
         if compute.is_none() {
             let mut prepare = Vec::new();
             for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
@@ -270,23 +325,16 @@ impl Passes<'_> {
             }
             enc.access(&prepare, &[]);
         }
-        if let Some(c) = &mut clock {
-            c.start(cmd);
-        }
-        // The shadow view, where the mode and θ ask for one and the job's rows reach it.
-        let shadow = match (&slot.shadow, &views.shadow, job.shadow_area, &slot.masked, &slot.mask_bindings) {
-            (Some(targets), Some(grid), Some(area), Some(masked), Some(bindings)) => {
-                self.shadow.test().map(|test| (&**targets, grid, area, masked, bindings, test))
-            }
-            _ => None,
-        };
+        let shadow = self.shadow_pass(slot, job);
         match compute {
-            // Both views in one coverage pass (compute_raster.rs).
-            Some((state, rp, draw)) => {
-                let shadow_area = shadow.map(|(_, _, area, ..)| area);
-                state.record(enc, rp, (&slot.range, job.area), shadow_area, draw);
+            // Both views were covered in one pass (compute_raster.rs); without a shadow mask
+            // to resolve the range view's words, the resolve pass does.
+            Some((state, rp, (index, _))) => {
+                if shadow.is_none() {
+                    state.record_resolve(enc, rp, (&slot.range, job.area), index);
+                }
                 if let Some(c) = &mut clock {
-                    c.lap(cmd, if shadow_area.is_some() { "range and shadow" } else { "range" });
+                    c.lap(cmd, if shadow.is_some() { "range and shadow" } else { "range" });
                 }
             }
             None => {
@@ -369,9 +417,6 @@ impl Passes<'_> {
         mut clock: Option<&mut PassClock>,
     ) {
         let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
-        if let Some(c) = &mut clock {
-            c.start(enc.cmd);
-        }
         host_view.record(enc, &slot.range, shadowed);
         if let Some(c) = &mut clock {
             c.lap(enc.cmd, "exact upload");

@@ -3,7 +3,9 @@
 //! passes and no waits between hypotheses.
 //!
 //! The passes are render's (src/render/passes.rs); this file adds the score pass as their
-//! sink. Render targets live in a few slots reused round-robin; a slot's next hypothesis
+//! sink. Render targets live in a few slots reused round-robin, and the compute rasterizer
+//! covers the hypotheses of a run of consecutive slots in one dispatch before their other
+//! passes (src/render/compute_raster.rs, `CoverageGroup`); a slot's next hypothesis
 //! waits (by barrier) for that slot's previous score pass, and each score pass for the one
 //! before it, since both add to the one counts buffer (synchronization validation sees the
 //! buffer bound, and atomics are writes to it). Slot images are sized for the largest
@@ -20,8 +22,8 @@ use crate::exact::{render_exact, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
+    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink,
+    SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -192,19 +194,30 @@ pub(crate) fn count_batch(
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
-        // The most triangles of a hypothesis the compute rasterizer renders (its queue's room).
-        compute_raster: range_table.as_ref().zip(
-            items
-                .iter()
-                .zip(&jobs)
-                .filter(|(_, job)| job.as_ref().is_some_and(|j| j.compute))
-                .map(|(i, _)| i.mesh.index_count / 3)
-                .max(),
-        ),
+        compute_raster: range_table.as_ref(),
         from_host: !host_views.is_empty(),
     };
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
+    // The compute rasterizer covers consecutive slots' hypotheses in one dispatch, as many as
+    // the renderer asks for and its queue of large triangles, which has room for every
+    // triangle of every member in both views, can bind.
+    let max_triangles = items
+        .iter()
+        .zip(&jobs)
+        .filter(|(_, job)| job.as_ref().is_some_and(|j| j.compute))
+        .map(|(i, _)| i.mesh.index_count / 3)
+        .max();
+    let coverage_views: Vec<_> = slots.iter().filter_map(|slot| slot.compute_views()).collect();
+    let coverage = match max_triangles {
+        Some(triangles) if coverage_views.len() == slots.len() => {
+            let queue_room = large_queue_bytes(u64::from(triangles), 2).max(1);
+            let fits = usize::try_from(ctx.max_storage_buffer_range() / queue_room).unwrap_or(usize::MAX);
+            let members = renderer.hypotheses_per_dispatch().min(slots.len()).min(fits).max(1);
+            Some(renderer.coverage_group(&coverage_views, members, triangles)?)
+        }
+        _ => None,
+    };
     let bytes = (counts_words as u64 * 4).max(4);
     let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
     let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
@@ -235,7 +248,22 @@ pub(crate) fn count_batch(
         // SAFETY: cmd is recording; the buffer is not in use.
         unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
         enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-        for (recorded, (item, job)) in items.iter().zip(&jobs).filter_map(|(i, j)| Some((i, j.as_ref()?))).enumerate() {
+        let recorded: Vec<(&BatchItem, &Job)> =
+            items.iter().zip(&jobs).filter_map(|(item, job)| Some((item, job.as_ref()?))).collect();
+        for (n, &(item, job)) in recorded.iter().enumerate() {
+            let position = n % slots.len();
+            let slot = &slots[position];
+            // The first job of each run of slots records the run's coverage: its own and the
+            // next jobs' in the run's slots (CoverageGroup).
+            if let Some(group) = coverage.as_ref().filter(|g| position.is_multiple_of(g.members())) {
+                let run_length = group.members().min(slots.len() - position);
+                let run_jobs: Vec<_> = (0..)
+                    .zip(&recorded[n..])
+                    .take(run_length)
+                    .map(|(m, &(_, job))| (&slots[position + m], job))
+                    .collect();
+                passes.record_coverage(&mut enc, group, position / group.members(), &run_jobs)?;
+            }
             let score = |offset: usize| ScoreConstants {
                 counts_offset: offset as u32,
                 width: sensor.width,
@@ -249,7 +277,7 @@ pub(crate) fn count_batch(
                 dx: sensor.pitch[0] as f32,
                 dy: sensor.pitch[1] as f32,
             };
-            let bindings = &score_bindings[recorded % slots.len()];
+            let bindings = &score_bindings[position];
             let record_scores = |enc: &mut Encoder, images: &JobImages| {
                 let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
                 let mut buffers = vec![(settings.sensed.pixels, Access::ComputeRead), (&counts, Access::ComputeWrite)];
@@ -272,7 +300,7 @@ pub(crate) fn count_batch(
             };
             // The unshadowed labels are the range view's.
             let sink = Sink::Compute { record: &record_scores, reads_range_label: item.unshadowed_offset.is_some() };
-            passes.record(&mut enc, &slots[recorded % slots.len()], job, &sink, None);
+            passes.record(&mut enc, slot, job, &sink, None);
         }
         enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
         let region = [vk::BufferCopy::default().size(bytes)];
