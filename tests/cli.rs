@@ -254,6 +254,29 @@ fn verify_runs_a_batch_of_1024_from_the_cli() {
 }
 
 #[test]
+fn verify_covers_hypotheses_in_groups_with_the_same_scores() {
+    let (d, exr) = sensed_example("verify_grouped");
+    let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
+    let scores = |n: &str| {
+        let path = d.join(format!("scores-{n}.jsonl"));
+        let out = verify(&hyps, &exr, &path, &["--raster", "compute", "--hypotheses-per-dispatch", n]);
+        let stdout = text(&out.stdout);
+        assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+        let expected = format!("compute rasterizer: {n} hypothes");
+        assert!(stdout.lines().any(|l| l.starts_with(&expected)), "{expected:?} in {stdout}");
+        std::fs::read_to_string(path).unwrap()
+    };
+    // The example's three hypotheses in one coverage dispatch, and each in its own.
+    assert_eq!(scores("3"), scores("1"));
+    for bad in ["0", "5", "many"] {
+        let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--hypotheses-per-dispatch", bad]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains("--hypotheses-per-dispatch"), "{bad}: {stderr}");
+    }
+}
+
+#[test]
 fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     let (d, exr) = sensed_example("verify_bad");
     let pose = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";

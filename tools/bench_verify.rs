@@ -8,9 +8,10 @@
 //! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
 //! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024², with
 //! label-mode and depth-mode shadows. Both take the fastest of five batches per rasterizer,
-//! the rasterizers in turn (`fastest_in_turn`).
+//! the rasterizers in turn (`fastest_in_turn`). Between them, the compute rasterizer covering
+//! one hypothesis a coverage dispatch against four (`Renderer::with_hypotheses_per_dispatch`).
 //! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
-//! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these three.
+//! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these four.
 //!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
@@ -24,7 +25,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::RangeImage;
 use rangesynth::limits::MemoryBudget;
-use rangesynth::render::Raster;
+use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::scene::Scene;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
@@ -47,6 +48,7 @@ fn main() -> anyhow::Result<()> {
     memory_by_batch(&[&verifier, &compute], &sensed, &scene, quick)?;
     if std::env::args().any(|a| a == "--rasters") {
         raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
+        grouping_costs(&sensed, &scene, quick)?;
         return filling_costs(&[&verifier, &compute], quick);
     }
     println!(
@@ -253,6 +255,50 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         let rates: Vec<f64> = fastest_in_turn(ROUNDS, &jobs)?.iter().map(|s| 64.0 / s).collect();
         let name = format!("{model_name} ({triangles})");
         println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
+    }
+    Ok(())
+}
+
+/// Hypotheses per second with the compute rasterizer covering one hypothesis a coverage
+/// dispatch and covering COVERAGE_MEMBERS, label-mode shadows at 256² (the issue's goal on a
+/// GPU: 100,000 a second for a 10k-triangle model).
+fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
+    let batch = if quick { 64 } else { 256 };
+    let members = [1, COVERAGE_MEMBERS];
+    println!(
+        "
+compute rasterizer, hypotheses a coverage dispatch: label-mode shadows, batches of {batch}"
+    );
+    println!(
+        "{:<26} {:>14} {:>14} {:>10}",
+        "model (triangles)",
+        format!("{} hyp/s", members[0]),
+        format!("{} hyp/s", members[1]),
+        "ratio"
+    );
+    let verifiers: Vec<Verifier> = members
+        .iter()
+        .map(|&n| {
+            let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
+            Verifier::new(renderer.with_hypotheses_per_dispatch(n))
+        })
+        .collect::<rangesynth::Result<_>>()?;
+    let settings = settings(scene.sensor, ShadowMode::Label);
+    for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
+        let mut batches = Vec::new();
+        for verifier in &verifiers {
+            let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
+            verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
+            batches.push(hypotheses);
+        }
+        let jobs: Vec<_> = verifiers
+            .iter()
+            .zip(&batches)
+            .map(|(verifier, hypotheses)| move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop))
+            .collect();
+        let rates: Vec<f64> = fastest_in_turn(ROUNDS, &jobs)?.iter().map(|s| batch as f64 / s).collect();
+        let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
+        println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
 }

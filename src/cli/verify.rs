@@ -15,7 +15,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
-use rangesynth::render::{Raster, COMPUTE_CROSSOVER};
+use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS};
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -49,6 +49,11 @@ pub struct VerifyArgs {
     /// Most hypotheses per GPU submission.
     #[arg(long, default_value_t = MAX_CHUNK)]
     chunk_size: usize,
+    /// Hypotheses the compute rasterizer covers in one dispatch, 1 to 4 (default: 4 on a GPU,
+    /// where it saves a dispatch and a barrier each; 1 on a CPU device such as lavapipe, where
+    /// those cost next to nothing). The scores are the same either way.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=COVERAGE_MEMBERS as u64))]
+    hypotheses_per_dispatch: Option<u64>,
     /// How many of the best hypotheses the summary lists.
     #[arg(long, default_value_t = 10)]
     top: usize,
@@ -93,7 +98,11 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     )?;
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     drop(image);
-    let renderer = Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(raster);
+    let mut renderer =
+        Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(raster);
+    if let Some(n) = args.hypotheses_per_dispatch {
+        renderer = renderer.with_hypotheses_per_dispatch(n as usize);
+    }
     let verifier = Verifier::new(renderer).context("starting Vulkan")?;
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
@@ -209,6 +218,10 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Summ
              device has it; else graphics)"
         ),
         raster => println!("raster: {}", raster.as_str()),
+    }
+    if renderer.raster() != Raster::Graphics {
+        let n = renderer.hypotheses_per_dispatch();
+        println!("compute rasterizer: {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
     }
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
