@@ -39,7 +39,7 @@ layout(local_size_x = 64) in;
 
 // Each member's draw in each view, copied from the draw tables before the pass
 // (compute_raster.rs): draws[2m] the range view's of member m, draws[2m + 1] its shadow
-// view's (where there is none, never read). A uniform block, not a storage buffer: a software
+// view's (where it has none, whatever was there, read only to cull: it covers no pixels). A uniform block, not a storage buffer: a software
 // rasterizer loads a uniform block's value once for all the invocations it runs together, a
 // storage buffer's invocation by invocation (dense sphere at 256², coverage 4.7–4.8 →
 // 4.45–4.55 ms).
@@ -48,7 +48,7 @@ layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMB
 // What a member's pass needs beside its draws; matches `MemberConstants` in
 // src/render/compute_raster.rs.
 struct Member {
-    RasterView views[2]; // range view, shadow view (a copy of the range view's where none)
+    RasterView views[2]; // range view, shadow view (of no pixels where the member has none)
     uint triangles;      // the mesh's triangle count; 0 for a member with nothing to cover
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
     uint dealt_rows;     // blocks of the workgroups dealt over the stripes, per stripe (main)
@@ -57,7 +57,8 @@ struct Member {
 layout(set = 0, binding = 1, std140) uniform Members { Member members[MAX_MEMBERS]; };
 
 // Each member's visibility words in each view (where a view or a member is missing, another
-// member's are bound, never written).
+// member's are bound, never written: a member with no job covers no triangles, a view of no
+// pixels none of them).
 layout(set = 0, binding = 2, std430) buffer RangeWords0 { uint64_t words[]; } range_words0;
 layout(set = 0, binding = 3, std430) buffer RangeWords1 { uint64_t words[]; } range_words1;
 layout(set = 0, binding = 4, std430) buffer RangeWords2 { uint64_t words[]; } range_words2;
@@ -89,7 +90,8 @@ layout(constant_id = 1) const uint VIEW_COUNT = 2u;
 // Workgroups a block, and stripes the blocks are dealt over (powers of two; main).
 layout(constant_id = 2) const uint DEAL_BLOCK = 1u;
 layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
-// The members a dispatch covers (1 to MAX_MEMBERS; see above).
+// 1: a dispatch covers one job, the member the constant 0; MAX_MEMBERS: up to MAX_MEMBERS
+// (see above).
 layout(constant_id = 4) const uint MEMBERS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the

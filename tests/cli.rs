@@ -262,7 +262,7 @@ fn verify_covers_hypotheses_in_groups_with_the_same_scores() {
         let out = verify(&hyps, &exr, &path, &["--raster", "compute", "--hypotheses-per-dispatch", n]);
         let stdout = text(&out.stdout);
         assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
-        let expected = format!("compute rasterizer: {n} hypothes");
+        let expected = format!("compute rasterizer: up to {n} hypothes");
         assert!(stdout.lines().any(|l| l.starts_with(&expected)), "{expected:?} in {stdout}");
         std::fs::read_to_string(path).unwrap()
     };

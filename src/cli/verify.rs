@@ -219,9 +219,9 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Summ
         ),
         raster => println!("raster: {}", raster.as_str()),
     }
-    if renderer.raster() != Raster::Graphics {
+    if renderer.may_compute() {
         let n = renderer.hypotheses_per_dispatch();
-        println!("compute rasterizer: {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
+        println!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
     }
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));

@@ -227,9 +227,11 @@ impl GpuContext {
         }))
     }
 
-    /// Whether the device can run the compute rasterizer (64-bit integers and buffer atomics).
+    /// Whether the device can run the compute rasterizer: 64-bit integers and buffer atomics,
+    /// and as many storage buffers a shader stage as its coverage pass binds.
     pub fn supports_compute_raster(&self) -> bool {
-        self.int64_atomics
+        let storage_buffers = self.limits.max_per_stage_descriptor_storage_buffers as usize;
+        self.int64_atomics && storage_buffers >= crate::render::COVERAGE_STORAGE_BUFFERS
     }
 
     /// The most bytes the device binds as one storage buffer (maxStorageBufferRange): it bounds

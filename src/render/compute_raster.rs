@@ -188,6 +188,11 @@ const MAX_GROUPS: u32 = 65_535;
 /// each member's words).
 pub const COVERAGE_MEMBERS: usize = 4;
 
+/// Storage buffers the coverage passes bind: each member's words in each view, the queue of
+/// large triangles and its dispatch arguments (a device binding fewer a stage cannot run the
+/// compute rasterizer; Vulkan guarantees 4, the GPUs it targets bind thousands).
+pub const COVERAGE_STORAGE_BUFFERS: usize = 2 * COVERAGE_MEMBERS + 2;
+
 /// The coverage passes' pipelines for dispatches of `members` jobs.
 struct CoveragePipelines {
     /// The small triangles' coverage of the range view alone, and of both views.
@@ -200,14 +205,14 @@ impl CoveragePipelines {
     fn new(ctx: &Arc<GpuContext>, members: u32) -> Result<Self> {
         // Both uniform blocks (the members' draws, then their constants), each member's words
         // in each view, the large-triangle queue and its dispatch arguments.
-        let words = 2 * COVERAGE_MEMBERS;
-        let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: words + 2 };
+        let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
         // The coverage shader's specialization constants: MAX_GROUPS, the views it covers (the
         // large triangles' pass reads each queued triangle's view), how it deals its
-        // workgroups, and the members of a dispatch.
+        // workgroups, and whether a dispatch covers one job or up to COVERAGE_MEMBERS.
         let covering = |code, views: u32, name: &str| {
             let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members];
-            ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {members} a dispatch"))
+            let dispatch = if members == 1 { "one job" } else { "grouped" };
+            ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {dispatch}"))
         };
         Ok(Self {
             range: covering(shaders::RASTER_COMP, 1, "compute raster coverage (range view)")?,
@@ -249,7 +254,8 @@ impl ComputeRasterPipelines {
         })
     }
 
-    /// The coverage pipelines for dispatches of `members` jobs (1 to [`COVERAGE_MEMBERS`]).
+    /// The coverage pipelines for dispatches of `members` jobs (1 to [`COVERAGE_MEMBERS`]): one
+    /// job's, or the grouped ones, which cover up to [`COVERAGE_MEMBERS`].
     fn coverage(&self, members: usize) -> Result<&CoveragePipelines> {
         if members == 1 {
             return Ok(&self.single);
@@ -471,6 +477,9 @@ impl CoverageGroup {
                 emptied.push((view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
             }
         }
+        // Only the covered members' words are declared: the others bound beside them (a
+        // graphics job's slot, slots past a short run's end) are never touched, their members
+        // covering no triangles.
         let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
         cleared.extend([&self.large_args, &self.draws, &self.constants].map(|b| (b, Access::TransferWrite)));
         for (_, member) in &covered {
@@ -483,10 +492,13 @@ impl CoverageGroup {
             let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
             let triangles = member.draw.mesh.index_count / 3;
+            // A member without a shadow view, in a dispatch covering others' (no batch has
+            // one today: the mode and θ decide for all its jobs), covers no pixels there.
+            let no_shadow = RasterView { area: [0; 4], ..range };
             constants[m] = MemberConstants {
                 views: [
                     range,
-                    shadow.map_or(range, |(view, area)| ComputeViews::raster_view(view, area, member.index)),
+                    shadow.map_or(no_shadow, |(view, area)| ComputeViews::raster_view(view, area, member.index)),
                 ],
                 triangles,
                 cull: cull_sign(member.draw.mesh.solidity),
@@ -505,7 +517,8 @@ impl CoverageGroup {
             // No workgroups, an empty queue: (x, y, z, length).
             d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
             d.cmd_update_buffer(cmd, self.constants.raw, 0, bytemuck::cast_slice(&constants));
-            // Each view's draw; without a shadow view, the second is loaded but never used.
+            // Each view's draw the member has: draws[2m] its range view's, draws[2m + 1] its
+            // shadow view's.
             for &(m, member) in &covered {
                 for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
                     let copy = vk::BufferCopy {

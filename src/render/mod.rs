@@ -21,7 +21,7 @@ mod targets;
 pub use crate::render_output::{PassTime, RenderOutput};
 pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use compute_raster::{ComputeViews, CoverageGroup};
-pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS};
+pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -225,9 +225,9 @@ impl Renderer {
         }
     }
 
-    /// Whether the compute rasterizer may render any view: where this renderer's memory
-    /// estimates count its visibility words.
-    pub(crate) fn may_compute(&self) -> bool {
+    /// Whether the compute rasterizer may render any view, by this renderer's choice and its
+    /// device's support: where its memory estimates count its visibility words.
+    pub fn may_compute(&self) -> bool {
         match self.raster {
             Raster::Graphics => false,
             Raster::Compute => true,
