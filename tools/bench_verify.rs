@@ -247,12 +247,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             batches.push(hypotheses);
         }
-        let jobs: Vec<_> = verifiers
-            .iter()
-            .zip(&batches)
-            .map(|(verifier, hypotheses)| move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop))
-            .collect();
-        let rates: Vec<f64> = fastest_in_turn(ROUNDS, &jobs)?.iter().map(|s| 64.0 / s).collect();
+        let rates = rates_in_turn(verifiers, sensed, &settings, &batches)?;
         let name = format!("{model_name} ({triangles})");
         println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
@@ -294,16 +289,27 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             batches.push(hypotheses);
         }
-        let jobs: Vec<_> = verifiers
-            .iter()
-            .zip(&batches)
-            .map(|(verifier, hypotheses)| move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop))
-            .collect();
-        let rates: Vec<f64> = fastest_in_turn(ROUNDS, &jobs)?.iter().map(|s| batch as f64 / s).collect();
+        let rates = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
         println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
+}
+
+/// Hypotheses per second of each verifier verifying its batch: the fastest of ROUNDS, the
+/// verifiers in turn.
+fn rates_in_turn(
+    verifiers: &[&Verifier],
+    sensed: &SensedImage,
+    settings: &VerifySettings,
+    batches: &[Vec<Hypothesis>],
+) -> anyhow::Result<Vec<f64>> {
+    let jobs: Vec<_> = verifiers
+        .iter()
+        .zip(batches)
+        .map(|(verifier, hypotheses)| move || verifier.verify(sensed, settings, hypotheses, &mut |_| {}).map(drop))
+        .collect();
+    Ok(fastest_in_turn(ROUNDS, &jobs)?.iter().zip(batches).map(|(s, batch)| batch.len() as f64 / s).collect())
 }
 
 /// Batches each rasterizer verifies in the rasterizer tables, in turn.
