@@ -72,14 +72,15 @@ pub enum Raster {
 
 /// Triangles per footprint pixel from which `auto` takes the compute rasterizer. Measured on
 /// lavapipe with `bench_verify --rasters` (compute against graphics in the same run, batches
-/// taken in turn; three runs, 2026-11-24): in depth-mode verification at 256², batches of 64,
-/// the box, 0.001 triangles per footprint pixel, ran 1.00–1.12× as fast, spheres of 0.015
-/// 1.35–1.43×, 0.071 1.39–1.48×, 0.17 1.56–1.68×, 0.31 1.63–1.81×, 0.70 1.90–2.07×, 1.3
-/// 2.33–2.42×, 3.1 3.17–3.30×, 32 9.93–10.24×; the box filling a 256² image, 0.00018,
-/// 1.05–1.22× in label mode and 1.05–1.23× in depth mode. Filling 512², 0.000046, it ran
-/// 0.70–0.80× (label) and 0.90–0.95× (depth) as fast (two runs of batches of 16,
-/// 2026-11-23). Compute starts to win between 0.000046 and 0.00018. No other device has been
-/// measured yet; they use the same rule.
+/// taken in turn; three runs, 2026-11-25): in depth-mode verification at 256², batches of 64,
+/// the box, 0.001 triangles per footprint pixel, ran 0.94–1.17× as fast (1.00–1.12× on
+/// 2026-11-24), spheres of 0.015 1.27–1.43×, 0.071 1.26–1.46×, 0.17 1.36–1.49×, 0.31
+/// 1.57–1.61×, 0.70 1.72–1.83×, 1.3 2.09–2.11×, 3.1 2.74–2.86×, 32 9.15–9.44×; the box
+/// filling a 256² image, 0.00018, 0.87–1.19× in label mode and 0.95–1.00× in depth mode
+/// (1.05–1.22× and 1.05–1.23× on 2026-11-24). Filling 512², 0.000046, it ran 0.70–0.80×
+/// (label) and 0.90–0.95× (depth) as fast (two runs of batches of 16, 2026-11-23). The two
+/// are even, within this machine's noise, between 0.00018 and 0.001. No other device has
+/// been measured yet; they use the same rule.
 pub const COMPUTE_CROSSOVER: f64 = 0.0001;
 
 impl Raster {
