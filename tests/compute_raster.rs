@@ -191,11 +191,16 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             .flat_map(|(m, model)| {
                 let model = verifier.model(model, Path::new(".")).unwrap();
                 let bindings = if model.mesh.surface_count() > 1 { vec![(1, 1), (2, 1)] } else { vec![(1, 1)] };
-                (0..4).map(move |k| Hypothesis {
-                    id: format!("{m}-{k}"),
-                    model: model.clone(),
-                    pose: step * DMat4::from_rotation_z(0.05 * f64::from(k)),
-                    bindings: bindings.clone(),
+                (0..4).map(move |k| {
+                    // One sphere far outside the image: its footprint misses it, so it records
+                    // no passes, and the hypotheses after it take the next slots.
+                    let away = if (m, k) == (1, 2) { DVec3::new(50.0, 0.0, 0.0) } else { DVec3::ZERO };
+                    Hypothesis {
+                        id: format!("{m}-{k}"),
+                        model: model.clone(),
+                        pose: DMat4::from_translation(away) * step * DMat4::from_rotation_z(0.05 * f64::from(k)),
+                        bindings: bindings.clone(),
+                    }
                 })
             })
             .collect()
@@ -227,6 +232,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
             out.into_iter().map(|v| (v.counts, v.unshadowed.map(|(c, _)| c))).collect::<Vec<_>>()
         };
         let graphics = counts(&VERIFIER);
+        let far = &graphics[6].0;
+        assert_eq!((far.n1_plus, far.n1_minus, far.n0), (0, 0, 0), "the sphere far outside the image renders nothing");
         assert_eq!(counts(&COMPUTE), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
         // Auto mixes both in one batch: the plane by graphics, the others by compute.
         assert_eq!(counts(&AUTO), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
