@@ -14,7 +14,10 @@ export VK_DRIVER_FILES="$icd" VK_ICD_FILENAMES="$icd" # the second for older loa
 export RANGESYNTH_EXPECT_DEVICE=llvmpipe
 cargo test --locked "$@"
 # The compute rasterizer through the conformance, stability and analytic suites as well (the
-# graphics pipeline ran them above); only on a full run.
+# graphics pipeline ran them above), and through the verification, effects and portability
+# suites covering four hypotheses a dispatch (lavapipe's default is one); only on a full run.
 if [ $# -eq 0 ]; then
   RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic
+  RANGESYNTH_TEST_RASTER=compute RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH=4 \
+    cargo test --locked --test verify --test effects --test portability
 fi

@@ -26,8 +26,10 @@ pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_re
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan
 /// version, with the rasterizer `RANGESYNTH_TEST_RASTER` names (`graphics` unless it is set:
-/// tools/test.sh runs the conformance, stability and analytic suites again with `compute`).
-/// Panics (fails the test) without a device.
+/// tools/test.sh runs the conformance, stability and analytic suites again with `compute`),
+/// covering as many hypotheses a dispatch as `RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH` says
+/// (the device's default unless it is set: tools/test.sh runs the verification suite again
+/// with the compute rasterizer covering four). Panics (fails the test) without a device.
 pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
     let options =
         ContextOptions { validation: true, device: std::env::var("RANGESYNTH_DEVICE").ok(), max_vulkan_version };
@@ -39,7 +41,12 @@ pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
     }
     assert!(renderer.context().validation_enabled());
     let raster = std::env::var("RANGESYNTH_TEST_RASTER").map_or(Ok(Raster::Graphics), |name| name.parse());
-    renderer.with_raster(raster.expect("RANGESYNTH_TEST_RASTER names a rasterizer"))
+    let renderer = renderer.with_raster(raster.expect("RANGESYNTH_TEST_RASTER names a rasterizer"));
+    match std::env::var("RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH") {
+        Ok(n) => renderer
+            .with_hypotheses_per_dispatch(n.parse().expect("RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH is a count")),
+        Err(_) => renderer,
+    }
 }
 
 pub fn renderer() -> &'static Renderer {
