@@ -29,20 +29,20 @@ layout(local_size_x = 64) in;
 // Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
 // dispatch covers up to MAX_MEMBERS jobs, one a z slice of its workgroups (the large
 // triangles' pass reads each queued triangle's member from the queue), so that a GPU pays a
-// dispatch and a barrier per group rather than per hypothesis. MEMBERS, the members this
-// pipeline covers, is a specialization constant: with one, the member is the constant 0 and
-// every read of its constants is at a constant offset, as a software rasterizer needs (it
-// gathers a uniform read at an index it cannot prove the same for all its lanes, lane by lane:
-// dense sphere at 256², coverage 3.29 → 4.58 ms). Matches COVERAGE_MEMBERS in
-// src/render/compute_raster.rs.
+// dispatch and a barrier per group rather than per hypothesis. MEMBERS, a specialization
+// constant, is 1 or MAX_MEMBERS: with 1, the member is the constant 0 and every read of its
+// constants is at a constant offset, as a software rasterizer needs (it gathers a uniform read
+// at an index it cannot prove the same for all its lanes, lane by lane: dense sphere at 256²,
+// coverage 3.29 → 4.58 ms), and keep_word's branches fold away. MAX_MEMBERS matches
+// COVERAGE_MEMBERS in src/render/compute_raster.rs.
 #define MAX_MEMBERS 4
 
 // Each member's draw in each view, copied from the draw tables before the pass
 // (compute_raster.rs): draws[2m] the range view's of member m, draws[2m + 1] its shadow
-// view's (where it has none, whatever was there, read only to cull: it covers no pixels). A uniform block, not a storage buffer: a software
-// rasterizer loads a uniform block's value once for all the invocations it runs together, a
-// storage buffer's invocation by invocation (dense sphere at 256², coverage 4.7–4.8 →
-// 4.45–4.55 ms).
+// view's (where it has none, whatever was there, read only to cull: it covers no pixels). A
+// uniform block, not a storage buffer: a software rasterizer loads a uniform block's value
+// once for all the invocations it runs together, a storage buffer's invocation by invocation
+// (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
 layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMBERS]; };
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
