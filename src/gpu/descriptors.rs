@@ -109,7 +109,8 @@ impl StorageSet {
 
 impl StorageSet {
     /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
-    /// `constants` pushed at offset 0 (none where empty). The set's resources must already be in GENERAL layout.
+    /// `constants` pushed at offset 0 (none where empty). The set's resources must already be
+    /// in GENERAL layout.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
         self.dispatch_slices(cmd, pipeline, constants, groups, 1);
     }

@@ -395,8 +395,10 @@ pub(crate) struct CoverageGroup {
 }
 
 impl CoverageGroup {
-    /// The coverage of `slots` (their words, in slot order), `members` slots a dispatch (1 to
-    /// [`COVERAGE_MEMBERS`]), rendering draws of no more than `max_triangles`.
+    /// The coverage of `slots` (their words, in slot order), up to `members` slots a dispatch
+    /// (1 to [`COVERAGE_MEMBERS`]; fewer where a queue of large triangles with room for every
+    /// triangle of every member would be more than the device binds), rendering draws of no
+    /// more than `max_triangles`.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
@@ -405,10 +407,14 @@ impl CoverageGroup {
         max_triangles: u32,
     ) -> Result<Self> {
         assert!((1..=COVERAGE_MEMBERS).contains(&members), "1 to {COVERAGE_MEMBERS} jobs a coverage dispatch");
-        let layout = pipelines.coverage(members)?.both.set_layout;
-        // A triangle is queued in a view of a member at most once.
+        // A triangle is queued in a view of a member at most once. One member's queue always
+        // fits: a view whose queue would not stays on the graphics path (Renderer::computes).
         let views = if slots.iter().any(|s| s.shadow.is_some()) { 2 } else { 1 };
-        let large_bytes = large_queue_bytes(u64::from(max_triangles) * members as u64, views).max(4);
+        let member_bytes = large_queue_bytes(u64::from(max_triangles), views).max(1);
+        let fitting = usize::try_from(ctx.max_storage_buffer_range() / member_bytes).unwrap_or(usize::MAX);
+        let members = members.min(fitting).max(1);
+        let layout = pipelines.coverage(members)?.both.set_layout;
+        let large_bytes = (member_bytes * members as u64).max(4);
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), "coverage large triangles")?;
         let args = BufferDesc {
             usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,

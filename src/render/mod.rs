@@ -19,7 +19,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
-pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
+pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 use compute_raster::{ComputeViews, CoverageGroup};
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS};
 pub use draw::Draw;
@@ -225,8 +225,9 @@ impl Renderer {
         }
     }
 
-    /// Whether the compute rasterizer may render any view, by this renderer's choice and its
-    /// device's support: where its memory estimates count its visibility words.
+    /// Whether the compute rasterizer may render any view: this renderer's choice is `compute`,
+    /// or `auto` on a device that supports it. Its memory estimates count the visibility words
+    /// there.
     pub fn may_compute(&self) -> bool {
         match self.raster {
             Raster::Graphics => false,

@@ -22,8 +22,8 @@ use crate::exact::{render_exact, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink,
-    SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
+    draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
+    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -200,8 +200,7 @@ pub(crate) fn count_batch(
     let slots: Vec<Slot> =
         (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
     // The compute rasterizer covers consecutive slots' hypotheses in one dispatch, as many as
-    // the renderer asks for and its queue of large triangles, which has room for every
-    // triangle of every member in both views, can bind.
+    // the renderer asks for (and its queue of large triangles can bind: CoverageGroup).
     let max_triangles = items
         .iter()
         .zip(&jobs)
@@ -211,9 +210,7 @@ pub(crate) fn count_batch(
     let coverage_views: Vec<_> = slots.iter().filter_map(|slot| slot.compute_views()).collect();
     let coverage = match max_triangles {
         Some(triangles) if coverage_views.len() == slots.len() => {
-            let queue_room = large_queue_bytes(u64::from(triangles), 2).max(1);
-            let fits = usize::try_from(ctx.max_storage_buffer_range() / queue_room).unwrap_or(usize::MAX);
-            let members = renderer.hypotheses_per_dispatch().min(slots.len()).min(fits).max(1);
+            let members = renderer.hypotheses_per_dispatch().min(slots.len());
             Some(renderer.coverage_group(&coverage_views, members, triangles)?)
         }
         _ => None,
