@@ -275,11 +275,12 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
     };
     println!("\ncompute rasterizer, hypotheses a coverage dispatch: label-mode shadows, batches of {batch}");
     println!(
-        "{:<26} {:>14} {:>14} {:>10}",
+        "{:<26} {:>14} {:>14} {:>10} {:>18}",
         "model (triangles)",
         format!("{} hyp/s", members[0]),
         format!("{} hyp/s", members[1]),
-        "ratio"
+        "ratio",
+        "barriers a hyp."
     );
     let settings = settings(scene.sensor, ShadowMode::Label);
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
@@ -290,8 +291,17 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             batches.push(hypotheses);
         }
         let rates = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
+        // Barriers a GPU waits at, a hypothesis: counted over one more batch of each.
+        let mut barriers = Vec::new();
+        for (verifier, hypotheses) in verifiers.iter().zip(&batches) {
+            let context = verifier.renderer().context();
+            let before = context.barriers_recorded();
+            verifier.verify(sensed, &settings, hypotheses, &mut |_| {})?;
+            barriers.push((context.barriers_recorded() - before) as f64 / hypotheses.len() as f64);
+        }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
-        println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
+        let barriers = format!("{:.2} / {:.2}", barriers[0], barriers[1]);
+        println!("{name:<26} {:>14.1} {:>14.1} {:>9.2}× {barriers:>18}", rates[0], rates[1], rates[1] / rates[0]);
     }
     Ok(())
 }

@@ -19,6 +19,7 @@ use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Environment variable naming the device to use (substring of its name).
@@ -80,6 +81,8 @@ pub struct GpuContext {
     int64_atomics: bool,
     /// Command pools, buffers and fences of finished submissions, reused by the next.
     recorders: Mutex<Vec<Recorder>>,
+    /// Pipeline barriers recorded so far ([`GpuContext::barriers_recorded`]).
+    barriers: AtomicU64,
 }
 
 /// What one submission records into and waits on; one per submission in flight.
@@ -224,6 +227,7 @@ impl GpuContext {
             is_cpu: properties.device_type == vk::PhysicalDeviceType::CPU,
             int64_atomics,
             recorders: Mutex::new(Vec::new()),
+            barriers: AtomicU64::new(0),
         }))
     }
 
@@ -292,6 +296,7 @@ impl GpuContext {
     /// # Safety
     /// `cmd` is recording; every handle in `info` is alive.
     pub(crate) unsafe fn cmd_pipeline_barrier2(&self, cmd: vk::CommandBuffer, info: &vk::DependencyInfo) {
+        self.barriers.fetch_add(1, Ordering::Relaxed);
         // SAFETY: forwarded from the caller.
         unsafe {
             match &self.commands {
@@ -356,6 +361,14 @@ impl GpuContext {
 
     pub fn device_name(&self) -> &str {
         &self.device_name
+    }
+
+    /// Pipeline barriers recorded through this context so far, in every command buffer. Each
+    /// makes a GPU finish the work before it before starting the work after it, so a batch
+    /// should take them per run of hypotheses, not per hypothesis (verify/batch.rs; tests and
+    /// bench_verify count them).
+    pub fn barriers_recorded(&self) -> u64 {
+        self.barriers.load(Ordering::Relaxed)
     }
 
     /// Whether the device is a CPU (a software rasterizer such as lavapipe), not a GPU.

@@ -4,6 +4,11 @@
 //! barrier, and none where a read follows a read in the same layout. No call site tracks a
 //! "from" state.
 //!
+//! A pass that is recorded later, beside others, is a [`Step`]: its uses, then the commands
+//! that run it. Independent jobs' steps recorded together ([`Encoder::record_together`]) share
+//! one barrier: a GPU then waits once for all of them, not once for each (a barrier between
+//! dispatches drains the whole device before the next starts).
+//!
 //! Every resource starts a command buffer as [`Access::Nothing`]: a render target's earlier
 //! contents are discarded (each job clears and draws the pixels it reads), and buffers the
 //! host wrote, or an earlier submission left ready, are visible to a new submission without a
@@ -31,17 +36,27 @@ impl<'a> Encoder<'a> {
         self.ctx
     }
 
-    /// Makes each image and buffer ready for its next use, recording one barrier for all.
+    /// Makes each image and buffer ready for its next use, recording one barrier for all. A
+    /// resource named twice takes one transition; it must be named for one use.
     pub fn access(&mut self, images: &[(&Image, Access)], buffers: &[(&Buffer, Access)]) {
+        let mut named = HashMap::new();
         let mut image_transitions = Vec::new();
         for &(image, to) in images {
-            if let Some(from) = self.transition((vk::ObjectType::IMAGE, image.raw.as_raw()), to) {
+            let handle = (vk::ObjectType::IMAGE, image.raw.as_raw());
+            if Self::named_before(&mut named, handle, to) {
+                continue;
+            }
+            if let Some(from) = self.transition(handle, to) {
                 image_transitions.push(ImageTransition { image, from, to });
             }
         }
         let mut buffer_transitions = Vec::new();
         for &(buffer, to) in buffers {
-            if let Some(from) = self.transition((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to) {
+            let handle = (vk::ObjectType::BUFFER, buffer.raw.as_raw());
+            if Self::named_before(&mut named, handle, to) {
+                continue;
+            }
+            if let Some(from) = self.transition(handle, to) {
                 buffer_transitions.push(BufferTransition { buffer, from, to });
             }
         }
@@ -50,10 +65,61 @@ impl<'a> Encoder<'a> {
         }
     }
 
+    /// Records steps of independent jobs (no two write one resource, nor does one write what
+    /// another reads): their uses behind one barrier, then each one's commands in turn.
+    pub fn record_together(&mut self, steps: Vec<Step<'_>>) {
+        let images: Vec<_> = steps.iter().flat_map(|step| step.images.iter().copied()).collect();
+        let buffers: Vec<_> = steps.iter().flat_map(|step| step.buffers.iter().copied()).collect();
+        self.access(&images, &buffers);
+        for step in steps {
+            (step.record)(self.ctx, self.cmd);
+        }
+    }
+
+    /// Whether `handle` was named before in one call to [`Encoder::access`] (for the same use:
+    /// two uses of a resource at once have no one barrier).
+    fn named_before(
+        named: &mut HashMap<(vk::ObjectType, u64), Access>,
+        handle: (vk::ObjectType, u64),
+        to: Access,
+    ) -> bool {
+        let before = named.insert(handle, to);
+        assert!(before.is_none_or(|use_before| use_before == to), "a resource named for two uses at once");
+        before.is_some()
+    }
+
     /// The use a resource moves from, or `None` when no barrier is needed: a read after the
     /// same read (same stages, same layout).
     fn transition(&mut self, handle: (vk::ObjectType, u64), to: Access) -> Option<Access> {
         let from = self.current.insert(handle, to).unwrap_or(Access::Nothing);
         (!(from == to && to.is_read_only())).then_some(from)
+    }
+}
+
+/// What records a step's commands into a command buffer.
+pub type RecordCommands<'a> = Box<dyn FnOnce(&GpuContext, vk::CommandBuffer) + 'a>;
+
+/// One pass of a job as an [`Encoder`] records it: the uses it makes of images and buffers,
+/// then the commands that run it, recorded once they are ready (no barrier of their own).
+pub struct Step<'a> {
+    pub images: Vec<(&'a Image, Access)>,
+    pub buffers: Vec<(&'a Buffer, Access)>,
+    pub record: RecordCommands<'a>,
+    /// The pass's name in the render summary's times, where it is one that the summary times.
+    pub lap: Option<&'static str>,
+}
+
+impl<'a> Step<'a> {
+    pub fn new(
+        images: Vec<(&'a Image, Access)>,
+        buffers: Vec<(&'a Buffer, Access)>,
+        record: impl FnOnce(&GpuContext, vk::CommandBuffer) + 'a,
+    ) -> Self {
+        Self { images, buffers, record: Box::new(record), lap: None }
+    }
+
+    /// The same step, timed under `name`.
+    pub fn timed(self, name: &'static str) -> Self {
+        Self { lap: Some(name), ..self }
     }
 }

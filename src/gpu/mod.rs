@@ -14,6 +14,6 @@ pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
 pub use compute::ComputePipeline;
 pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::{SetShape, StorageSet};
-pub use encoder::Encoder;
+pub use encoder::{Encoder, Step};
 pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
 pub use timing::Timestamps;

@@ -50,7 +50,7 @@ use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
 use crate::gpu::{
-    shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, SetShape, StorageSet,
+    shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, SetShape, Step, StorageSet,
 };
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
@@ -345,24 +345,22 @@ impl<'a> ComputeViews<'a> {
         RasterView { area: [area.col, area.row, area.width, area.height], draw, stride: view.stride, _pad: [0; 2] }
     }
 
-    /// Records the resolve pass of the range view's words over `range_area`, draw `index`
+    /// The resolve pass of the range view's words over `range_area`, draw `index`
     /// having been covered there (where no shadow mask follows to resolve them): it writes the
     /// range view's colour attachments, in GENERAL layout as a compute pass leaves them.
-    pub fn record_resolve(
-        &self,
-        enc: &mut Encoder,
-        pipelines: &ComputeRasterPipelines,
-        (range_targets, range_area): (&ViewTargets, PixelRect),
+    pub fn resolve_step<'s>(
+        &'s self,
+        pipelines: &'s ComputeRasterPipelines,
+        (range_targets, range_area): (&'s ViewTargets, PixelRect),
         index: u32,
-    ) {
+    ) -> Step<'s> {
         let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
-        enc.access(
-            &writes,
-            &[(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)],
-        );
+        let reads = vec![(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)];
         let pixels = [range_area.width, range_area.height].map(|n| n.div_ceil(8));
         let range = Self::raster_view(&self.range, range_area, index);
-        self.resolve.dispatch(enc.cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels);
+        Step::new(writes, reads, move |_, cmd| {
+            self.resolve.dispatch(cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels)
+        })
     }
 }
 
@@ -457,7 +455,7 @@ impl CoverageGroup {
     /// Records the coverage passes of one run of slots (number `run`), `members[m]` the job of
     /// its slot m, where the compute rasterizer renders it. Both views' words are left for the
     /// shadow mask, which resolves the range view (shadow_pass.rs), or for the resolve pass
-    /// where there is no shadow view ([`ComputeViews::record_resolve`]).
+    /// where there is no shadow view ([`ComputeViews::resolve_step`]).
     pub fn record(
         &self,
         enc: &mut Encoder,

@@ -37,6 +37,7 @@ const _: () = assert!(std::mem::offset_of!(EffectConstants, params) == 48);
 const _: () = assert!(std::mem::offset_of!(EffectConstants, reflectivity_offset) == 64);
 
 /// Where a job's effect passes read and write, beyond the slot's images.
+#[derive(Clone, Copy)]
 pub(crate) struct EffectJob {
     pub region: PixelRect,
     pub size: (u32, u32),

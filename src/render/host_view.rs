@@ -6,7 +6,7 @@
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::exact::ExactImage;
-use crate::gpu::{Access, Buffer, Encoder, GpuContext};
+use crate::gpu::{Access, Buffer, GpuContext, Step};
 use ash::vk;
 use std::sync::Arc;
 
@@ -42,35 +42,37 @@ impl HostView {
         Ok(Self { planes, size: (image.width, image.height) })
     }
 
-    /// Records the copies into the range view's attachments and `shadowed`.
-    pub fn record(&self, enc: &mut Encoder, range: &ViewTargets, shadowed: &Buffer) {
+    /// The copies into the range view's attachments and `shadowed`.
+    pub fn step<'s>(&'s self, range: &'s ViewTargets, shadowed: &'s Buffer) -> Step<'s> {
         let (w, h) = self.size;
         let plane_bytes = u64::from(w) * u64::from(h) * 4;
         let targets: Vec<_> = range.colour.iter().map(|image| (image, Access::TransferWrite)).collect();
-        enc.access(&targets, &[(&self.planes, Access::TransferRead), (shadowed, Access::TransferWrite)]);
-        let cmd = enc.cmd;
-        let d = &enc.ctx().device;
-        for (plane, image) in range.colour.iter().enumerate() {
-            let region = [vk::BufferImageCopy::default()
-                .buffer_offset(plane as u64 * plane_bytes)
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
-            // SAFETY: cmd is recording; the image is w×h in TRANSFER_DST layout (barrier above)
-            // and the plane lies inside the buffer.
-            unsafe {
-                d.cmd_copy_buffer_to_image(
-                    cmd,
-                    self.planes.raw,
-                    image.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &region,
-                )
-            };
-        }
-        let last = [vk::BufferCopy::default().src_offset((Self::PLANES as u64 - 1) * plane_bytes).size(plane_bytes)];
-        // SAFETY: both buffers hold the plane (the shadowed labels are w·h words).
-        unsafe { d.cmd_copy_buffer(cmd, self.planes.raw, shadowed.raw, &last) };
+        let buffers = vec![(&self.planes, Access::TransferRead), (shadowed, Access::TransferWrite)];
+        Step::new(targets, buffers, move |ctx: &GpuContext, cmd| {
+            let d = &ctx.device;
+            for (plane, image) in range.colour.iter().enumerate() {
+                let region = [vk::BufferImageCopy::default()
+                    .buffer_offset(plane as u64 * plane_bytes)
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+                // SAFETY: cmd is recording; the image is w×h in TRANSFER_DST layout (the step's
+                // barrier) and the plane lies inside the buffer.
+                unsafe {
+                    d.cmd_copy_buffer_to_image(
+                        cmd,
+                        self.planes.raw,
+                        image.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &region,
+                    )
+                };
+            }
+            let last =
+                [vk::BufferCopy::default().src_offset((Self::PLANES as u64 - 1) * plane_bytes).size(plane_bytes)];
+            // SAFETY: both buffers hold the plane (the shadowed labels are w·h words).
+            unsafe { d.cmd_copy_buffer(cmd, self.planes.raw, shadowed.raw, &last) };
+        })
     }
 }

@@ -8,8 +8,10 @@
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
 //! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
-//! only when the effects name it (effect_pass.rs). Each pass states the use it makes of each
-//! resource and the [`Encoder`] derives the barriers.
+//! only when the effects name it (effect_pass.rs). Each pass is a [`Step`]: the use it makes
+//! of each resource, from which the [`Encoder`] derives the barriers, and its commands. A job
+//! records its steps one after the other; a run of jobs in different slots records each
+//! stage's steps side by side behind one barrier ([`Passes::record_run`]).
 
 use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember};
 use super::draw::{record_view, Draw, DrawConstants, ViewPass};
@@ -22,7 +24,7 @@ use super::targets::{ViewKind, ViewTargets};
 use super::Views;
 use crate::effects::{Effect, Effects, EFFECT_ORDER};
 use crate::error::Result;
-use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Timestamps};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowSettings, ShadowTest};
@@ -178,10 +180,10 @@ pub(crate) struct Job<'a> {
 pub(crate) enum Sink<'a> {
     /// Copies of the range view's labels and z (the masked labels stay in the slot).
     Readback { label: &'a Buffer, z: &'a Buffer },
-    /// A caller's compute pass over the job's images, recorded after the passes: it states
-    /// its own accesses to the encoder. `reads_range_label`: whether it reads the range view's
-    /// label image (a score of the unshadowed labels), not only the shadowed labels and z.
-    Compute { record: &'a dyn Fn(&mut Encoder, &JobImages), reads_range_label: bool },
+    /// A caller's compute passes over the job's images, recorded after the others, each with
+    /// the uses it makes. `reads_range_label`: whether they read the range view's label image
+    /// (a score of the unshadowed labels), not only the shadowed labels and z.
+    Compute { steps: Box<dyn Fn(JobImages<'a>) -> Vec<Step<'a>> + 'a>, reads_range_label: bool },
 }
 
 impl Sink<'_> {
@@ -309,35 +311,66 @@ impl<'p> Passes<'p> {
     /// Records one job's passes into the encoder's command buffer, after its coverage where
     /// the compute rasterizer renders it ([`Passes::record_coverage`]). A clock given laps each
     /// pass; its caller started it ([`PassClock::start`]) before the coverage.
-    pub fn record(&self, enc: &mut Encoder, slot: &Slot, job: &Job, sink: &Sink, mut clock: Option<&mut PassClock>) {
+    pub fn record<'s>(
+        &'s self,
+        enc: &mut Encoder,
+        slot: &'s Slot<'_>,
+        job: &'s Job<'_>,
+        sink: &Sink<'s>,
+        mut clock: Option<&mut PassClock>,
+    ) {
+        for step in self.steps(slot, job, sink) {
+            let lap = step.lap;
+            enc.record_together(vec![step]);
+            if let (Some(c), Some(name)) = (&mut clock, lap) {
+                c.lap(enc.cmd, name);
+            }
+        }
+    }
+
+    /// Records the passes of a run of jobs in different slots, after their coverage: each
+    /// job's first passes behind one barrier for all of them, then each job's second, and so
+    /// on. A GPU then runs the jobs' masks side by side, then their scores, where one job at
+    /// a time would wait for each pass before the next (`verify`'s batches; the timed
+    /// `render` records one job with [`Passes::record`]).
+    pub fn record_run<'s>(&'s self, enc: &mut Encoder, jobs: &[(&'s Slot<'_>, &'s Job<'_>, &Sink<'s>)]) {
+        let mut steps: Vec<_> = jobs.iter().map(|&(slot, job, sink)| self.steps(slot, job, sink).into_iter()).collect();
+        loop {
+            let stage: Vec<Step> = steps.iter_mut().filter_map(Iterator::next).collect();
+            if stage.is_empty() {
+                return;
+            }
+            enc.record_together(stage);
+        }
+    }
+
+    /// One job's passes in order, each with the uses it makes of its slot's resources.
+    fn steps<'s>(&'s self, slot: &'s Slot<'_>, job: &'s Job<'_>, sink: &Sink<'s>) -> Vec<Step<'s>> {
         let (p, sensor) = (self.pipelines, self.sensor);
-        let cmd = enc.cmd;
         let views = job.views;
         if let Some(host_view) = job.host_view {
-            return self.record_from_host(enc, slot, job, host_view, sink, clock);
+            let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
+            let mut steps = vec![host_view.step(&slot.range, shadowed).timed("exact upload")];
+            steps.extend(self.effects_and_sink(slot, job, Some(shadowed), sink));
+            return steps;
         }
+        let mut steps = Vec::new();
         let compute = self.compute_job(slot, job);
-        if compute.is_none() {
-            let mut prepare = Vec::new();
-            for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
-                prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
-                prepare.push((&targets.depth, Access::DepthAttachmentWrite));
-            }
-            enc.access(&prepare, &[]);
-        }
         let shadow = self.shadow_pass(slot, job);
         match compute {
             // Both views were covered in one pass (compute_raster.rs); without a shadow mask
             // to resolve the range view's words, the resolve pass does.
-            Some((state, rp, (index, _))) => {
-                if shadow.is_none() {
-                    state.record_resolve(enc, rp, (&slot.range, job.area), index);
-                }
-                if let Some(c) = &mut clock {
-                    c.lap(cmd, if shadow.is_some() { "range and shadow" } else { "range" });
-                }
-            }
+            Some((state, rp, (index, _))) => match shadow {
+                None => steps.push(state.resolve_step(rp, (&slot.range, job.area), index).timed("range")),
+                // The coverage's time, up to here.
+                Some(_) => steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}).timed("range and shadow")),
+            },
             None => {
+                let mut prepare = Vec::new();
+                for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
+                    prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
+                    prepare.push((&targets.depth, Access::DepthAttachmentWrite));
+                }
                 let range_pass = ViewPass {
                     pipelines: &p.range,
                     layout: p.raster_layout,
@@ -347,10 +380,9 @@ impl<'p> Passes<'p> {
                     origin: views.origin,
                     area: job.area,
                 };
-                record_view(enc.ctx(), cmd, &range_pass, job.draws, job.first_draw_index);
-                if let Some(c) = &mut clock {
-                    c.lap(cmd, "range");
-                }
+                let record_range =
+                    move |ctx: &GpuContext, cmd| record_view(ctx, cmd, &range_pass, job.draws, job.first_draw_index);
+                steps.push(Step::new(prepare, Vec::new(), record_range).timed("range"));
                 if let Some((targets, grid, area, ..)) = shadow {
                     let shadow_pass = ViewPass {
                         pipelines: &p.shadow,
@@ -361,10 +393,10 @@ impl<'p> Passes<'p> {
                         origin: views.origin,
                         area,
                     };
-                    record_view(enc.ctx(), cmd, &shadow_pass, job.draws, job.first_draw_index);
-                    if let Some(c) = &mut clock {
-                        c.lap(cmd, "shadow");
-                    }
+                    let record_shadow = move |ctx: &GpuContext, cmd| {
+                        record_view(ctx, cmd, &shadow_pass, job.draws, job.first_draw_index)
+                    };
+                    steps.push(Step::new(Vec::new(), Vec::new(), record_shadow).timed("shadow"));
                 }
             }
         }
@@ -394,56 +426,38 @@ impl<'p> Passes<'p> {
             if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }
-            enc.access(&images, &buffers);
             let (mask, constants) = reading_words.unwrap_or((&p.mask, constants));
-            bindings.record(cmd, mask, test, &constants);
-            if let Some(c) = &mut clock {
-                c.lap(cmd, "shadow mask");
-            }
+            let record_mask = move |_: &GpuContext, cmd| bindings.record(cmd, mask, test, &constants);
+            steps.push(Step::new(images, buffers, record_mask).timed("shadow mask"));
             shadowed_labels = Some(masked);
         }
-        self.record_effects_and_sink(enc, slot, job, shadowed_labels, sink, clock);
+        steps.extend(self.effects_and_sink(slot, job, shadowed_labels, sink));
+        steps
     }
 
-    /// Records a job of shadow mode `exact`: its host view copied into the slot, then the
-    /// effects and the sink.
-    fn record_from_host(
-        &self,
-        enc: &mut Encoder,
-        slot: &Slot,
-        job: &Job,
-        host_view: &HostView,
-        sink: &Sink,
-        mut clock: Option<&mut PassClock>,
-    ) {
-        let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
-        host_view.record(enc, &slot.range, shadowed);
-        if let Some(c) = &mut clock {
-            c.lap(enc.cmd, "exact upload");
-        }
-        self.record_effects_and_sink(enc, slot, job, Some(shadowed), sink, clock);
-    }
-
-    /// Records the named effects' passes and the sink, after the range view and (where any)
-    /// the shadowed labels were written.
-    fn record_effects_and_sink(
-        &self,
-        enc: &mut Encoder,
-        slot: &Slot,
-        job: &Job,
-        shadowed_labels: Option<&Buffer>,
-        sink: &Sink,
-        mut clock: Option<&mut PassClock>,
-    ) {
-        let (sensor, cmd, views) = (self.sensor, enc.cmd, job.views);
+    /// The named effects' passes and the sink, after the range view and (where any) the
+    /// shadowed labels were written.
+    fn effects_and_sink<'s>(
+        &'s self,
+        slot: &'s Slot<'_>,
+        job: &'s Job<'_>,
+        shadowed_labels: Option<&'s Buffer>,
+        sink: &Sink<'s>,
+    ) -> Vec<Step<'s>> {
+        let (sensor, views) = (self.sensor, job.views);
+        let mut steps = Vec::new();
         if let (Some(buffers), Some(pipelines)) = (&slot.effects, self.effect_pipelines) {
             // No losses yet, and z 0.0 where no surface is (as the range view is cleared).
             let cleared: Vec<&Buffer> = std::iter::once(&buffers.losses).chain(&buffers.measured_z).collect();
-            enc.access(&[], &cleared.iter().map(|&b| (b, Access::TransferWrite)).collect::<Vec<_>>());
-            for buffer in cleared {
-                // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffer.
-                unsafe { enc.ctx().device.cmd_fill_buffer(cmd, buffer.raw, 0, vk::WHOLE_SIZE, 0) };
-            }
+            let uses = cleared.iter().map(|&b| (b, Access::TransferWrite)).collect();
+            let clear = move |ctx: &GpuContext, cmd| {
+                for buffer in cleared {
+                    // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the
+                    // buffer.
+                    unsafe { ctx.device.cmd_fill_buffer(cmd, buffer.raw, 0, vk::WHOLE_SIZE, 0) };
+                }
+            };
+            steps.push(Step::new(Vec::new(), uses, clear));
             let effect_job = EffectJob {
                 region: job.area,
                 size: (views.range.width, views.range.height),
@@ -458,48 +472,58 @@ impl<'p> Passes<'p> {
                 used.extend(buffers.measured_z.as_ref().map(|z| (z, Access::ComputeWrite)));
                 used.extend(shadowed_labels.map(|m| (m, Access::ComputeRead)));
                 used.extend(slot.reflectivities.map(|r| (r, Access::ComputeRead)));
-                enc.access(&reads, &used);
-                buffers.record(cmd, pipelines, effect, (self.effects, sensor), &effect_job, z_in_buffer);
+                let effects = self.effects;
+                let record = move |_: &GpuContext, cmd| {
+                    buffers.record(cmd, pipelines, effect, (effects, sensor), &effect_job, z_in_buffer)
+                };
+                steps.push(Step::new(reads, used, record).timed(effect.pass_name()));
                 z_in_buffer |= matches!(effect, Effect::Noise | Effect::Quantize);
-                if let Some(c) = &mut clock {
-                    c.lap(cmd, effect.pass_name());
-                }
             }
         }
         let (losses, measured_z) = slot.effect_outputs();
         match sink {
             Sink::Readback { label, z } => {
-                let sources = [(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
-                enc.access(&sources, &[(label, Access::TransferWrite), (z, Access::TransferWrite)]);
+                let sources = vec![(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
                 let (w, h) = (views.range.width, views.range.height);
-                let region = [vk::BufferImageCopy::default()
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
-                let d = &enc.ctx().device;
-                // SAFETY: the images are in TRANSFER_SRC layout; the buffers hold w·h·4 bytes.
-                unsafe {
-                    for (image, buffer) in [(slot.range.label(), label), (slot.range.z(), z)] {
-                        d.cmd_copy_image_to_buffer(
-                            cmd,
-                            image.raw,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            buffer.raw,
-                            &region,
-                        );
+                let copies = [(slot.range.label(), *label), (slot.range.z(), *z)];
+                let copy = move |ctx: &GpuContext, cmd| {
+                    let region = [vk::BufferImageCopy::default()
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default()
+                                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                .layer_count(1),
+                        )
+                        .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+                    for (image, buffer) in copies {
+                        // SAFETY: the image is in TRANSFER_SRC layout (the step's barrier); the
+                        // buffer holds w·h·4 bytes.
+                        unsafe {
+                            ctx.device.cmd_copy_image_to_buffer(
+                                cmd,
+                                image.raw,
+                                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                                buffer.raw,
+                                &region,
+                            )
+                        };
                     }
-                }
+                };
+                steps.push(Step::new(
+                    sources,
+                    vec![(*label, Access::TransferWrite), (*z, Access::TransferWrite)],
+                    copy,
+                ));
                 let mut host = vec![(*label, Access::HostRead), (*z, Access::HostRead)];
                 host.extend([shadowed_labels, losses, measured_z].into_iter().flatten().map(|b| (b, Access::HostRead)));
-                enc.access(&[], &host);
+                steps.push(Step::new(Vec::new(), host, |_, _| {}));
             }
-            Sink::Compute { record, .. } => {
+            Sink::Compute { steps: sink_steps, .. } => {
                 let images =
                     JobImages { label: slot.range.label(), z: slot.range.z(), shadowed_labels, losses, measured_z };
-                record(enc, &images);
+                steps.extend(sink_steps(images));
             }
         }
+        steps
     }
 }
 

@@ -1,25 +1,28 @@
 //! Many hypotheses per submission: for each, the range pass, the shadow pass, the shadow mask,
-//! the named effects and the verification counts, all recorded into one command buffer with barriers between
-//! passes and no waits between hypotheses.
+//! the named effects and the verification counts, all recorded into one command buffer with
+//! no waits between hypotheses.
 //!
 //! The passes are render's (src/render/passes.rs); this file adds the score pass as their
-//! sink. Render targets live in a few slots reused round-robin, and the compute rasterizer
-//! covers the hypotheses of a run of consecutive slots in one dispatch before their other
-//! passes (src/render/compute_raster.rs, `CoverageGroup`); a slot's next hypothesis
-//! waits (by barrier) for that slot's previous score pass, and each score pass for the one
-//! before it, since both add to the one counts buffer (synchronization validation sees the
-//! buffer bound, and atomics are writes to it). Slot images are sized for the largest
-//! view of the batch, and each hypothesis renders its own grid into them, so a hypothesis
-//! renders the same alone or in any batch. Each pass touches only the hypothesis' footprint
-//! (its bounding sphere's pixels, with a margin), so a small model in a large image costs
-//! little; a hypothesis whose footprint misses the image records nothing. Counts go to one
-//! device-local buffer, zeroed first, copied to host memory at the end.
+//! sink. Render targets live in a few slots reused round-robin, and the hypotheses are
+//! recorded in runs, one a slot: the compute rasterizer covers a run's hypotheses in one
+//! dispatch, or a few (src/render/compute_raster.rs, `CoverageGroup`), and then the run's
+//! passes go side by side (`Passes::record_run`), each stage of them behind one barrier: a GPU
+//! waits for the work before a barrier once a stage for the run, not once a pass for each
+//! hypothesis (tests/verify.rs counts them). So that the run's score passes need no barrier
+//! between them, each slot adds to counts of its own (synchronization validation sees a
+//! buffer bound, and atomics are writes to it); a slot's next hypothesis waits (by barrier)
+//! for its previous one's passes. Slot images are sized for the largest view of the batch,
+//! and each hypothesis renders its own grid into them, so a hypothesis renders the same alone
+//! or in any batch. Each pass touches only the hypothesis' footprint (its bounding sphere's
+//! pixels, with a margin), so a small model in a large image costs little; a hypothesis whose
+//! footprint misses the image records nothing. The slots' counts, in device-local buffers
+//! zeroed first, are copied to host memory at the end and put in the order the verifier reads.
 
 use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass, ScoreSources};
 use crate::effects::Effects;
 use crate::error::Result;
 use crate::exact::{render_exact, ExactObject};
-use crate::gpu::{Access, Buffer, BufferDesc, Encoder};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step};
 use crate::mesh::Mesh;
 use crate::render::{
     draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
@@ -63,6 +66,8 @@ pub struct BatchItem<'a> {
     pub counts_offset: usize,
     /// Also count the unshadowed image here, when asked and a shadow pass runs.
     pub unshadowed_offset: Option<usize>,
+    /// The words its counts take from `counts_offset` (the unshadowed image's included).
+    pub counts_words: usize,
 }
 
 impl BatchItem<'_> {
@@ -101,7 +106,8 @@ pub(crate) fn batch_slot_memory(
     Ok(per_slot * SLOTS.min(hypotheses) as u64)
 }
 
-/// Records and runs one batch; returns the counts buffer (`counts_words` u32 words).
+/// Records and runs one batch; returns the counts (`counts_words` u32 words, each item's at
+/// its `counts_offset`).
 pub(crate) fn count_batch(
     renderer: &Renderer,
     score_pass: &ScorePass,
@@ -215,14 +221,37 @@ pub(crate) fn count_batch(
         }
         _ => None,
     };
-    let bytes = (counts_words as u64 * 4).max(4);
-    let counts = Buffer::new(ctx, BufferDesc::gpu_storage(bytes), "verification counts")?;
-    let readback = Buffer::new(ctx, BufferDesc::readback(bytes), "verification counts readback")?;
+    // Each recorded hypothesis' slot, its run's slots in turn, and where its counts lie in
+    // that slot's counts: a slot's own buffer, so that the runs' score passes, each adding to
+    // its slot's, need no barrier between them (synchronization validation sees a buffer
+    // bound, and atomics are writes to it).
+    let recorded: Vec<(&BatchItem, &Job)> =
+        items.iter().zip(&jobs).filter_map(|(item, job)| Some((item, job.as_ref()?))).collect();
+    let mut slot_words = vec![0; slots.len()];
+    let placed: Vec<(usize, usize)> = (0..recorded.len())
+        .map(|n| {
+            let slot = n % slots.len();
+            let at = slot_words[slot];
+            slot_words[slot] += recorded[n].0.counts_words;
+            (slot, at)
+        })
+        .collect();
+    let slot_counts: Vec<Buffer> = (0..)
+        .zip(&slot_words)
+        .map(|(i, &words)| {
+            let bytes = (words as u64 * 4).max(4);
+            Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("slot {i} verification counts"))
+        })
+        .collect::<Result<_>>()?;
+    let readback_words: usize = slot_words.iter().sum();
+    let readback =
+        Buffer::new(ctx, BufferDesc::readback((readback_words as u64 * 4).max(4)), "verification counts readback")?;
     // Bound where a slot has no shadowed labels or effect outputs; never read then.
     let placeholder = Buffer::new(ctx, BufferDesc::gpu_storage(4), "placeholder")?;
     let score_bindings: Vec<_> = slots
         .iter()
-        .map(|slot| {
+        .zip(&slot_counts)
+        .map(|(slot, counts)| {
             let (label, z) = slot.range_label_and_z();
             let (losses, measured_z) = slot.effect_outputs();
             let inputs = ScoreInputs {
@@ -230,7 +259,7 @@ pub(crate) fn count_batch(
                 z,
                 shadowed_labels: slot.masked().unwrap_or(&placeholder),
                 sensed: settings.sensed.pixels,
-                counts: &counts,
+                counts,
                 losses: losses.unwrap_or(&placeholder),
                 measured_z: measured_z.unwrap_or(&placeholder),
             };
@@ -241,72 +270,105 @@ pub(crate) fn count_batch(
     let passes = renderer.passes(sensor, settings.shadow, settings.effects, compute)?;
     ctx.submit_and_wait("verification batch", |cmd| {
         let mut enc = Encoder::new(ctx, cmd);
-        enc.access(&[], &[(&counts, Access::TransferWrite)]);
-        // SAFETY: cmd is recording; the buffer is not in use.
-        unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
-        enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-        let recorded: Vec<(&BatchItem, &Job)> =
-            items.iter().zip(&jobs).filter_map(|(item, job)| Some((item, job.as_ref()?))).collect();
-        for (n, &(item, job)) in recorded.iter().enumerate() {
-            let position = n % slots.len();
-            let slot = &slots[position];
-            // The first job of each run of slots records the run's coverage: its own and the
-            // next jobs' in the run's slots (CoverageGroup).
-            if let Some(group) = coverage.as_ref().filter(|g| position.is_multiple_of(g.members())) {
-                let run_length = group.members().min(slots.len() - position);
-                let run_jobs: Vec<_> = (0..)
-                    .zip(&recorded[n..])
-                    .take(run_length)
-                    .map(|(m, &(_, job))| (&slots[position + m], job))
-                    .collect();
-                passes.record_coverage(&mut enc, group, position / group.members(), &run_jobs)?;
-            }
-            let score = |offset: usize| ScoreConstants {
-                counts_offset: offset as u32,
-                width: sensor.width,
-                height: sensor.height,
-                z_origin: job.views.origin.z as f32,
-                region: [job.area.col, job.area.row, job.area.width, job.area.height],
-                surfaces: item.surfaces,
-                segments: settings.sensed.segment_count,
-                tolerance: settings.tolerance,
-                area_scale: settings.area_scale,
-                dx: sensor.pitch[0] as f32,
-                dy: sensor.pitch[1] as f32,
-            };
-            let bindings = &score_bindings[position];
-            let record_scores = |enc: &mut Encoder, images: &JobImages| {
-                let range_reads = [(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-                let mut buffers = vec![(settings.sensed.pixels, Access::ComputeRead), (&counts, Access::ComputeWrite)];
-                let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
-                buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
-                enc.access(&range_reads, &buffers);
-                let sources = ScoreSources {
-                    shadowed: images.shadowed_labels.is_some(),
-                    losses: images.losses.is_some(),
-                    measured_z: images.measured_z.is_some(),
-                };
-                bindings.record(enc.cmd, score_pass, sources, &score(item.counts_offset));
-                // Counted again unshadowed only where a shadow pass ran; else the verifier
-                // copies the counts. The counts are written again: ordered after the first.
-                if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
-                    enc.access(&[], &[(&counts, Access::ComputeWrite)]);
-                    let unshadowed = ScoreSources { shadowed: false, ..sources };
-                    bindings.record(enc.cmd, score_pass, unshadowed, &score(offset));
-                }
-            };
-            // The unshadowed labels are the range view's.
-            let sink = Sink::Compute { record: &record_scores, reads_range_label: item.unshadowed_offset.is_some() };
-            passes.record(&mut enc, slot, job, &sink, None);
+        let zeroed: Vec<_> = slot_counts.iter().map(|counts| (counts, Access::TransferWrite)).collect();
+        enc.access(&[], &zeroed);
+        for counts in &slot_counts {
+            // SAFETY: cmd is recording; the buffer is not in use.
+            unsafe { ctx.device.cmd_fill_buffer(cmd, counts.raw, 0, vk::WHOLE_SIZE, 0) };
         }
-        enc.access(&[], &[(&counts, Access::TransferRead), (&readback, Access::TransferWrite)]);
-        let region = [vk::BufferCopy::default().size(bytes)];
-        // SAFETY: both buffers hold `bytes` bytes; the barrier above ordered the writes.
-        unsafe { ctx.device.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
+        // The jobs in runs of the slots: each run's coverage, then its jobs' passes side by
+        // side (Passes::record_run).
+        for (run_jobs, run_places) in recorded.chunks(slots.len()).zip(placed.chunks(slots.len())) {
+            let in_slots: Vec<_> =
+                run_jobs.iter().zip(run_places).map(|(&(_, job), &(slot, _))| (&slots[slot], job)).collect();
+            // The compute rasterizer covers up to a group's members at once: the group's runs
+            // of slots (CoverageGroup).
+            if let Some(group) = &coverage {
+                for (group_run, members) in in_slots.chunks(group.members()).enumerate() {
+                    passes.record_coverage(&mut enc, group, group_run, members)?;
+                }
+            }
+            let sinks: Vec<_> = run_jobs
+                .iter()
+                .zip(run_places)
+                .map(|(&(item, job), &(slot, at))| {
+                    let score = move |offset: usize| ScoreConstants {
+                        counts_offset: offset as u32,
+                        width: sensor.width,
+                        height: sensor.height,
+                        z_origin: job.views.origin.z as f32,
+                        region: [job.area.col, job.area.row, job.area.width, job.area.height],
+                        surfaces: item.surfaces,
+                        segments: settings.sensed.segment_count,
+                        tolerance: settings.tolerance,
+                        area_scale: settings.area_scale,
+                        dx: sensor.pitch[0] as f32,
+                        dy: sensor.pitch[1] as f32,
+                    };
+                    let (bindings, counts) = (&score_bindings[slot], &slot_counts[slot]);
+                    let steps = score_steps(move |images| {
+                        let reads = vec![(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
+                        let mut buffers =
+                            vec![(settings.sensed.pixels, Access::ComputeRead), (counts, Access::ComputeWrite)];
+                        let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
+                        buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
+                        let sources = ScoreSources {
+                            shadowed: images.shadowed_labels.is_some(),
+                            losses: images.losses.is_some(),
+                            measured_z: images.measured_z.is_some(),
+                        };
+                        let first = score(at);
+                        let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
+                        let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record)];
+                        // Counted again unshadowed only where a shadow pass ran; else the
+                        // verifier copies the counts. A step of its own: the counts are
+                        // written again, ordered after the first.
+                        if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                            let again = score(at + offset - item.counts_offset);
+                            let unshadowed = ScoreSources { shadowed: false, ..sources };
+                            let record =
+                                move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
+                            steps.push(Step::new(reads, buffers, record));
+                        }
+                        steps
+                    });
+                    // The unshadowed labels are the range view's.
+                    Sink::Compute { steps: Box::new(steps), reads_range_label: item.unshadowed_offset.is_some() }
+                })
+                .collect();
+            let run: Vec<_> = in_slots.iter().zip(&sinks).map(|(&(slot, job), sink)| (slot, job, sink)).collect();
+            passes.record_run(&mut enc, &run);
+        }
+        let copied: Vec<_> = slot_counts.iter().map(|counts| (counts, Access::TransferRead)).collect();
+        enc.access(&[], &[copied, vec![(&readback, Access::TransferWrite)]].concat());
+        let mut base = 0;
+        for (counts, &words) in slot_counts.iter().zip(&slot_words) {
+            if words > 0 {
+                let region = [vk::BufferCopy::default().dst_offset(base as u64 * 4).size(words as u64 * 4)];
+                // SAFETY: the slot's counts hold `words` words, and the readback all slots'.
+                unsafe { ctx.device.cmd_copy_buffer(cmd, counts.raw, readback.raw, &region) };
+            }
+            base += words;
+        }
         enc.access(&[], &[(&readback, Access::HostRead)]);
         Ok(())
     })?;
-    let mut words: Vec<u32> = readback.read()?;
-    words.truncate(counts_words);
+    // Each recorded hypothesis' counts, from its slot's, where the verifier reads them; zeros
+    // for a hypothesis that recorded nothing.
+    let slot_bases: Vec<usize> =
+        slot_words.iter().scan(0, |base, &words| Some(std::mem::replace(base, *base + words))).collect();
+    let read: Vec<u32> = readback.read()?;
+    let mut words = vec![0; counts_words];
+    for (&(item, _), &(slot, at)) in recorded.iter().zip(&placed) {
+        let from = slot_bases[slot] + at;
+        words[item.counts_offset..item.counts_offset + item.counts_words]
+            .copy_from_slice(&read[from..from + item.counts_words]);
+    }
     Ok(words)
+}
+
+/// A sink's steps as [`Sink::Compute`] takes them: for the images of one lifetime, steps of
+/// that lifetime.
+fn score_steps<'a>(steps: impl Fn(JobImages<'a>) -> Vec<Step<'a>>) -> impl Fn(JobImages<'a>) -> Vec<Step<'a>> {
+    steps
 }

@@ -270,6 +270,7 @@ impl Verifier {
                         model: &h.model.mesh,
                         counts_offset: offset,
                         unshadowed_offset: settings.compare_shadow.then_some(offset + words),
+                        counts_words: words * copies,
                     };
                     offset += words * copies;
                     item
