@@ -17,7 +17,7 @@ layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
 layout(set = 0, binding = 2, std430) readonly buffer ShadowedLabels { uint shadowed_label[]; };
 // Per pixel: dense segment index + 1 (0 = no data), and z's bits (src/verify/sensed.rs).
 layout(set = 0, binding = 3, std430) readonly buffer Sensed { uvec2 sensed_pixel[]; };
-// The batch's counters; this hypothesis' start at counts_offset.
+// The slot's counters (src/verify/batch.rs); this hypothesis' start at counts_offset.
 layout(set = 0, binding = 4, std430) buffer Counts { uint count[]; };
 // Where effects are named (src/effects.rs): per pixel, the reason an effect lost it (0 if none
 // did), and the measured z where an effect changes z.

@@ -65,11 +65,19 @@ impl<'a> Encoder<'a> {
         }
     }
 
-    /// Records steps of independent jobs (no two write one resource, nor does one write what
-    /// another reads): their uses behind one barrier, then each one's commands in turn.
+    /// Records steps of independent jobs: their uses behind one barrier, then each one's
+    /// commands in turn. A resource more than one of them names must be only read, by all of
+    /// them: nothing would order two writes, or a write and a read, between their commands.
     pub fn record_together(&mut self, steps: Vec<Step<'_>>) {
         let images: Vec<_> = steps.iter().flat_map(|step| step.images.iter().copied()).collect();
         let buffers: Vec<_> = steps.iter().flat_map(|step| step.buffers.iter().copied()).collect();
+        let mut named = HashMap::new();
+        let handles = images.iter().map(|&(image, to)| ((vk::ObjectType::IMAGE, image.raw.as_raw()), to));
+        for (handle, to) in handles.chain(buffers.iter().map(|&(b, to)| ((vk::ObjectType::BUFFER, b.raw.as_raw()), to)))
+        {
+            let shared = named.insert(handle, to).is_some();
+            assert!(!shared || to.is_read_only(), "steps recorded together both use a resource, one to write it");
+        }
         self.access(&images, &buffers);
         for step in steps {
             (step.record)(self.ctx, self.cmd);

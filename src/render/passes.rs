@@ -6,7 +6,8 @@
 //! (host_view.rs) in place of the three passes before the effects.
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
-//! compute pass over them (`verify`'s score pass, one job a hypothesis, in verify/batch.rs).
+//! compute passes over them (`verify`'s score passes, one job a hypothesis, in
+//! verify/batch.rs).
 //! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
 //! only when the effects name it (effect_pass.rs). Each pass is a [`Step`]: the use it makes
 //! of each resource, from which the [`Encoder`] derives the barriers, and its commands. A job
@@ -286,7 +287,8 @@ impl<'p> Passes<'p> {
 
     /// Records the compute rasterizer's coverage of a run of jobs in one dispatch (`group`'s
     /// run number `run`), `jobs[m]` the job in the run's slot m; before the jobs' own passes
-    /// ([`Passes::record`]). Jobs the graphics pipeline renders are left to those.
+    /// ([`Passes::record`], [`Passes::record_run`]). Jobs the graphics pipeline renders are
+    /// left to those.
     pub fn record_coverage(
         &self,
         enc: &mut Encoder,
@@ -362,8 +364,13 @@ impl<'p> Passes<'p> {
             // to resolve the range view's words, the resolve pass does.
             Some((state, rp, (index, _))) => match shadow {
                 None => steps.push(state.resolve_step(rp, (&slot.range, job.area), index).timed("range")),
-                // The coverage's time, up to here.
-                Some(_) => steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}).timed("range and shadow")),
+                // The coverage's time, up to here; and a step of nothing in place of the shadow
+                // raster, so that in a run the masks and scores of jobs either rasterizer
+                // rendered fall in the same stages.
+                Some(_) => {
+                    steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}).timed("range and shadow"));
+                    steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}));
+                }
             },
             None => {
                 let mut prepare = Vec::new();

@@ -64,7 +64,8 @@ pub struct BatchItem<'a> {
     pub model: &'a Mesh,
     /// Counts of the shadowed image (or the only image when there is no shadow pass).
     pub counts_offset: usize,
-    /// Also count the unshadowed image here, when asked and a shadow pass runs.
+    /// Also count the unshadowed image here, when asked and a shadow pass runs: within the
+    /// item's counts, after the shadowed image's.
     pub unshadowed_offset: Option<usize>,
     /// The words its counts take from `counts_offset` (the unshadowed image's included).
     pub counts_words: usize,
@@ -115,6 +116,9 @@ pub(crate) fn count_batch(
     items: &[BatchItem],
     counts_words: usize,
 ) -> Result<Vec<u32>> {
+    if items.is_empty() {
+        return Ok(vec![0; counts_words]);
+    }
     let ctx = renderer.context();
     let sensor = settings.sensor;
     let max_side = ctx.limits.max_image_dimension2_d;
@@ -324,6 +328,9 @@ pub(crate) fn count_batch(
                         // verifier copies the counts. A step of its own: the counts are
                         // written again, ordered after the first.
                         if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                            debug_assert!(
+                                (item.counts_offset..item.counts_offset + item.counts_words).contains(&offset)
+                            );
                             let again = score(at + offset - item.counts_offset);
                             let unshadowed = ScoreSources { shadowed: false, ..sources };
                             let record =

@@ -11,7 +11,7 @@ use std::sync::Arc;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ScoreConstants {
-    /// This hypothesis' first word in the batch's counts.
+    /// This hypothesis' first word in its slot's counts (src/verify/batch.rs).
     pub counts_offset: u32,
     pub width: u32,
     pub height: u32,
@@ -89,7 +89,7 @@ impl ScorePass {
     }
 
     /// The descriptor set binding what one slot's score passes read and write: the range
-    /// view's label and z attachments, the shadowed labels, the sensed image, the batch's
+    /// view's label and z attachments, the shadowed labels, the sensed image, the slot's
     /// counts, and the effects' losses and measured z (any buffer where there are none: then
     /// they are not read).
     pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
