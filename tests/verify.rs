@@ -358,9 +358,11 @@ fn an_overlap_table_too_large_for_a_batch_is_refused() {
 /// one barrier a stage for the run, where a GPU waits for the work before it, not one a pass
 /// for each hypothesis. So two runs more (eight hypotheses) add two runs' stages: with the
 /// graphics pipeline, the rasters (one barrier for both views' attachments), the masks and the
-/// scores; with the compute rasterizer covering the run in one dispatch, the coverage's three
-/// (its words emptied, the coverage, the large triangles), the masks and the scores. (Before,
-/// each hypothesis took its own: about 12 a run with the graphics pipeline.)
+/// scores; with the compute rasterizer, the coverage's three (the words and the coverage
+/// buffers made ready, the coverage dispatches, the large triangles'), whether it covers the
+/// run's four hypotheses in one dispatch or one a dispatch, then the masks and the scores.
+/// (Before the runs, each hypothesis took its own: about 12 a run with the graphics pipeline;
+/// before the coverage dispatches went side by side, one a dispatch took 14 a run.)
 #[test]
 fn a_batch_waits_once_a_stage_for_each_run_of_slots() {
     const RUN: usize = 4;

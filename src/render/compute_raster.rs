@@ -49,9 +49,7 @@ use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
 use crate::error::Result;
-use crate::gpu::{
-    shaders, Access, Buffer, BufferDesc, ComputePipeline, Encoder, GpuContext, Image, SetShape, Step, StorageSet,
-};
+use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
 use ash::vk;
@@ -375,11 +373,17 @@ pub(crate) struct CoverageMember<'v, 'a> {
 }
 
 /// The coverage passes of a submission's slots: jobs in consecutive slots share a dispatch,
-/// up to `members` of them (the slots in runs of `members`, each run with its bindings of its
-/// slots' words), and the queue of large triangles, the draws and the members' constants, all
-/// reused run after run.
+/// up to `members` of them (the slots in runs of `members`). Each run has its own bindings of
+/// its slots' words, queue of large triangles, draws and members' constants, so that a batch
+/// may record every run's coverage side by side (`Passes::record_coverage`); each is reused
+/// by the run's slots' next jobs.
 pub(crate) struct CoverageGroup {
     members: usize,
+    runs: Vec<CoverageRun>,
+}
+
+/// What one run of slots' coverage dispatches use.
+struct CoverageRun {
     /// The queue of large (triangle, member, view) entries, room for every triangle of every
     /// member in every view, and its indirect dispatch's (x, y, z), then its length.
     large: Buffer,
@@ -388,8 +392,7 @@ pub(crate) struct CoverageGroup {
     /// and the members' constants.
     draws: Buffer,
     constants: Buffer,
-    /// The bindings of each run of slots.
-    runs: Vec<StorageSet>,
+    set: StorageSet,
 }
 
 impl CoverageGroup {
@@ -412,39 +415,12 @@ impl CoverageGroup {
         let fitting = usize::try_from(ctx.max_storage_buffer_range() / member_bytes).unwrap_or(usize::MAX);
         let members = members.min(fitting).max(1);
         let layout = pipelines.coverage(members)?.both.set_layout;
-        let large_bytes = (member_bytes * members as u64).max(4);
-        let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes), "coverage large triangles")?;
-        let args = BufferDesc {
-            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(16)
-        };
-        let large_args = Buffer::new(ctx, args, "coverage large-triangle dispatch")?;
-        let uniform = |bytes: usize| BufferDesc {
-            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            ..BufferDesc::gpu_storage(bytes as u64)
-        };
-        let draws = Buffer::new(ctx, uniform(2 * COVERAGE_MEMBERS * size_of::<DrawConstants>()), "coverage draws")?;
-        let constants = Buffer::new(ctx, uniform(COVERAGE_MEMBERS * size_of::<MemberConstants>()), "coverage members")?;
         let runs = slots
             .chunks(members)
             .enumerate()
-            .map(|(run, slots)| {
-                // Each member's words in each view; where a member or a view is missing, the
-                // run's first range view's, never written.
-                let member_words = |m: usize, shadow: bool| {
-                    let views = slots.get(m).unwrap_or(&slots[0]);
-                    match (shadow, &views.shadow) {
-                        (true, Some(words)) => &words.nearest,
-                        _ => &views.range.nearest,
-                    }
-                };
-                let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
-                buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
-                buffers.extend([&large, &large_args]);
-                StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))
-            })
+            .map(|(run, slots)| CoverageRun::new(ctx, layout, slots, member_bytes * members as u64, run))
             .collect::<Result<_>>()?;
-        Ok(Self { members, large, large_args, draws, constants, runs })
+        Ok(Self { members, runs })
     }
 
     /// Jobs a coverage dispatch covers.
@@ -452,47 +428,47 @@ impl CoverageGroup {
         self.members
     }
 
-    /// Records the coverage passes of one run of slots (number `run`), `members[m]` the job of
-    /// its slot m, where the compute rasterizer renders it. Both views' words are left for the
-    /// shadow mask, which resolves the range view (shadow_pass.rs), or for the resolve pass
-    /// where there is no shadow view ([`ComputeViews::resolve_step`]).
-    pub fn record(
-        &self,
-        enc: &mut Encoder,
-        pipelines: &ComputeRasterPipelines,
+    /// The coverage passes of one run of slots (number `run`), `members[m]` the job of its
+    /// slot m, where the compute rasterizer renders it: three steps, the run's words and
+    /// buffers made ready, the coverage dispatch and the large triangles' (none where no
+    /// member is covered). Both views' words are left for the shadow mask, which resolves the
+    /// range view (shadow_pass.rs), or for the resolve pass where there is no shadow view
+    /// ([`ComputeViews::resolve_step`]).
+    pub fn steps<'s>(
+        &'s self,
+        pipelines: &'s ComputeRasterPipelines,
         run: usize,
-        members: &[Option<CoverageMember>],
-    ) -> Result<()> {
+        members: &[Option<CoverageMember<'s, '_>>],
+    ) -> Result<Vec<Step<'s>>> {
         let covered: Vec<(usize, &CoverageMember)> =
             members.iter().enumerate().filter_map(|(m, member)| Some((m, member.as_ref()?))).collect();
         if covered.is_empty() {
-            return Ok(());
+            return Ok(Vec::new());
         }
         let coverage = pipelines.coverage(self.members)?;
-        let cmd = enc.cmd;
+        let buffers = &self.runs[run];
         // Each view's words, where the job covers it: the rows of its area are emptied, not
         // the whole view: a hypothesis costs its footprint, not the image. Nothing reads a
         // word beyond the area's rows, as nothing reads the attachments beyond the area that
         // the graphics pass clears (draw.rs).
-        let mut emptied = Vec::new();
+        let mut emptied: Vec<(&'s Buffer, u64, u64)> = Vec::new();
         for (_, member) in &covered {
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
             for (view, area) in std::iter::once((&member.views.range, member.range_area)).chain(shadow) {
                 let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
-                emptied.push((view, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
+                emptied.push((&view.nearest, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
             }
         }
         // Only the covered members' words are declared: the others bound beside them (a
         // graphics job's slot, slots past a short run's end) are never touched, their members
         // covering no triangles.
-        let mut cleared: Vec<_> = emptied.iter().map(|(view, ..)| (&view.nearest, Access::TransferWrite)).collect();
-        cleared.extend([&self.large_args, &self.draws, &self.constants].map(|b| (b, Access::TransferWrite)));
-        for (_, member) in &covered {
-            cleared.extend(member.views.views().map(|view| (view.draw_table, Access::TransferRead)));
-        }
-        enc.access(&[], &cleared);
+        let mut cleared: Vec<_> = emptied.iter().map(|&(words, ..)| (words, Access::TransferWrite)).collect();
+        cleared.extend([&buffers.large_args, &buffers.draws, &buffers.constants].map(|b| (b, Access::TransferWrite)));
         let entry = size_of::<DrawConstants>() as u64;
         let mut constants = [<MemberConstants as bytemuck::Zeroable>::zeroed(); COVERAGE_MEMBERS];
+        // Each view's draw the member has: draws[2m] its range view's, draws[2m + 1] its
+        // shadow view's.
+        let mut draw_copies: Vec<(&'s Buffer, vk::BufferCopy)> = Vec::new();
         for &(m, member) in &covered {
             let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
@@ -510,41 +486,42 @@ impl CoverageGroup {
                 dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
                 _pad: 0,
             };
-        }
-        let d = &enc.ctx().device;
-        // SAFETY: cmd is recording; the barrier above ordered earlier uses of the buffers; the
-        // rows lie within the views' words, and their bytes are a multiple of 4; the copies and
-        // updates lie within the uniform blocks.
-        unsafe {
-            for &(view, offset, size) in &emptied {
-                d.cmd_fill_buffer(cmd, view.nearest.raw, offset, size, u32::MAX);
+            for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
+                let copy = vk::BufferCopy {
+                    src_offset: u64::from(member.index) * entry,
+                    dst_offset: slot * entry,
+                    size: entry,
+                };
+                draw_copies.push((view.draw_table, copy));
             }
-            // No workgroups, an empty queue: (x, y, z, length).
-            d.cmd_update_buffer(cmd, self.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
-            d.cmd_update_buffer(cmd, self.constants.raw, 0, bytemuck::cast_slice(&constants));
-            // Each view's draw the member has: draws[2m] its range view's, draws[2m + 1] its
-            // shadow view's.
-            for &(m, member) in &covered {
-                for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
-                    let copy = vk::BufferCopy {
-                        src_offset: u64::from(member.index) * entry,
-                        dst_offset: slot * entry,
-                        size: entry,
-                    };
-                    d.cmd_copy_buffer(cmd, view.draw_table.raw, self.draws.raw, &[copy]);
+        }
+        cleared.extend(draw_copies.iter().map(|&(table, _)| (table, Access::TransferRead)));
+        let prepare = move |ctx: &GpuContext, cmd| {
+            let d = &ctx.device;
+            // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffers;
+            // the rows lie within the views' words, and their bytes are a multiple of 4; the
+            // copies and updates lie within the uniform blocks.
+            unsafe {
+                for (words, offset, size) in emptied {
+                    d.cmd_fill_buffer(cmd, words.raw, offset, size, u32::MAX);
+                }
+                // No workgroups, an empty queue: (x, y, z, length).
+                d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                d.cmd_update_buffer(cmd, buffers.constants.raw, 0, bytemuck::cast_slice(&constants));
+                for (table, copy) in draw_copies {
+                    d.cmd_copy_buffer(cmd, table.raw, buffers.draws.raw, &[copy]);
                 }
             }
-        }
+        };
         let uses = |queue: Access, args: Access| {
             let mut uses: Vec<_> = covered
                 .iter()
                 .flat_map(|(_, member)| member.views.views().map(|v| (&v.nearest, Access::ComputeWrite)))
                 .collect();
-            uses.extend([(&self.large, queue), (&self.large_args, args)]);
-            uses.extend([&self.draws, &self.constants].map(|b| (b, Access::UniformRead)));
+            uses.extend([(&buffers.large, queue), (&buffers.large_args, args)]);
+            uses.extend([&buffers.draws, &buffers.constants].map(|b| (b, Access::UniformRead)));
             uses
         };
-        enc.access(&[], &uses(Access::ComputeWrite, Access::ComputeWrite));
         let triangles = covered.iter().map(|(_, member)| member.draw.mesh.index_count / 3).max().unwrap_or(0);
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
@@ -552,10 +529,64 @@ impl CoverageGroup {
         let pipeline = if both { &coverage.both } else { &coverage.range };
         // Slices up to the last member covered; the others' triangle counts are 0.
         let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
-        let set = &self.runs[run];
-        set.dispatch_slices(cmd, pipeline, &[], coverage_groups, slices);
-        enc.access(&[], &uses(Access::ComputeRead, Access::IndirectAndComputeRead));
-        set.dispatch_indirect(cmd, &coverage.large, &[], &self.large_args);
-        Ok(())
+        let cover = move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, pipeline, &[], coverage_groups, slices);
+        let large =
+            move |_: &GpuContext, cmd| buffers.set.dispatch_indirect(cmd, &coverage.large, &[], &buffers.large_args);
+        Ok(vec![
+            Step::new(Vec::new(), cleared, prepare),
+            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover),
+            Step::new(Vec::new(), uses(Access::ComputeRead, Access::IndirectAndComputeRead), large),
+        ])
+    }
+}
+
+impl CoverageRun {
+    /// The buffers and bindings of run number `run`, of `slots` (one a member), with a queue
+    /// of `large_bytes`.
+    fn new(
+        ctx: &Arc<GpuContext>,
+        layout: vk::DescriptorSetLayout,
+        slots: &[&ComputeViews],
+        large_bytes: u64,
+        run: usize,
+    ) -> Result<Self> {
+        let large = Buffer::new(
+            ctx,
+            BufferDesc::gpu_storage(large_bytes.max(4)),
+            &format!("coverage run {run} large triangles"),
+        )?;
+        let args = BufferDesc {
+            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..BufferDesc::gpu_storage(16)
+        };
+        let large_args = Buffer::new(ctx, args, &format!("coverage run {run} large-triangle dispatch"))?;
+        let uniform = |bytes: usize| BufferDesc {
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            ..BufferDesc::gpu_storage(bytes as u64)
+        };
+        let draws = Buffer::new(
+            ctx,
+            uniform(2 * COVERAGE_MEMBERS * size_of::<DrawConstants>()),
+            &format!("coverage run {run} draws"),
+        )?;
+        let constants = Buffer::new(
+            ctx,
+            uniform(COVERAGE_MEMBERS * size_of::<MemberConstants>()),
+            &format!("coverage run {run} members"),
+        )?;
+        // Each member's words in each view; where a member or a view is missing, the run's
+        // first range view's, never written.
+        let member_words = |m: usize, shadow: bool| {
+            let views = slots.get(m).unwrap_or(&slots[0]);
+            match (shadow, &views.shadow) {
+                (true, Some(words)) => &words.nearest,
+                _ => &views.range.nearest,
+            }
+        };
+        let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
+        buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
+        buffers.extend([&large, &large_args]);
+        let set = StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))?;
+        Ok(Self { large, large_args, draws, constants, set })
     }
 }

@@ -395,7 +395,7 @@ impl Renderer {
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
             clock.start(cmd);
             if let Some(group) = &coverage {
-                passes.record_coverage(&mut enc, group, 0, &[(&slot, &job)])?;
+                passes.record_coverage(&mut enc, group, &[(&slot, &job)])?;
             }
             passes.record(&mut enc, &slot, &job, &sink, Some(&mut clock));
             Ok(())

@@ -285,17 +285,13 @@ impl<'p> Passes<'p> {
         }
     }
 
-    /// Records the compute rasterizer's coverage of a run of jobs in one dispatch (`group`'s
-    /// run number `run`), `jobs[m]` the job in the run's slot m; before the jobs' own passes
-    /// ([`Passes::record`], [`Passes::record_run`]). Jobs the graphics pipeline renders are
-    /// left to those.
-    pub fn record_coverage(
-        &self,
-        enc: &mut Encoder,
-        group: &CoverageGroup,
-        run: usize,
-        jobs: &[(&Slot, &Job)],
-    ) -> Result<()> {
+    /// Records the compute rasterizer's coverage of a run of jobs in different slots,
+    /// `jobs[i]` the job in the run's slot i, before the jobs' own passes ([`Passes::record`],
+    /// [`Passes::record_run`]): `group`'s runs of its members, each in one dispatch, the runs
+    /// side by side (their buffers made ready behind one barrier, then their coverage
+    /// dispatches behind another, then their large triangles' behind a third). Jobs the
+    /// graphics pipeline renders are left to their passes.
+    pub fn record_coverage(&self, enc: &mut Encoder, group: &CoverageGroup, jobs: &[(&Slot, &Job)]) -> Result<()> {
         let Some(rp) = self.raster_pipelines else {
             return Ok(());
         };
@@ -307,7 +303,17 @@ impl<'p> Passes<'p> {
                 Some(CoverageMember { views, range_area: job.area, shadow_area, index, draw })
             })
             .collect();
-        group.record(enc, rp, run, &members)
+        let mut runs = Vec::new();
+        for (run, run_members) in members.chunks(group.members()).enumerate() {
+            runs.push(group.steps(rp, run, run_members)?.into_iter());
+        }
+        loop {
+            let stage: Vec<Step> = runs.iter_mut().filter_map(Iterator::next).collect();
+            if stage.is_empty() {
+                return Ok(());
+            }
+            enc.record_together(stage);
+        }
     }
 
     /// Records one job's passes into the encoder's command buffer, after its coverage where

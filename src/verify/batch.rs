@@ -285,12 +285,10 @@ pub(crate) fn count_batch(
         for (run_jobs, run_places) in recorded.chunks(slots.len()).zip(placed.chunks(slots.len())) {
             let in_slots: Vec<_> =
                 run_jobs.iter().zip(run_places).map(|(&(_, job), &(slot, _))| (&slots[slot], job)).collect();
-            // The compute rasterizer covers up to a group's members at once: the group's runs
-            // of slots (CoverageGroup).
+            // The compute rasterizer covers up to a group's members in one dispatch, its runs
+            // side by side (CoverageGroup).
             if let Some(group) = &coverage {
-                for (group_run, members) in in_slots.chunks(group.members()).enumerate() {
-                    passes.record_coverage(&mut enc, group, group_run, members)?;
-                }
+                passes.record_coverage(&mut enc, group, &in_slots)?;
             }
             let sinks: Vec<_> = run_jobs
                 .iter()
