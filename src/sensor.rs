@@ -207,6 +207,14 @@ impl ViewGrid {
         ((centre / step).round() * step).as_vec3().as_dvec3()
     }
 
+    /// How far a sphere (centre in this view's frame) reaches from the grid's first pixel
+    /// centre, in pixels along a row or a column, whichever is farther.
+    pub fn reach(&self, centre: DVec3, radius: f64) -> f64 {
+        let [x0, y0] = self.origin;
+        let [dx, dy] = self.pitch;
+        (((centre.x - x0).abs() + radius) / dx).max(((y0 - centre.y).abs() + radius) / dy)
+    }
+
     /// The pixels whose centres may fall on a sphere's orthographic footprint (centre in this
     /// view's frame), grown by `margin` pixels on every side and clipped to the grid; `None`
     /// when it misses the grid.

@@ -331,6 +331,29 @@ fn spikes_from_far_outside_the_view_render_as_the_graphics_pipeline_renders_them
     assert_renders_as(&render_compute(&sc), &graphics);
 }
 
+/// Tips 2,000,000 pixels away, just within the compute rasterizer's reach
+/// (`render::MAX_REACH_PIXELS`, 2^21): the large triangles' 64-bit edge functions stay exact.
+#[test]
+fn spikes_from_the_edge_of_the_compute_rasterizers_reach_render_as_the_graphics_pipeline_renders_them() {
+    let (sc, graphics) = spikes(12, -70_000.0);
+    assert_renders_as(&render_compute(&sc), &graphics);
+}
+
+/// A plane reaching 25 million pixels past a 64² view in every direction: beyond the compute
+/// rasterizer's reach its edge functions overflowed, and it rendered nothing (every pixel
+/// empty); such a draw is left to the graphics pipeline, which renders the plane everywhere.
+#[test]
+fn a_model_reaching_beyond_the_compute_rasterizers_reach_stays_on_the_graphics_path() {
+    let s = centred_sensor(64, 64, 0.02, [0.0, 0.0], 0.0);
+    let sc = scene(s, ShadowMode::None, &[("builtin:plane:1000000", DMat4::from_rotation_z(0.14))]);
+    let (centre, radius) = sc.objects[0].mesh.bounding_sphere();
+    assert!((centre.x.abs() + radius) / 0.02 > 20_000_000.0, "25 million pixels");
+    let out = render_compute(&sc);
+    assert!(out.label.iter().all(|&l| l == 1), "the plane everywhere");
+    assert_eq!(out.label, render(&sc).label);
+    assert_eq!(out.raster, Raster::Graphics);
+}
+
 /// More queued triangles than one indirect dispatch has workgroups (65,535): the large
 /// triangles' workgroups stride over the rest of the queue. Tips 54 pixels left of the view,
 /// not 57,000: 5,000 spikes that far away, their depths 0.001 apart, kept a different

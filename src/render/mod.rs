@@ -21,7 +21,7 @@ mod targets;
 pub use crate::render_output::{PassTime, RenderOutput};
 pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
 use compute_raster::{ComputeViews, CoverageGroup};
-pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS};
+pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -153,6 +153,15 @@ pub(crate) struct Views {
     pub shadow: Option<ViewGrid>,
 }
 
+impl Views {
+    /// How far, in pixels, a bounding sphere (centre in the range frame) reaches from the first
+    /// pixel of either view (`ViewGrid::reach`): what the compute rasterizer's choice reads.
+    pub fn reach(&self, sensor: &Sensor, (centre, radius): (DVec3, f64)) -> f64 {
+        let shadow = self.shadow.map_or(0.0, |g| g.reach(sensor.to_shadow_frame().transform_point3(centre), radius));
+        self.range.reach(centre, radius).max(shadow)
+    }
+}
+
 impl Renderer {
     pub fn new(options: &ContextOptions) -> Result<Self> {
         Self::with_context(GpuContext::new(options)?)
@@ -197,16 +206,24 @@ impl Renderer {
 
     /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, over
     /// `footprint_pixels` (compute_raster.rs), into visibility words for views of at most
-    /// `view_pixels`. Words this device cannot bind as one storage buffer (its
-    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), or a queue of large
-    /// triangles with room for every triangle in both views (16.7 million triangles there),
-    /// leave the view to the graphics pipeline.
-    pub(crate) fn computes(&self, draws: usize, triangles: u64, footprint_pixels: u64, view_pixels: u64) -> bool {
+    /// `view_pixels`, its draws reaching `reach_pixels` from the views' first pixels
+    /// ([`Views::reach`]). Words this device cannot bind as one storage buffer (its
+    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), a queue of large
+    /// triangles with room for every triangle in both views (16.7 million triangles there), or
+    /// corners beyond [`MAX_REACH_PIXELS`] leave the view to the graphics pipeline.
+    pub(crate) fn computes(
+        &self,
+        draws: usize,
+        triangles: u64,
+        (footprint_pixels, reach_pixels): (u64, f64),
+        view_pixels: u64,
+    ) -> bool {
         let range = self.ctx.max_storage_buffer_range();
         let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= range;
         let queue_fits = compute_raster::large_queue_bytes(triangles, 2) <= range;
         words_fit
             && queue_fits
+            && reach_pixels <= MAX_REACH_PIXELS
             && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
     }
 
@@ -323,7 +340,9 @@ impl Renderer {
         }
         let pixels = |g: &ViewGrid| u64::from(g.width) * u64::from(g.height);
         let view_pixels = pixels(&views.range).max(views.shadow.as_ref().map_or(0, pixels));
-        let compute = exact_triangles.is_none() && self.computes(draws.len(), triangles, footprint, view_pixels);
+        let reach = spheres.iter().map(|&sphere| views.reach(&scene.sensor, sphere)).fold(0.0, f64::max);
+        let compute =
+            exact_triangles.is_none() && self.computes(draws.len(), triangles, (footprint, reach), view_pixels);
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             render_memory(&views, &scene.effects, compute, exact_triangles),

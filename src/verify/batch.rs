@@ -176,6 +176,7 @@ pub(crate) fn count_batch(
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
             let footprint = u64::from(area.width) * u64::from(area.height);
+            let reach = views.reach(sensor, (centre, radius));
             let triangles = u64::from(item.mesh.index_count / 3);
             Some(Job {
                 draws: draws.as_slice(),
@@ -185,7 +186,7 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
-                compute: host_views.is_empty() && renderer.computes(1, triangles, footprint, slot_view_pixels),
+                compute: host_views.is_empty() && renderer.computes(1, triangles, (footprint, reach), slot_view_pixels),
             })
         })
         .collect();
