@@ -51,6 +51,10 @@ layout(constant_id = 4) const uint RUN = 1u;
 layout(constant_id = 5) const bool USE_SHADOWED = false;   // labels from the shadow mask's output, not range_label
 layout(constant_id = 6) const bool USE_LOSSES = false;     // drop the pixels an effect lost
 layout(constant_id = 7) const bool USE_MEASURED_Z = false; // z from measured_z, not the range view
+// Whether sqrt_rounded corrects the device's square root (score_pass.rs: on a GPU), and ulps
+// added to it first: 0, but for the test that stands in for a device whose sqrt errs.
+layout(constant_id = 8) const bool CORRECT_SQRT = true;
+layout(constant_id = 9) const int SQRT_ERROR_ULPS = 0;
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
@@ -129,10 +133,64 @@ void count_units(inout AreaTally a, uint index, uint units) {
     a.high += carry;
 }
 
-// area.rs block_area_units, operation for operation, without fused multiply-adds.
+// The sign of m² − s, m the midpoint between r and the float next to it above (`up`) or
+// below, exactly, in integers: r and s positive normal floats, r within a few ulp of √s.
+int midpoint_square_minus(float r, bool up, float s) {
+    uint r_bits = floatBitsToUint(r), s_bits = floatBitsToUint(s);
+    // r = M · 2^e and s = S · 2^f, M and S whole numbers of 24 bits.
+    uint M = (r_bits & 0x7fffffu) | 0x800000u, S = (s_bits & 0x7fffffu) | 0x800000u;
+    int e = int(r_bits >> 23) - 150, f = int(s_bits >> 23) - 150;
+    // m = K · 2^k: (2M ± 1) · 2^(e − 1), or below a power of two, whose neighbour below is
+    // half as far, (4M − 1) · 2^(e − 2).
+    uint K = up ? 2u * M + 1u : (M == 0x800000u ? 4u * M - 1u : 2u * M - 1u);
+    int k = up || M != 0x800000u ? e - 1 : e - 2;
+    // K² · 2^(2k) against S · 2^f: K² (up to 50 bits) against S · 2^(f − 2k), a shift of
+    // 23 to 27 bits next to √s.
+    uint square_high, square_low;
+    umulExtended(K, K, square_high, square_low);
+    uint shift = uint(clamp(f - 2 * k, 1, 31));
+    uint s_high = S >> (32u - shift), s_low = S << shift;
+    if (square_high != s_high) {
+        return square_high > s_high ? 1 : -1;
+    }
+    return square_low > s_low ? 1 : (square_low < s_low ? -1 : 0);
+}
+
+// √s as IEEE 754 rounds it to nearest, as the host's f32::sqrt gives it (area.rs): Vulkan
+// lets a device's sqrt err by a few ulp (NVIDIA's approximates it), and the areas the host
+// and the GPU count must agree to the bit. The device's root is moved to the float whose
+// midpoints with its neighbours bracket √s (a square root is never such a midpoint: the
+// comparisons are strict). Zero, subnormal and infinite sums are left as the device has them.
+// Not compiled in on a CPU device, whose root is the IEEE one (lavapipe: the box's verification
+// at 256² took 1.44 ms a hypothesis with it, 1.33 without).
+float sqrt_rounded(float s) {
+    float r = sqrt(s);
+    if (!CORRECT_SQRT) {
+        return r;
+    }
+    if (SQRT_ERROR_ULPS != 0) {
+        r = uintBitsToFloat(uint(int(floatBitsToUint(r)) + SQRT_ERROR_ULPS));
+    }
+    if (!(s >= 1.17549435e-38 && s <= 3.40282347e38)) {
+        return r;
+    }
+    for (int i = 0; i < 4; i++) {
+        if (midpoint_square_minus(r, true, s) < 0) {
+            r = uintBitsToFloat(floatBitsToUint(r) + 1u);
+        } else if (midpoint_square_minus(r, false, s) > 0) {
+            r = uintBitsToFloat(floatBitsToUint(r) - 1u);
+        } else {
+            break;
+        }
+    }
+    return r;
+}
+
+// area.rs block_area_units, operation for operation, without fused multiply-adds, its square
+// root rounded as the host's is.
 uint triangle_units(float p, float q, float level) {
     precise float sum = p * p + q * q + level;
-    precise float units = sqrt(sum) * s.area_scale;
+    precise float units = sqrt_rounded(sum) * s.area_scale;
     return uint(min(units, 4294967040.0));
 }
 

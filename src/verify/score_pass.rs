@@ -71,7 +71,19 @@ pub(crate) struct ScorePass {
 }
 
 impl ScorePass {
+    /// The pass, correcting the device's square root to the IEEE one (shaders/score.comp,
+    /// `sqrt_rounded`) on a GPU, where Vulkan lets it err by a few ulp; a CPU device's is exact.
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        Self::with_sqrt((!ctx.is_cpu(), 0), ctx)
+    }
+
+    /// The pass on a device whose square root errs by `ulps`, which it corrects: for the test
+    /// standing in for such a device on lavapipe.
+    pub fn with_sqrt_error(ctx: &Arc<GpuContext>, ulps: i32) -> Result<Self> {
+        Self::with_sqrt((true, ulps), ctx)
+    }
+
+    fn with_sqrt((correct, error_ulps): (bool, i32), ctx: &Arc<GpuContext>) -> Result<Self> {
         let pipeline = |sources: ScoreSources| {
             let flags = [sources.shadowed, sources.losses, sources.measured_z].map(u32::from);
             // The range view's label and z; the buffers of ScoreInputs.
@@ -80,7 +92,18 @@ impl ScorePass {
                 SetShape::storage(2, 5),
                 size_of::<ScoreConstants>(),
                 shaders::SCORE_COMP,
-                &[N1_PLUS_WORD, N1_MINUS_WORD, N0_WORD, SCALARS, SCORE_RUN, flags[0], flags[1], flags[2]],
+                &[
+                    N1_PLUS_WORD,
+                    N1_MINUS_WORD,
+                    N0_WORD,
+                    SCALARS,
+                    SCORE_RUN,
+                    flags[0],
+                    flags[1],
+                    flags[2],
+                    u32::from(correct),
+                    error_ulps as u32,
+                ],
                 &format!("verification counts ({sources:?})"),
             )
         };
