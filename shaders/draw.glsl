@@ -28,15 +28,26 @@ layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Wor
     uint word[];
 };
 
+// The rotation of row `r` applied to `v`, in this order and unfused (`precise`): the functions
+// here run in the vertex and fragment shaders of the graphics pipeline and in the compute
+// rasterizer's shaders, which must compute the same bits, and a GPU may otherwise fuse
+// multiply-adds differently in each stage (or order a dot product's terms as it likes).
+float rotate_row(vec4 r, vec3 v) {
+    precise float rotated = r.x * v.x + r.y * v.y + r.z * v.z;
+    return rotated;
+}
+
 vec3 to_view(DrawData d, vec3 model) {
-    vec4 p = vec4(model, 1.0);
-    return vec3(dot(d.view_from_model[0], p), dot(d.view_from_model[1], p), dot(d.view_from_model[2], p));
+    precise vec3 v = vec3(rotate_row(d.view_from_model[0], model) + d.view_from_model[0].w,
+                          rotate_row(d.view_from_model[1], model) + d.view_from_model[1].w,
+                          rotate_row(d.view_from_model[2], model) + d.view_from_model[2].w);
+    return v;
 }
 
 // The rotation part alone: directions (normals) do not translate.
 vec3 rotate_to_view(DrawData d, vec3 direction) {
-    return vec3(dot(d.view_from_model[0].xyz, direction), dot(d.view_from_model[1].xyz, direction),
-                dot(d.view_from_model[2].xyz, direction));
+    return vec3(rotate_row(d.view_from_model[0], direction), rotate_row(d.view_from_model[1], direction),
+                rotate_row(d.view_from_model[2], direction));
 }
 
 // Depths (0..1) closer than this to the nearest at a pixel are a tie, decided for the lower
@@ -88,8 +99,9 @@ vec3 triangle_normal(DrawData d, uint triangle) {
 // corner a with unit normal n: for the range view (range_pixel) and the compute rasterizer's
 // depths (raster.comp).
 float plane_z(DrawData d, vec3 a, vec3 n, vec2 pixel) {
-    vec2 centre = vec2(d.grid.x + pixel.x * d.grid.z, d.grid.y - pixel.y * d.grid.w);
-    return a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
+    precise vec2 centre = vec2(d.grid.x + pixel.x * d.grid.z, d.grid.y - pixel.y * d.grid.w);
+    precise float z = a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
+    return z;
 }
 
 // What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that

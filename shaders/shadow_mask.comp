@@ -172,7 +172,8 @@ vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 g
     }
     vec3 a = triangle_corner(d, t, 0u);
     gradient = -n.xy / n.z;
-    return vec2(a.z + dot(gradient, ps.xy - a.xy) - ps.z, bias + m.bias_relative * scale * l1_length(gradient));
+    precise float rise = a.z + (gradient.x * (ps.x - a.x) + gradient.y * (ps.y - a.y)) - ps.z;
+    return vec2(rise, bias + m.bias_relative * scale * l1_length(gradient));
 }
 
 // Whether the surface seen at shadow pixel q hides p' (shadow frame): the triangle over p' on
@@ -209,13 +210,15 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
 
 bool shadowed(ivec2 pixel, RangePixel range) {
     uint label = range.label;
-    float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
-    float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
+    // Unfused (`precise`), so that both variants of this shader, the graphics pipeline's and
+    // the compute rasterizer's, compute the same p' and shadow pixel on any device.
+    precise float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
+    precise float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
     float z = range.z;
     // p' = R_y(-theta) p
-    vec3 ps = vec3(m.cos_theta * x - m.sin_theta * z, y, m.sin_theta * x + m.cos_theta * z);
-    float column = (ps.x - m.shadow_grid.x) / m.shadow_grid.z;
-    float row = (m.shadow_grid.y - y) / m.shadow_grid.w;
+    precise vec3 ps = vec3(m.cos_theta * x - m.sin_theta * z, y, m.sin_theta * x + m.cos_theta * z);
+    precise float column = (ps.x - m.shadow_grid.x) / m.shadow_grid.z;
+    precise float row = (m.shadow_grid.y - y) / m.shadow_grid.w;
     ivec2 s = ivec2(floor(column + 0.5), floor(row + 0.5));
     // The shadow grid covers every point the range view can see (sensor.rs); a point
     // outside it can only come from rounding at its border and is treated as lit.
