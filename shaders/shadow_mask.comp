@@ -93,16 +93,23 @@ bool shadow_label_is(ivec2 q, uint label) {
     return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw)) && shadow_seen(q).r == label;
 }
 
+// The arithmetic of the shadow test is unfused (`precise`) wherever it decides a pixel, so
+// that both variants of this shader, the graphics pipeline's and the compute rasterizer's,
+// decide it alike on a GPU that would fuse multiply-adds differently in each.
+
 // Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
 float edge_function(vec2 a, vec2 b, vec2 q) {
-    return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+    precise float area = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+    return area;
 }
 
 // Distance from q to the segment a–b.
 float segment_distance(vec2 q, vec2 a, vec2 b) {
-    vec2 ab = b - a;
-    float t = clamp(dot(q - a, ab) / max(dot(ab, ab), 1e-30), 0.0, 1.0);
-    return length(q - (a + t * ab));
+    precise vec2 ab = b - a;
+    precise float along = (q.x - a.x) * ab.x + (q.y - a.y) * ab.y;
+    precise float t = clamp(along / max(ab.x * ab.x + ab.y * ab.y, 1e-30), 0.0, 1.0);
+    precise vec2 off = q - (a + t * ab);
+    return length(off);
 }
 
 float l1_length(vec2 v) {
@@ -173,7 +180,8 @@ vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 g
     vec3 a = triangle_corner(d, t, 0u);
     gradient = -n.xy / n.z;
     precise float rise = a.z + (gradient.x * (ps.x - a.x) + gradient.y * (ps.y - a.y)) - ps.z;
-    return vec2(rise, bias + m.bias_relative * scale * l1_length(gradient));
+    precise float allowance = bias + m.bias_relative * scale * l1_length(gradient);
+    return vec2(rise, allowance);
 }
 
 // Whether the surface seen at shadow pixel q hides p' (shadow frame): the triangle over p' on
@@ -199,7 +207,8 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
     }
     vec2 gradient;
     vec2 rise = plane_rise(d, t, ps, scale, bias, gradient);
-    if (rise.x > rise.y + l1_length(gradient - own) * beyond) {
+    precise float bound = rise.y + l1_length(gradient - own) * beyond;
+    if (rise.x > bound) {
         return true;
     }
     if (beyond == 0.0) {
@@ -210,8 +219,6 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
 
 bool shadowed(ivec2 pixel, RangePixel range) {
     uint label = range.label;
-    // Unfused (`precise`), so that both variants of this shader, the graphics pipeline's and
-    // the compute rasterizer's, compute the same p' and shadow pixel on any device.
     precise float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
     precise float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
     float z = range.z;
@@ -236,17 +243,18 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     // Depth mode. The camera sees the side of a surface the projector lights only when that
     // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).
     vec2 gradient = range.gradient;
-    float facing = m.cos_theta - m.sin_theta * gradient.x;
+    precise float facing = m.cos_theta - m.sin_theta * gradient.x;
     float scale = max(max(abs(ps.x), abs(ps.y)), max(abs(ps.z), abs(z)));
     // z came from a plane evaluated in f32, which errs in proportion to its steepness.
-    float steepness = 1.0 + l1_length(gradient);
-    float bias = m.bias_pitch + m.bias_relative * scale * (1.0 + steepness);
+    precise float steepness = 1.0 + l1_length(gradient);
+    precise float bias = m.bias_pitch + m.bias_relative * scale * (1.0 + steepness);
     // The gradient came from an f32 normal; its error grows with the square of steepness.
-    if (facing <= m.bias_relative * steepness * steepness) {
+    precise float facing_bound = m.bias_relative * steepness * steepness;
+    if (facing <= facing_bound) {
         return true;
     }
     // The same plane in the shadow frame: n = R_y(−θ)(−∂z/∂x, −∂z/∂y, 1), whose z is `facing`.
-    vec2 own = vec2(m.cos_theta * gradient.x + m.sin_theta, gradient.y) / facing;
+    precise vec2 own = vec2(m.cos_theta * gradient.x + m.sin_theta, gradient.y) / facing;
     if (!in_grid) {
         return false;
     }

@@ -167,8 +167,9 @@ pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
 
 /// How far from a view's first pixel, in pixels, a draw's corners may lie for the compute
 /// rasterizer to render it (`Renderer::computes`; beyond, the graphics pipeline does): 2^21.
-/// Snapped to 1/256 pixel (2^29 units), the corners' differences stay below 2^30 and the large
-/// triangles' 64-bit edge functions below 2^62, exact; farther, they overflowed (and corners
+/// Snapped to 1/256 pixel, the corners lie within 2^29 + 128 units of a box's first pixel
+/// centre, their differences within 2^30 + 256, and the large triangles' 64-bit edge
+/// functions below 2^62, exact; farther, they overflowed (and corners
 /// beyond 2^31 pixels did not convert to integers at all), and a triangle reaching millions of
 /// pixels past the view went missing.
 pub const MAX_REACH_PIXELS: f64 = 2_097_152.0;

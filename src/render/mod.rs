@@ -19,7 +19,7 @@ mod target_pool;
 mod targets;
 
 pub use crate::render_output::{PassTime, RenderOutput};
-pub(crate) use compute_raster::VISIBILITY_WORD_BYTES;
+pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use compute_raster::{ComputeViews, CoverageGroup};
 pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub use draw::Draw;
@@ -116,17 +116,23 @@ pub(crate) fn plan_views(
 /// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel. In shadow
-/// mode `exact`, the CPU's casters and image (exact.rs) and their upload (host_view.rs).
-/// Measured before the range view gained its gradient: a 16384² render peaked at 47 bytes
-/// per pixel.
-fn render_memory(views: &Views, effects: &Effects, compute_raster: bool, exact_triangles: Option<u64>) -> u64 {
+/// (4). With the compute rasterizer (covering `compute_triangles`), each view's 8-byte
+/// visibility words a pixel and its queue of large triangles. In shadow mode `exact`, the
+/// CPU's casters and image (exact.rs) and their upload (host_view.rs). Measured before the
+/// range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
+fn render_memory(
+    views: &Views,
+    effects: &Effects,
+    compute_triangles: Option<u64>,
+    exact_triangles: Option<u64>,
+) -> u64 {
     let range = u64::from(views.range.width) * u64::from(views.range.height);
     let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
     let effect_bytes = if effects.is_empty() { 0 } else { 16 };
-    let visibility = if compute_raster { VISIBILITY_WORD_BYTES } else { 0 };
+    let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
-    let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow;
+    let queue = compute_triangles.map_or(0, |t| large_queue_bytes(t, views.count()));
+    let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow + queue;
     let exact = exact_triangles
         .map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + HostView::BYTES_PER_PIXEL) * range);
     (rendering + exact).max(60 * range)
@@ -154,6 +160,11 @@ pub(crate) struct Views {
 }
 
 impl Views {
+    /// 1, or 2 with a shadow view.
+    pub fn count(&self) -> u64 {
+        1 + u64::from(self.shadow.is_some())
+    }
+
     /// How far, in pixels, a bounding sphere (centre in the range frame) reaches from the first
     /// pixel of either view (`ViewGrid::reach`): what the compute rasterizer's choice reads.
     pub fn reach(&self, sensor: &Sensor, (centre, radius): (DVec3, f64)) -> f64 {
@@ -220,7 +231,7 @@ impl Renderer {
     ) -> bool {
         let range = self.ctx.max_storage_buffer_range();
         let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= range;
-        let queue_fits = compute_raster::large_queue_bytes(triangles, 2) <= range;
+        let queue_fits = large_queue_bytes(triangles, 2) <= range;
         words_fit
             && queue_fits
             && reach_pixels <= MAX_REACH_PIXELS
@@ -345,7 +356,7 @@ impl Renderer {
             exact_triangles.is_none() && self.computes(draws.len(), triangles, (footprint, reach), view_pixels);
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, compute, exact_triangles),
+            render_memory(&views, &scene.effects, compute.then_some(triangles), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws, compute)
     }

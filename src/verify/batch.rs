@@ -25,8 +25,8 @@ use crate::exact::{render_exact, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink, SinkKind, Slot,
-    SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
+    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink,
+    SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -81,7 +81,8 @@ impl BatchItem<'_> {
 /// counts: its slots, each a range view (its attachments and the shadowed labels: 24
 /// bytes a pixel, and 8 more for the effects' losses and measured z) and a shadow view as
 /// wide as the widest hypothesis needs (20 bytes a pixel), and with the compute rasterizer 8
-/// bytes a pixel of each view for its visibility words.
+/// bytes a pixel of each view for its visibility words and a queue of large triangles with
+/// room for every triangle of the largest model (`max_triangles`) in each view.
 /// Fails as a batch would on a hypothesis whose views cannot be planned.
 pub(crate) fn batch_slot_memory(
     renderer: &Renderer,
@@ -89,7 +90,7 @@ pub(crate) fn batch_slot_memory(
     shadow: &ShadowSettings,
     effects: &Effects,
     posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
-    hypotheses: usize,
+    (hypotheses, max_triangles): (usize, u64),
 ) -> Result<u64> {
     let max_side = renderer.context().limits.max_image_dimension2_d;
     let mut shadow_width = 0;
@@ -99,11 +100,13 @@ pub(crate) fn batch_slot_memory(
     }
     let rows = u64::from(sensor.height);
     let effect_bytes = if effects.is_empty() { 0 } else { 8 };
-    // The compute rasterizer's visibility words, per pixel of each view.
+    // The compute rasterizer's visibility words, per pixel of each view, and queue.
     let visibility = if renderer.may_compute() { VISIBILITY_WORD_BYTES } else { 0 };
+    let views = if shadow_width > 0 { 2 } else { 1 };
+    let queue = if renderer.may_compute() { large_queue_bytes(max_triangles, views) } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
     let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
-    let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width));
+    let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width)) + queue;
     Ok(per_slot * SLOTS.min(hypotheses) as u64)
 }
 

@@ -199,8 +199,9 @@ impl Verifier {
             )));
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
-        let slots =
-            batch_slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, hypotheses.len())?;
+        let max_triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
+        let batch = (hypotheses.len(), max_triangles);
+        let slots = batch_slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, batch)?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // Shadow mode `exact`: one chunk's images cast on the CPU, and the casters of one.
         let exact_bytes = match settings.shadow.mode {
