@@ -18,7 +18,7 @@
 //! footprint misses the image records nothing. The slots' counts, in device-local buffers
 //! zeroed first, are copied to host memory at the end and put in the order the verifier reads.
 
-use super::score_pass::{ScoreConstants, ScoreInputs, ScorePass, ScoreSources};
+use super::score_pass::{ScoreBindings, ScoreConstants, ScoreInputs, ScorePass, ScoreSources};
 use crate::effects::Effects;
 use crate::error::Result;
 use crate::exact::{render_exact, ExactObject};
@@ -298,51 +298,8 @@ pub(crate) fn count_batch(
                 .iter()
                 .zip(run_places)
                 .map(|(&(item, job), &(slot, at))| {
-                    let score = move |offset: usize| ScoreConstants {
-                        counts_offset: offset as u32,
-                        width: sensor.width,
-                        height: sensor.height,
-                        z_origin: job.views.origin.z as f32,
-                        region: [job.area.col, job.area.row, job.area.width, job.area.height],
-                        surfaces: item.surfaces,
-                        segments: settings.sensed.segment_count,
-                        tolerance: settings.tolerance,
-                        area_scale: settings.area_scale,
-                        dx: sensor.pitch[0] as f32,
-                        dy: sensor.pitch[1] as f32,
-                    };
-                    let (bindings, counts) = (&score_bindings[slot], &slot_counts[slot]);
-                    let steps = score_steps(move |images| {
-                        let reads = vec![(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-                        let mut buffers =
-                            vec![(settings.sensed.pixels, Access::ComputeRead), (counts, Access::ComputeWrite)];
-                        let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
-                        buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
-                        let sources = ScoreSources {
-                            shadowed: images.shadowed_labels.is_some(),
-                            losses: images.losses.is_some(),
-                            measured_z: images.measured_z.is_some(),
-                        };
-                        let first = score(at);
-                        let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
-                        let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record)];
-                        // Counted again unshadowed only where a shadow pass ran; else the
-                        // verifier copies the counts. A step of its own: the counts are
-                        // written again, ordered after the first.
-                        if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
-                            debug_assert!(
-                                (item.counts_offset..item.counts_offset + item.counts_words).contains(&offset)
-                            );
-                            let again = score(at + offset - item.counts_offset);
-                            let unshadowed = ScoreSources { shadowed: false, ..sources };
-                            let record =
-                                move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
-                            steps.push(Step::new(reads, buffers, record));
-                        }
-                        steps
-                    });
-                    // The unshadowed labels are the range view's.
-                    Sink::Compute { steps: Box::new(steps), reads_range_label: item.unshadowed_offset.is_some() }
+                    let scoring = ScoreJob { settings, score_pass, item, job, slot_counts: (&slot_counts[slot], at) };
+                    scoring.sink(&score_bindings[slot])
                 })
                 .collect();
             let run: Vec<_> = in_slots.iter().zip(&sinks).map(|(&(slot, job), sink)| (slot, job, sink)).collect();
@@ -376,8 +333,64 @@ pub(crate) fn count_batch(
     Ok(words)
 }
 
-/// A sink's steps as [`Sink::Compute`] takes them: for the images of one lifetime, steps of
-/// that lifetime.
-fn score_steps<'a>(steps: impl Fn(JobImages<'a>) -> Vec<Step<'a>>) -> impl Fn(JobImages<'a>) -> Vec<Step<'a>> {
-    steps
+/// What one hypothesis' score passes need: the batch's settings, the item and its job, and its
+/// slot's counts with where in them its own start.
+struct ScoreJob<'a> {
+    settings: &'a BatchSettings<'a>,
+    score_pass: &'a ScorePass,
+    item: &'a BatchItem<'a>,
+    job: &'a Job<'a>,
+    slot_counts: (&'a Buffer, usize),
+}
+
+impl<'a> ScoreJob<'a> {
+    /// The job's sink: its score pass, and a second of the unshadowed labels where the item
+    /// asks for it and a shadow pass ran, a step of its own (the counts are written again,
+    /// ordered after the first). Else the verifier copies the counts.
+    fn sink(self, bindings: &'a ScoreBindings) -> Sink<'a> {
+        let Self { settings, score_pass, item, .. } = self;
+        let (counts, at) = self.slot_counts;
+        let steps = move |images: JobImages<'a>| -> Vec<Step<'a>> {
+            let reads = vec![(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
+            let mut buffers = vec![(settings.sensed.pixels, Access::ComputeRead), (counts, Access::ComputeWrite)];
+            let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
+            buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
+            let sources = ScoreSources {
+                shadowed: images.shadowed_labels.is_some(),
+                losses: images.losses.is_some(),
+                measured_z: images.measured_z.is_some(),
+            };
+            let first = self.constants(at);
+            let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
+            let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record)];
+            if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
+                debug_assert!((item.counts_offset..item.counts_offset + item.counts_words).contains(&offset));
+                let again = self.constants(at + offset - item.counts_offset);
+                let unshadowed = ScoreSources { shadowed: false, ..sources };
+                let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
+                steps.push(Step::new(reads, buffers, record));
+            }
+            steps
+        };
+        // The unshadowed labels are the range view's.
+        Sink::Compute { steps: Box::new(steps), reads_range_label: item.unshadowed_offset.is_some() }
+    }
+
+    /// The score pass's constants for counts at `offset` in the slot's.
+    fn constants(&self, offset: usize) -> ScoreConstants {
+        let (sensor, job) = (self.settings.sensor, self.job);
+        ScoreConstants {
+            counts_offset: offset as u32,
+            width: sensor.width,
+            height: sensor.height,
+            z_origin: job.views.origin.z as f32,
+            region: [job.area.col, job.area.row, job.area.width, job.area.height],
+            surfaces: self.item.surfaces,
+            segments: self.settings.sensed.segment_count,
+            tolerance: self.settings.tolerance,
+            area_scale: self.settings.area_scale,
+            dx: sensor.pitch[0] as f32,
+            dy: sensor.pitch[1] as f32,
+        }
+    }
 }
