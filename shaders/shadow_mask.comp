@@ -97,6 +97,26 @@ bool shadow_label_is(ivec2 q, uint label) {
 // that both variants of this shader, the graphics pipeline's and the compute rasterizer's,
 // decide it alike on a GPU that would fuse multiply-adds differently in each.
 
+// A triangle's corner and unit normal in the shadow view's frame: read in 64-bit words where
+// the variant has them (FROM_WORDS), two loads a corner in place of three, for the depth
+// test's walks, which read a corner at every step.
+vec3 view_corner(DrawData d, uint t, uint k) {
+#ifdef FROM_WORDS
+    return to_view(d, mesh_corner_by_words(d, t, k));
+#else
+    return triangle_corner(d, t, k);
+#endif
+}
+
+vec3 view_normal(DrawData d, uint t) {
+#ifdef FROM_WORDS
+    float third_z;
+    return rotate_to_view(d, mesh_normal_by_words(d, t, third_z));
+#else
+    return triangle_normal(d, t);
+#endif
+}
+
 // Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
 float edge_function(vec2 a, vec2 b, vec2 q) {
     precise float area = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
@@ -129,7 +149,7 @@ const uint WALK_TOO_LONG = 0xfffffffeu;
 uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
     // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
     // Each step's corners are the ones the step before had.
-    vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
+    vec2 a = view_corner(d, t, 0u).xy, b = view_corner(d, t, 1u).xy, c = view_corner(d, t, 2u).xy;
     for (int step = 0; step < MAX_WALK_STEPS; step++) {
         float winding = edge_function(a, b, c) >= 0.0 ? -1.0 : 1.0;
         // How far p lies outside each edge's line (a–b, b–c, c–a).
@@ -152,7 +172,7 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
         // The neighbour shares from and to (the same points: vertices are matched by
         // position), so only its third corner is read.
         uint next = link >> LINK_INDEX_SHIFT, edge = link & LINK_EDGE_MASK;
-        vec2 third = triangle_corner(d, next, (edge + 2u) % 3u).xy;
+        vec2 third = view_corner(d, next, (edge + 2u) % 3u).xy;
         if (edge_function(from, to, opposite) * edge_function(from, to, third) >= 0.0) {
             return NO_NEIGHBOUR;
         }
@@ -172,12 +192,12 @@ uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
 // for, on top of the point's own `bias` (its error grows with the plane's steepness). A
 // triangle seen edge-on has no plane over p': it rises by −∞.
 vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 gradient) {
-    vec3 n = triangle_normal(d, t);
+    vec3 n = view_normal(d, t);
     if (n.z == 0.0) {
         gradient = vec2(0.0);
         return vec2(-1.0 / 0.0, bias);
     }
-    vec3 a = triangle_corner(d, t, 0u);
+    vec3 a = view_corner(d, t, 0u);
     gradient = -n.xy / n.z;
     precise float rise = a.z + (gradient.x * (ps.x - a.x) + gradient.y * (ps.y - a.y)) - ps.z;
     precise float allowance = bias + m.bias_relative * scale * l1_length(gradient);
@@ -202,7 +222,7 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
     float beyond = 0.0; // how far the plane is extrapolated beyond its triangle
     if (t == WALK_TOO_LONG) {
         t = seen;
-        vec2 a = triangle_corner(d, t, 0u).xy, b = triangle_corner(d, t, 1u).xy, c = triangle_corner(d, t, 2u).xy;
+        vec2 a = view_corner(d, t, 0u).xy, b = view_corner(d, t, 1u).xy, c = view_corner(d, t, 2u).xy;
         beyond = min(segment_distance(ps.xy, a, b), min(segment_distance(ps.xy, b, c), segment_distance(ps.xy, c, a)));
     }
     vec2 gradient;

@@ -37,6 +37,14 @@ void mesh_corners_by_words(DrawData d, uint t, float third_z, out vec3 corner[3]
     corner[2] = vec3(f3, third_z);
 }
 
+// Corner k (0, 1, 2) of a triangle as the mesh stores it (floats 3k to 3k + 2), in two word
+// reads where mesh_corner makes three.
+vec3 mesh_corner_by_words(DrawData d, uint t, uint k) {
+    uint first = 3u * k;
+    vec2 low = record_floats(d, t, first >> 1u), high = record_floats(d, t, (first >> 1u) + 1u);
+    return (first & 1u) == 0u ? vec3(low, high.x) : vec3(low.y, high);
+}
+
 // range_pixel, reading the record in words.
 RangePixel range_pixel_by_words(DrawData d, uint t, vec2 pixel) {
     vec2 f0 = record_floats(d, t, 0u), f1 = record_floats(d, t, 1u);
