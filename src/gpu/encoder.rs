@@ -84,6 +84,19 @@ impl<'a> Encoder<'a> {
         }
     }
 
+    /// Records independent jobs' lists of steps stage by stage: every list's first step
+    /// together ([`Encoder::record_together`]), then every list's second, and so on.
+    pub fn record_in_stages(&mut self, lists: Vec<Vec<Step<'_>>>) {
+        let mut lists: Vec<_> = lists.into_iter().map(Vec::into_iter).collect();
+        loop {
+            let stage: Vec<Step> = lists.iter_mut().filter_map(Iterator::next).collect();
+            if stage.is_empty() {
+                return;
+            }
+            self.record_together(stage);
+        }
+    }
+
     /// Whether `handle` was named before in one call to [`Encoder::access`] (for the same use:
     /// two uses of a resource at once have no one barrier).
     fn named_before(

@@ -305,15 +305,10 @@ impl<'p> Passes<'p> {
             .collect();
         let mut runs = Vec::new();
         for (run, run_members) in members.chunks(group.members()).enumerate() {
-            runs.push(group.steps(rp, run, run_members)?.into_iter());
+            runs.push(group.steps(rp, run, run_members)?);
         }
-        loop {
-            let stage: Vec<Step> = runs.iter_mut().filter_map(Iterator::next).collect();
-            if stage.is_empty() {
-                return Ok(());
-            }
-            enc.record_together(stage);
-        }
+        enc.record_in_stages(runs);
+        Ok(())
     }
 
     /// Records one job's passes into the encoder's command buffer, after its coverage where
@@ -342,14 +337,7 @@ impl<'p> Passes<'p> {
     /// a time would wait for each pass before the next (`verify`'s batches; the timed
     /// `render` records one job with [`Passes::record`]).
     pub fn record_run<'s>(&'s self, enc: &mut Encoder, jobs: &[(&'s Slot<'_>, &'s Job<'_>, &Sink<'s>)]) {
-        let mut steps: Vec<_> = jobs.iter().map(|&(slot, job, sink)| self.steps(slot, job, sink).into_iter()).collect();
-        loop {
-            let stage: Vec<Step> = steps.iter_mut().filter_map(Iterator::next).collect();
-            if stage.is_empty() {
-                return;
-            }
-            enc.record_together(stage);
-        }
+        enc.record_in_stages(jobs.iter().map(|&(slot, job, sink)| self.steps(slot, job, sink)).collect());
     }
 
     /// One job's passes in order, each with the uses it makes of its slot's resources.
