@@ -27,6 +27,8 @@
 //!   verification 3.5–3.9 → 4.8–4.9 ms a hypothesis on lavapipe). Pipelines for one member
 //!   are specialized to it (the member the constant 0), so a group of one runs the code a
 //!   coverage pass of one job always ran. The images and counts are the same either way.
+//!   Each group has buffers of its own, so a batch records all of a run of slots' groups side
+//!   by side, one barrier a stage for them all (`Passes::record_coverage`).
 //! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
 //!   fragment shader would have written for that triangle. Where a shadow mask follows, the
 //!   mask does it as it tests each pixel, and reads the shadow view's words as they are
@@ -38,7 +40,8 @@
 //! a compute pass spreads the triangles over every core. So far it renders views of one draw
 //! (every `verify` hypothesis, a scene of one object); a view of several draws keeps the
 //! graphics path, whose tie rule the compute path does not implement yet, and so does a view
-//! whose visibility words the device cannot bind as one storage buffer (Renderer::computes).
+//! whose visibility words the device cannot bind as one storage buffer, or whose draw reaches
+//! beyond [`MAX_REACH_PIXELS`] (Renderer::computes).
 //!
 //! [`Raster::Auto`], the default, picks per view: the compute rasterizer where the device has
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
