@@ -36,27 +36,17 @@ impl<'a> Encoder<'a> {
         self.ctx
     }
 
-    /// Makes each image and buffer ready for its next use, recording one barrier for all. A
-    /// resource named twice takes one transition; it must be named for one use.
+    /// Makes each image and buffer ready for its next use, recording one barrier for all.
     pub fn access(&mut self, images: &[(&Image, Access)], buffers: &[(&Buffer, Access)]) {
-        let mut named = HashMap::new();
         let mut image_transitions = Vec::new();
         for &(image, to) in images {
-            let handle = (vk::ObjectType::IMAGE, image.raw.as_raw());
-            if Self::named_before(&mut named, handle, to) {
-                continue;
-            }
-            if let Some(from) = self.transition(handle, to) {
+            if let Some(from) = self.transition((vk::ObjectType::IMAGE, image.raw.as_raw()), to) {
                 image_transitions.push(ImageTransition { image, from, to });
             }
         }
         let mut buffer_transitions = Vec::new();
         for &(buffer, to) in buffers {
-            let handle = (vk::ObjectType::BUFFER, buffer.raw.as_raw());
-            if Self::named_before(&mut named, handle, to) {
-                continue;
-            }
-            if let Some(from) = self.transition(handle, to) {
+            if let Some(from) = self.transition((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to) {
                 buffer_transitions.push(BufferTransition { buffer, from, to });
             }
         }
@@ -66,18 +56,28 @@ impl<'a> Encoder<'a> {
     }
 
     /// Records steps of independent jobs: their uses behind one barrier, then each one's
-    /// commands in turn. A resource more than one of them names must be only read, by all of
-    /// them: nothing would order two writes, or a write and a read, between their commands.
+    /// commands in turn. A resource named more than once (by several steps, or twice by one)
+    /// must be named for one use, a read: nothing would order two writes, or a write and a
+    /// read, between their commands. It takes one transition.
     pub fn record_together(&mut self, steps: Vec<Step<'_>>) {
-        let images: Vec<_> = steps.iter().flat_map(|step| step.images.iter().copied()).collect();
-        let buffers: Vec<_> = steps.iter().flat_map(|step| step.buffers.iter().copied()).collect();
         let mut named = HashMap::new();
-        let handles = images.iter().map(|&(image, to)| ((vk::ObjectType::IMAGE, image.raw.as_raw()), to));
-        for (handle, to) in handles.chain(buffers.iter().map(|&(b, to)| ((vk::ObjectType::BUFFER, b.raw.as_raw()), to)))
-        {
-            let shared = named.insert(handle, to).is_some();
-            assert!(!shared || to.is_read_only(), "steps recorded together both use a resource, one to write it");
-        }
+        let mut first_use = |handle: (vk::ObjectType, u64), to: Access| match named.insert(handle, to) {
+            None => true,
+            Some(before) => {
+                assert!(before == to && to.is_read_only(), "steps recorded together use a resource, one to write it");
+                false
+            }
+        };
+        let images: Vec<_> = steps
+            .iter()
+            .flat_map(|step| step.images.iter().copied())
+            .filter(|&(image, to)| first_use((vk::ObjectType::IMAGE, image.raw.as_raw()), to))
+            .collect();
+        let buffers: Vec<_> = steps
+            .iter()
+            .flat_map(|step| step.buffers.iter().copied())
+            .filter(|&(buffer, to)| first_use((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to))
+            .collect();
         self.access(&images, &buffers);
         for step in steps {
             (step.record)(self.ctx, self.cmd);
@@ -95,18 +95,6 @@ impl<'a> Encoder<'a> {
             }
             self.record_together(stage);
         }
-    }
-
-    /// Whether `handle` was named before in one call to [`Encoder::access`] (for the same use:
-    /// two uses of a resource at once have no one barrier).
-    fn named_before(
-        named: &mut HashMap<(vk::ObjectType, u64), Access>,
-        handle: (vk::ObjectType, u64),
-        to: Access,
-    ) -> bool {
-        let before = named.insert(handle, to);
-        assert!(before.is_none_or(|use_before| use_before == to), "a resource named for two uses at once");
-        before.is_some()
     }
 
     /// The use a resource moves from, or `None` when no barrier is needed: a read after the
