@@ -276,6 +276,30 @@ fn verify_covers_hypotheses_in_groups_with_the_same_scores() {
     }
 }
 
+/// `--slots`: the example's three hypotheses side by side in three slots, and one a run in
+/// one, score the same; the summary says how many; out-of-range counts are refused by name.
+#[test]
+fn verify_keeps_the_slots_asked_for_with_the_same_scores() {
+    let (d, exr) = sensed_example("verify_slots");
+    let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
+    let scores = |n: &str| {
+        let path = d.join(format!("scores-{n}.jsonl"));
+        let out = verify(&hyps, &exr, &path, &["--slots", n]);
+        let stdout = text(&out.stdout);
+        assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+        let expected = format!("batches: up to {n} hypotheses side by side");
+        assert!(stdout.lines().any(|l| l.starts_with(&expected)), "{expected:?} in {stdout}");
+        std::fs::read_to_string(path).unwrap()
+    };
+    assert_eq!(scores("3"), scores("1"));
+    for bad in ["0", "65", "many"] {
+        let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--slots", bad]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains("--slots"), "{bad}: {stderr}");
+    }
+}
+
 #[test]
 fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     let (d, exr) = sensed_example("verify_bad");

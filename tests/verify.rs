@@ -10,6 +10,7 @@ use glam::{DMat4, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rangesynth::io::RangeImage;
+use rangesynth::limits::{MemoryBudget, DEFAULT_MEMORY_BUDGET};
 use rangesynth::render::Raster;
 use rangesynth::sensor::Sensor;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
@@ -354,49 +355,106 @@ fn an_overlap_table_too_large_for_a_batch_is_refused() {
     assert!(message.contains("65536 segments against 300 surfaces needs 75 MiB"), "{message}");
 }
 
-/// A batch records its hypotheses in runs of its four slots, each run's passes side by side:
-/// one barrier a stage for the run, where a GPU waits for the work before it, not one a pass
-/// for each hypothesis. So two runs more (eight hypotheses) add two runs' stages: with the
-/// graphics pipeline, the rasters (one barrier for both views' attachments), the masks and the
-/// scores; with the compute rasterizer, the coverage's three (the words and the coverage
-/// buffers made ready, the coverage dispatches, the large triangles'), whether it covers the
-/// run's four hypotheses in one dispatch or one a dispatch, then the masks and the scores.
-/// (Before the runs, each hypothesis took its own: about 12 a run with the graphics pipeline;
-/// before the coverage dispatches went side by side, one a dispatch took 14 a run.)
+/// A batch records its hypotheses in runs of its slots, each run's passes side by side: one
+/// barrier a stage for the run, where a GPU waits for the work before it, not one a pass for
+/// each hypothesis. So two runs more add two runs' stages, whether a run is 4 hypotheses long
+/// (a CPU device's default) or 16 (a GPU's): with the graphics pipeline, the rasters (one
+/// barrier for both views' attachments), the masks and the scores; with the compute
+/// rasterizer, the coverage's three (the words and the coverage buffers made ready, the
+/// coverage dispatches, the large triangles'), whether it covers four hypotheses in one
+/// dispatch or one a dispatch, then the masks and the scores. (Before the runs, each
+/// hypothesis took its own: about 12 a run of four with the graphics pipeline; before the
+/// coverage dispatches went side by side, one a dispatch took 14 a run of four.)
 #[test]
 fn a_batch_waits_once_a_stage_for_each_run_of_slots() {
-    const RUN: usize = 4;
+    const PER_DISPATCH: usize = 4;
     let sensor = test_sensor(20.0);
     let (_, sensed) = sensed(sensor);
     let settings = settings(sensor, ShadowMode::Label);
     for (raster, barriers_a_run) in [(Raster::Graphics, 3), (Raster::Compute, 5)] {
-        let verifier =
-            Verifier::new(test_renderer(None).with_raster(raster).with_hypotheses_per_dispatch(RUN)).expect("verifier");
+        for slots in [4, 16] {
+            let renderer = test_renderer(None).with_raster(raster).with_hypotheses_per_dispatch(PER_DISPATCH);
+            let verifier = Verifier::new(renderer).expect("verifier").with_slots(slots);
+            let model = verifier.model("builtin:step", Path::new(".")).expect("model");
+            let hypotheses = |n: usize| -> Vec<Hypothesis> {
+                (0..n)
+                    .map(|i| Hypothesis {
+                        id: format!("h{i}"),
+                        model: model.clone(),
+                        pose: DMat4::from_rotation_z(0.01 * i as f64) * step_pose(),
+                        bindings: vec![(1, 1)],
+                    })
+                    .collect()
+            };
+            let barriers = |runs: usize| barriers_verifying(&verifier, &sensed, &settings, &hypotheses(runs * slots)).0;
+            // The first uploads the sensed image and the mesh, which take barriers of their own.
+            barriers(1);
+            let (one_run, three_runs) = (barriers(1), barriers(3));
+            assert_eq!(
+                three_runs - one_run,
+                2 * barriers_a_run,
+                "{raster:?}, runs of {slots}: {one_run} barriers for one run, {three_runs} for three"
+            );
+        }
+    }
+}
+
+/// The barriers a verification records, and what it returns; fails on a validation message.
+fn barriers_verifying(
+    verifier: &Verifier,
+    sensed: &SensedImage,
+    settings: &VerifySettings,
+    hypotheses: &[Hypothesis],
+) -> (u64, rangesynth::Result<Vec<Verification>>) {
+    let context = verifier.renderer().context();
+    let before = context.barriers_recorded();
+    let out = verifier.verify(sensed, settings, hypotheses, &mut |_| {});
+    let messages = context.take_validation_messages();
+    assert!(messages.is_empty(), "validation reported:\n{}", messages.join("\n"));
+    (context.barriers_recorded() - before, out)
+}
+
+/// A batch keeps as many slots as the memory budget holds, up to those asked for, rather than
+/// being refused: under a budget that holds one slot, a batch that asked for 16 runs its
+/// hypotheses one a run (a run's stages for each: at least three barriers a hypothesis more
+/// than in one run of 16), and counts what it counts with all 16.
+#[test]
+fn a_batch_keeps_the_slots_the_memory_budget_holds() {
+    const SLOTS: usize = 16;
+    let sensor = test_sensor(20.0);
+    let (_, sensed) = sensed(sensor);
+    let settings = settings(sensor, ShadowMode::Depth);
+    let verifier_within = |budget: u64| {
+        let renderer = test_renderer(None).with_memory_budget(MemoryBudget::new(budget));
+        let verifier = Verifier::new(renderer).expect("verifier").with_slots(SLOTS);
         let model = verifier.model("builtin:step", Path::new(".")).expect("model");
-        let context = verifier.renderer().context();
-        let barriers = |runs: usize| {
-            let hypotheses: Vec<Hypothesis> = (0..runs * RUN)
-                .map(|i| Hypothesis {
-                    id: format!("h{i}"),
-                    model: model.clone(),
-                    pose: DMat4::from_rotation_z(0.01 * i as f64) * step_pose(),
-                    bindings: vec![(1, 1)],
-                })
-                .collect();
-            let before = context.barriers_recorded();
-            verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {}).expect("verification runs");
-            context.barriers_recorded() - before
-        };
+        let hypotheses: Vec<Hypothesis> = (0..SLOTS)
+            .map(|i| Hypothesis {
+                id: format!("h{i}"),
+                model: model.clone(),
+                pose: DMat4::from_rotation_z(0.01 * i as f64) * step_pose(),
+                bindings: (1..=8).map(|l| (l, l)).collect(),
+            })
+            .collect();
         // The first uploads the sensed image and the mesh, which take barriers of their own.
-        barriers(1);
-        let (one_run, three_runs) = (barriers(1), barriers(3));
-        assert_eq!(
-            three_runs - one_run,
-            2 * barriers_a_run,
-            "{raster:?}: {one_run} barriers for one run, {three_runs} for three"
-        );
-        let messages = context.take_validation_messages();
-        assert!(messages.is_empty(), "validation reported:\n{}", messages.join("\n"));
+        let _ = barriers_verifying(&verifier, &sensed, &settings, &hypotheses);
+        barriers_verifying(&verifier, &sensed, &settings, &hypotheses)
+    };
+    let (barriers_all, counted_all) = verifier_within(DEFAULT_MEMORY_BUDGET);
+    let counted_all = counted_all.expect("verification in 16 slots runs");
+    // What one slot takes, beside the sensed image and the counts: the figure a budget too
+    // small for any refuses with (one slot, the fewest a batch keeps).
+    let one_slot = match verifier_within(1 << 20).1 {
+        Err(rangesynth::Error::TooLarge { needed, .. }) => needed.0,
+        other => panic!("a 1 MiB budget holds no slot of a 128² verification: {:?}", other.map(|v| v.len())),
+    };
+    let (barriers_one, counted_one) = verifier_within(one_slot);
+    let counted_one = counted_one.expect("a budget that holds one slot verifies the batch");
+    // At least the three stages of a run (raster, mask, score) for each of 15 runs more.
+    let more = barriers_one.saturating_sub(barriers_all);
+    assert!(more >= 3 * (SLOTS as u64 - 1), "{barriers_one} barriers in one slot, {barriers_all} in 16");
+    for (one, all) in counted_one.iter().zip(&counted_all) {
+        assert_eq!(one.counts, all.counts, "{}", one.id);
     }
 }
 

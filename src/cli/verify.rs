@@ -15,7 +15,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
-use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS};
+use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -54,6 +54,12 @@ pub struct VerifyArgs {
     /// those cost next to nothing). The scores are the same either way.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=COVERAGE_MEMBERS as u64))]
     hypotheses_per_dispatch: Option<u64>,
+    /// Hypotheses a batch renders side by side, each in render targets of its own (its slot),
+    /// 1 to 64: each stage of their passes waits behind one barrier (default: 16 on a GPU, where
+    /// a barrier drains the device; 4 on a CPU device such as lavapipe, where it costs next to
+    /// nothing). Fewer where the memory budget holds fewer. The scores are the same either way.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS as u64))]
+    slots: Option<u64>,
     /// How many of the best hypotheses the summary lists.
     #[arg(long, default_value_t = 10)]
     top: usize,
@@ -103,7 +109,10 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     if let Some(n) = args.hypotheses_per_dispatch {
         renderer = renderer.with_hypotheses_per_dispatch(n as usize);
     }
-    let verifier = Verifier::new(renderer).context("starting Vulkan")?;
+    let mut verifier = Verifier::new(renderer).context("starting Vulkan")?;
+    if let Some(n) = args.slots {
+        verifier = verifier.with_slots(n as usize);
+    }
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
     let mut inputs = vec![args.hypotheses.clone(), args.scene.clone()];
@@ -158,7 +167,7 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     drop(out);
     pending.commit()?;
     bar.finish_and_clear();
-    print_summary(verifier.renderer(), &settings, &rows, args.top, start.elapsed().as_secs_f64());
+    print_summary(&verifier, &settings, &rows, args.top, start.elapsed().as_secs_f64());
     println!("wrote {}", args.out.display());
     check_validation(verifier.renderer())
 }
@@ -209,8 +218,8 @@ impl From<&Verification> for SummaryRow {
     }
 }
 
-fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
-    let s = &settings.sensor;
+fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
+    let (s, renderer) = (&settings.sensor, verifier.renderer());
     println!("device: {}", renderer.context().device_name());
     match renderer.raster() {
         Raster::Auto => println!(
@@ -223,6 +232,10 @@ fn print_summary(renderer: &Renderer, settings: &VerifySettings, results: &[Summ
         let n = renderer.hypotheses_per_dispatch();
         println!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
     }
+    println!(
+        "batches: up to {} hypotheses side by side (slots; fewer where the memory budget holds fewer)",
+        verifier.slots()
+    );
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
     }

@@ -26,6 +26,7 @@ pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use host_view::HostView;
+pub use passes::MAX_SLOTS;
 pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
 pub(crate) use targets::ViewKind;
 

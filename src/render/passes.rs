@@ -33,6 +33,9 @@ use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
 
+/// Most slots one batch may keep (src/verify/batch.rs, `default_slots`).
+pub const MAX_SLOTS: usize = 64;
+
 /// The render targets and bindings one job renders into; a batch reuses a few in turn.
 pub(crate) struct Slot<'a> {
     range: PooledTargets<'a>,

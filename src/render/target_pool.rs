@@ -4,14 +4,15 @@
 //! keeps those of the latest calls, at most [`KEPT`], so the memory it holds stays bounded
 //! by what recent calls used.
 
+use super::passes::MAX_SLOTS;
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::GpuContext;
 use std::sync::{Arc, Mutex};
 
-/// Views' targets the pool keeps when no call uses them: the four slots of a batch, each
-/// with a range and a shadow view.
-pub const KEPT: usize = 8;
+/// Views' targets the pool keeps when no call uses them: the most slots a batch may keep,
+/// each with a range and a shadow view (a call returns only those it used).
+pub const KEPT: usize = 2 * MAX_SLOTS;
 
 /// Free targets with their kind and size.
 type Kept = (ViewKind, (u32, u32), ViewTargets);

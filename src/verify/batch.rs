@@ -3,8 +3,9 @@
 //! no waits between hypotheses.
 //!
 //! The passes are render's (src/render/passes.rs); this file adds the score pass as their
-//! sink. Render targets live in a few slots reused round-robin, and the hypotheses are
-//! recorded in runs, one a slot: the compute rasterizer covers a run's hypotheses in one
+//! sink. Render targets live in slots reused round-robin, and the hypotheses are recorded in
+//! runs, one a slot (as many slots as the verifier asks for and the memory budget holds:
+//! [`default_slots`]): the compute rasterizer covers a run's hypotheses in one
 //! dispatch, or a few (src/render/compute_raster.rs, `CoverageGroup`), and then the run's
 //! passes go side by side (`Passes::record_run`), each stage of them behind one barrier: a GPU
 //! waits for the work before a barrier once a stage for the run, not once a pass for each
@@ -33,8 +34,19 @@ use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
 
-/// Render-target slots in flight within one submission.
-pub const SLOTS: usize = 4;
+/// Render-target slots a batch keeps unless the caller says otherwise: the hypotheses of a
+/// run go side by side, a barrier a stage for all of them. On a GPU a barrier drains the
+/// device, and a stage of one small model's passes for four hypotheses leaves most of a large
+/// one idle, so a run there is 16 long (at 256², about 4 MiB a slot); on a CPU device such as
+/// lavapipe, which runs a command buffer's dispatches one after another, barriers cost next to
+/// nothing and more slots only take memory, so it keeps 4.
+pub fn default_slots(ctx: &GpuContext) -> usize {
+    if ctx.is_cpu() {
+        4
+    } else {
+        16
+    }
+}
 
 /// The sensed image as the score pass reads it (uploaded once per `SensedImage`).
 pub struct SensedBuffers<'a> {
@@ -51,6 +63,8 @@ pub struct BatchSettings<'a> {
     pub tolerance: f32,
     pub area_scale: f32,
     pub sensed: SensedBuffers<'a>,
+    /// Render-target slots: hypotheses recorded side by side in a run.
+    pub slots: usize,
 }
 
 /// One hypothesis: a posed mesh and where its counts go (word offsets into the batch's counts).
@@ -77,20 +91,20 @@ impl BatchItem<'_> {
     }
 }
 
-/// Bytes of GPU memory a verification of these posed bounding spheres takes beyond the
-/// counts: its slots, each a range view (its attachments and the shadowed labels: 24
+/// Bytes of GPU memory each slot of a verification of these posed bounding spheres takes:
+/// a range view (its attachments and the shadowed labels: 24
 /// bytes a pixel, and 8 more for the effects' losses and measured z) and a shadow view as
 /// wide as the widest hypothesis needs (20 bytes a pixel), and with the compute rasterizer 8
 /// bytes a pixel of each view for its visibility words and a queue of large triangles with
 /// room for every triangle of the largest model (`max_triangles`) in each view.
 /// Fails as a batch would on a hypothesis whose views cannot be planned.
-pub(crate) fn batch_slot_memory(
+pub(crate) fn slot_memory(
     renderer: &Renderer,
     sensor: &Sensor,
     shadow: &ShadowSettings,
     effects: &Effects,
     posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
-    (hypotheses, max_triangles): (usize, u64),
+    max_triangles: u64,
 ) -> Result<u64> {
     let max_side = renderer.context().limits.max_image_dimension2_d;
     let mut shadow_width = 0;
@@ -106,8 +120,7 @@ pub(crate) fn batch_slot_memory(
     let queue = if renderer.may_compute() { large_queue_bytes(max_triangles, views) } else { 0 };
     let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
     let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
-    let per_slot = rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width)) + queue;
-    Ok(per_slot * SLOTS.min(hypotheses) as u64)
+    Ok(rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width)) + queue)
 }
 
 /// Records and runs one batch; returns the counts (`counts_words` u32 words, each item's at
@@ -211,8 +224,9 @@ pub(crate) fn count_batch(
         compute_raster: range_table.as_ref(),
         from_host: !host_views.is_empty(),
     };
-    let slots: Vec<Slot> =
-        (0..SLOTS.min(items.len())).map(|i| renderer.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
+    let slots: Vec<Slot> = (0..settings.slots.min(items.len()))
+        .map(|i| renderer.slot(&shape, &format!("slot {i}")))
+        .collect::<Result<_>>()?;
     // The compute rasterizer covers consecutive slots' hypotheses in one dispatch, as many as
     // the renderer asks for (and its queue of large triangles can bind: CoverageGroup).
     let max_triangles = items

@@ -6,11 +6,12 @@
 //! size comes from the device (a sixteenth of its device-local heap, at most
 //! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
 //! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
-//! image. In shadow mode `exact` a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose images
-//! are cast on the CPU before it is submitted.
+//! image. A batch keeps as many slots as the verifier asks for ([`Verifier::with_slots`]) and
+//! the memory budget holds, at least one. In shadow mode `exact` a chunk holds at most
+//! [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is submitted.
 
 use super::area::unit_scale;
-use super::batch::{batch_slot_memory, count_batch, BatchItem, BatchSettings, SensedBuffers};
+use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers};
 use super::counts::{Counts, CountsLayout};
 use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
@@ -21,7 +22,7 @@ use crate::exact;
 use crate::mesh::Mesh;
 use crate::pose::check_rigid;
 use crate::render::HostView;
-use crate::render::{GpuMesh, Renderer};
+use crate::render::{GpuMesh, Renderer, MAX_SLOTS};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -86,6 +87,8 @@ struct BatchPlan {
     segments: u32,
     /// Most bytes of counts one chunk may hold on this device.
     counts_budget: u64,
+    /// Render-target slots a batch keeps: as many as asked for that the budget holds.
+    slots: usize,
 }
 
 impl BatchPlan {
@@ -103,13 +106,31 @@ pub struct Verifier {
     score_pass: ScorePass,
     renderer: Renderer,
     models: Mutex<HashMap<String, Arc<Model>>>,
+    /// Most render-target slots a batch keeps (with_slots).
+    slots: usize,
 }
 
 impl Verifier {
     /// Fails only if the score pass's pipeline cannot be built on the renderer's device.
     pub fn new(renderer: Renderer) -> Result<Self> {
         let score_pass = ScorePass::new(renderer.context())?;
-        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()) })
+        let slots = default_slots(renderer.context());
+        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()), slots })
+    }
+
+    /// The same verifier, keeping up to `n` render-target slots a batch (clamped to 1 to
+    /// [`MAX_SLOTS`]): a batch records its hypotheses in runs of that many, each stage of a
+    /// run's passes behind one barrier. The default is 16 on a GPU, where a barrier drains the
+    /// device, and 4 on a CPU device, where barriers cost next to nothing (batch.rs,
+    /// `default_slots`). A batch keeps fewer where the memory budget holds fewer. The counts
+    /// and scores are the same either way.
+    pub fn with_slots(self, n: usize) -> Self {
+        Self { slots: n.clamp(1, MAX_SLOTS), ..self }
+    }
+
+    /// Most render-target slots a batch keeps.
+    pub fn slots(&self) -> usize {
+        self.slots
     }
 
     /// This verifier as on a device whose square root errs by `ulps`, which the score pass
@@ -182,10 +203,11 @@ impl Verifier {
         }
         let ctx = self.renderer.context();
         let counts_budget = CHUNK_COUNTS_BUDGET.min(ctx.device_local_heap_size() / 16);
-        let plan = BatchPlan {
+        let mut plan = BatchPlan {
             copies: if settings.compare_shadow { 2 } else { 1 },
             segments: sensed.segments.len() as u32,
             counts_budget,
+            slots: self.slots.min(hypotheses.len()).max(1),
         };
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
@@ -200,8 +222,7 @@ impl Verifier {
         }
         let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
         let max_triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
-        let batch = (hypotheses.len(), max_triangles);
-        let slots = batch_slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, batch)?;
+        let per_slot = slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, max_triangles)?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // Shadow mode `exact`: one chunk's images cast on the CPU, and the casters of one.
         let exact_bytes = match settings.shadow.mode {
@@ -214,13 +235,17 @@ impl Verifier {
             }
             _ => 0,
         };
-        // The sensed image on the host and the GPU, the slots, and the counts with their
-        // readback.
+        // The sensed image on the host and the GPU, the counts with their readback, and the
+        // slots: as many as the budget holds, up to those asked for.
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
-        self.renderer.memory_budget().check(
+        let fixed = sensed_bytes + 2 * counts + exact_bytes;
+        let budget = self.renderer.memory_budget();
+        let holds = budget.bytes().saturating_sub(fixed) / per_slot.max(1);
+        plan.slots = plan.slots.min(usize::try_from(holds).unwrap_or(usize::MAX)).max(1);
+        budget.check(
             format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
-            sensed_bytes + slots + 2 * counts + exact_bytes,
+            fixed + per_slot * plan.slots as u64,
         )?;
         Ok(plan)
     }
@@ -248,6 +273,7 @@ impl Verifier {
             tolerance: settings.tolerance as f32,
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
             sensed: SensedBuffers { pixels: &on_gpu.pixels, segment_count: sensed.segments.len() as u32 },
+            slots: plan.slots,
         };
         let mut results = Vec::with_capacity(hypotheses.len());
         let chunk_cap = match settings.shadow.mode {

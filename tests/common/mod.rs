@@ -21,8 +21,16 @@ use rangesynth::verify::Verifier;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::sync::{Arc, LazyLock};
 
-/// The test binary's one verifier; its renderer is the one every GPU test uses.
-pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| Verifier::new(test_renderer(None)).expect("verifier"));
+/// The test binary's one verifier; its renderer is the one every GPU test uses. It keeps as
+/// many slots a batch as `RANGESYNTH_TEST_SLOTS` says (the device's default unless it is set:
+/// tools/test.sh runs the verification suite again with a GPU's 16).
+pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
+    let verifier = Verifier::new(test_renderer(None)).expect("verifier");
+    match std::env::var("RANGESYNTH_TEST_SLOTS") {
+        Ok(n) => verifier.with_slots(n.parse().expect("RANGESYNTH_TEST_SLOTS is a count")),
+        Err(_) => verifier,
+    }
+});
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan
 /// version, with the rasterizer `RANGESYNTH_TEST_RASTER` names (`graphics` unless it is set:
