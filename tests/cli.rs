@@ -276,27 +276,29 @@ fn verify_covers_hypotheses_in_groups_with_the_same_scores() {
     }
 }
 
-/// `--slots`: the example's three hypotheses side by side in three slots, and one a run in
-/// one, score the same; the summary says how many; out-of-range counts are refused by name.
+/// `--slots` and `--chunks-in-flight`: the example's three hypotheses side by side in three
+/// slots in one chunk, and one a run in one slot, in chunks of one, two at once, score the
+/// same; the summary says how many; out-of-range counts are refused by name.
 #[test]
-fn verify_keeps_the_slots_asked_for_with_the_same_scores() {
+fn verify_keeps_the_slots_and_chunks_asked_for_with_the_same_scores() {
     let (d, exr) = sensed_example("verify_slots");
     let hyps = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/example/hypotheses.json");
-    let scores = |n: &str| {
-        let path = d.join(format!("scores-{n}.jsonl"));
-        let out = verify(&hyps, &exr, &path, &["--slots", n]);
+    let scores = |slots: &str, chunks: &str| {
+        let path = d.join(format!("scores-{slots}-{chunks}.jsonl"));
+        let flags = ["--slots", slots, "--chunks-in-flight", chunks, "--chunk-size", slots];
+        let out = verify(&hyps, &exr, &path, &flags);
         let stdout = text(&out.stdout);
         assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
-        let expected = format!("batches: up to {n} hypotheses side by side");
+        let expected = format!("batches: up to {slots} hypotheses side by side (slots), up to {chunks} chunk");
         assert!(stdout.lines().any(|l| l.starts_with(&expected)), "{expected:?} in {stdout}");
         std::fs::read_to_string(path).unwrap()
     };
-    assert_eq!(scores("3"), scores("1"));
-    for bad in ["0", "65", "many"] {
-        let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--slots", bad]);
+    assert_eq!(scores("3", "1"), scores("1", "2"));
+    for (flag, bad) in [("--slots", "0"), ("--slots", "65"), ("--slots", "many"), ("--chunks-in-flight", "3")] {
+        let out = verify(&hyps, &exr, &d.join("s.jsonl"), &[flag, bad]);
         let stderr = text(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
-        assert!(stderr.contains("--slots"), "{bad}: {stderr}");
+        assert_eq!(out.status.code(), Some(2), "{flag} {bad}: {stderr}");
+        assert!(stderr.contains(flag), "{flag} {bad}: {stderr}");
     }
 }
 

@@ -60,6 +60,11 @@ pub struct VerifyArgs {
     /// nothing). Fewer where the memory budget holds fewer. The scores are the same either way.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS as u64))]
     slots: Option<u64>,
+    /// Chunks (submissions) in flight at once, 1 or 2: with 2, one is recorded while the device
+    /// runs the other (default: 2 on a GPU; 1 on a CPU device, whose device work runs on the
+    /// same cores). One where the memory budget holds one. The scores are the same either way.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=2))]
+    chunks_in_flight: Option<u64>,
     /// How many of the best hypotheses the summary lists.
     #[arg(long, default_value_t = 10)]
     top: usize,
@@ -112,6 +117,9 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     let mut verifier = Verifier::new(renderer).context("starting Vulkan")?;
     if let Some(n) = args.slots {
         verifier = verifier.with_slots(n as usize);
+    }
+    if let Some(n) = args.chunks_in_flight {
+        verifier = verifier.with_chunks_in_flight(n as usize);
     }
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
@@ -233,8 +241,11 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
         println!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
     }
     println!(
-        "batches: up to {} hypotheses side by side (slots; fewer where the memory budget holds fewer)",
-        verifier.slots()
+        "batches: up to {} hypotheses side by side (slots), up to {} chunk{} in flight (fewer where the memory budget \
+         holds fewer)",
+        verifier.slots(),
+        verifier.chunks_in_flight(),
+        if verifier.chunks_in_flight() == 1 { "" } else { "s" }
     );
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));

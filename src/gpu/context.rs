@@ -83,6 +83,10 @@ pub struct GpuContext {
     recorders: Mutex<Vec<Recorder>>,
     /// Pipeline barriers recorded so far ([`GpuContext::barriers_recorded`]).
     barriers: AtomicU64,
+    /// Submissions the device has now, and the most it has had at once
+    /// ([`GpuContext::most_submissions_in_flight`]).
+    in_flight: AtomicU64,
+    most_in_flight: AtomicU64,
 }
 
 /// What one submission records into and waits on; one per submission in flight.
@@ -228,6 +232,8 @@ impl GpuContext {
             int64_atomics,
             recorders: Mutex::new(Vec::new()),
             barriers: AtomicU64::new(0),
+            in_flight: AtomicU64::new(0),
+            most_in_flight: AtomicU64::new(0),
         }))
     }
 
@@ -371,6 +377,13 @@ impl GpuContext {
         self.barriers.load(Ordering::Relaxed)
     }
 
+    /// The most submissions this context has had in flight at once (submitted, not yet seen
+    /// to finish): 2 where a verification recorded a chunk while the device ran another
+    /// (verify/lanes.rs; tests/verify.rs reads it).
+    pub fn most_submissions_in_flight(&self) -> u64 {
+        self.most_in_flight.load(Ordering::Relaxed)
+    }
+
     /// Whether the device is a CPU (a software rasterizer such as lavapipe), not a GPU.
     pub fn is_cpu(&self) -> bool {
         self.is_cpu
@@ -437,8 +450,13 @@ impl GpuContext {
                 unsafe { self.queue_submit2(*queue, &submit, recorder.fence) }.vk(name)?;
                 submitted = true;
             }
+            let now = self.in_flight.fetch_add(1, Ordering::Relaxed) + 1;
+            self.most_in_flight.fetch_max(now, Ordering::Relaxed);
             // SAFETY: the fence was just submitted.
             let waited = unsafe { d.wait_for_fences(&[recorder.fence], true, SUBMIT_TIMEOUT_NS) }.vk(name);
+            if waited.is_ok() {
+                self.in_flight.fetch_sub(1, Ordering::Relaxed);
+            }
             match waited {
                 Err(Error::Vulkan { result: vk::Result::TIMEOUT, .. }) => Err(Error::DeviceLost(format!(
                     "{name}: the GPU did not finish within {} s",

@@ -6,6 +6,7 @@ pub mod area;
 mod batch;
 mod counts;
 mod hypothesis;
+mod lanes;
 mod report;
 mod score_pass;
 mod scores;

@@ -7,12 +7,15 @@
 //! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
 //! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
 //! image. A batch keeps as many slots as the verifier asks for ([`Verifier::with_slots`]) and
-//! the memory budget holds, at least one. In shadow mode `exact` a chunk holds at most
-//! [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is submitted.
+//! the memory budget holds, at least one. On a GPU, two chunks are in flight at once, one
+//! recorded while the device runs the other (lanes.rs). In shadow mode `exact` a chunk holds
+//! at most [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is
+//! submitted.
 
 use super::area::unit_scale;
 use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers};
 use super::counts::{Counts, CountsLayout};
+use super::lanes::{default_chunks_in_flight, in_two_lanes};
 use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
@@ -28,6 +31,7 @@ use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -89,6 +93,9 @@ struct BatchPlan {
     counts_budget: u64,
     /// Render-target slots a batch keeps: as many as asked for that the budget holds.
     slots: usize,
+    /// Chunks in flight at once (lanes.rs): 2 where the verifier asks for two and the budget
+    /// holds their slots and counts, else 1.
+    lanes: usize,
 }
 
 impl BatchPlan {
@@ -108,6 +115,8 @@ pub struct Verifier {
     models: Mutex<HashMap<String, Arc<Model>>>,
     /// Most render-target slots a batch keeps (with_slots).
     slots: usize,
+    /// Most chunks in flight at once (with_chunks_in_flight).
+    chunks_in_flight: usize,
 }
 
 impl Verifier {
@@ -115,7 +124,8 @@ impl Verifier {
     pub fn new(renderer: Renderer) -> Result<Self> {
         let score_pass = ScorePass::new(renderer.context())?;
         let slots = default_slots(renderer.context());
-        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()), slots })
+        let chunks_in_flight = default_chunks_in_flight(renderer.context());
+        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()), slots, chunks_in_flight })
     }
 
     /// The same verifier, keeping up to `n` render-target slots a batch (clamped to 1 to
@@ -131,6 +141,21 @@ impl Verifier {
     /// Most render-target slots a batch keeps.
     pub fn slots(&self) -> usize {
         self.slots
+    }
+
+    /// The same verifier, keeping up to `n` chunks of a call in flight at once (1 or 2): with
+    /// 2, one chunk is recorded while the device runs another (lanes.rs). The default is 2 on
+    /// a GPU and 1 on a CPU device, whose "device" is the host's own cores: there the two
+    /// lanes only contend (lavapipe: 0.32–0.40 against 0.33–0.45 ms a hypothesis for the box
+    /// at 64² in chunks of 64). Two need the memory of two chunks; a call keeps one where the
+    /// budget holds one. The counts and scores are the same either way.
+    pub fn with_chunks_in_flight(self, n: usize) -> Self {
+        Self { chunks_in_flight: n.clamp(1, 2), ..self }
+    }
+
+    /// Most chunks of a call in flight at once.
+    pub fn chunks_in_flight(&self) -> usize {
+        self.chunks_in_flight
     }
 
     /// This verifier as on a device whose square root errs by `ulps`, which the score pass
@@ -208,6 +233,7 @@ impl Verifier {
             segments: sensed.segments.len() as u32,
             counts_budget,
             slots: self.slots.min(hypotheses.len()).max(1),
+            lanes: 1,
         };
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
@@ -235,18 +261,21 @@ impl Verifier {
             }
             _ => 0,
         };
-        // The sensed image on the host and the GPU, the counts with their readback, and the
-        // slots: as many as the budget holds, up to those asked for.
+        // The sensed image on the host and the GPU; and a chunk's: its counts with their
+        // readback, its exact images and its slots, as many as the budget holds, up to those
+        // asked for. Two chunks in flight (lanes.rs) where the budget holds both.
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
-        let fixed = sensed_bytes + 2 * counts + exact_bytes;
+        let chunk_bytes = 2 * counts + exact_bytes;
         let budget = self.renderer.memory_budget();
-        let holds = budget.bytes().saturating_sub(fixed) / per_slot.max(1);
+        let holds = budget.bytes().saturating_sub(sensed_bytes + chunk_bytes) / per_slot.max(1);
         plan.slots = plan.slots.min(usize::try_from(holds).unwrap_or(usize::MAX)).max(1);
-        budget.check(
-            format_args!("verifying against a {}×{} image", sensor.width, sensor.height),
-            fixed + per_slot * plan.slots as u64,
-        )?;
+        let in_flight = chunk_bytes + per_slot * plan.slots as u64;
+        let what = format_args!("verifying against a {}×{} image", sensor.width, sensor.height);
+        budget.check(what, sensed_bytes + in_flight)?;
+        if self.chunks_in_flight == 2 && sensed_bytes + 2 * in_flight <= budget.bytes() {
+            plan.lanes = 2;
+        }
         Ok(plan)
     }
 
@@ -275,14 +304,14 @@ impl Verifier {
             sensed: SensedBuffers { pixels: &on_gpu.pixels, segment_count: sensed.segments.len() as u32 },
             slots: plan.slots,
         };
-        let mut results = Vec::with_capacity(hypotheses.len());
         let chunk_cap = match settings.shadow.mode {
             ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
             _ => settings.chunk_size.clamp(1, MAX_CHUNK),
         };
+        // Each chunk as long as its cap and the counts budget allow.
+        let mut chunks: Vec<Range<usize>> = Vec::new();
         let mut start = 0;
         while start < hypotheses.len() {
-            // Grow the chunk while its counts fit the budget.
             let mut end = start;
             let mut bytes = 0;
             while end < hypotheses.len()
@@ -292,7 +321,12 @@ impl Verifier {
                 bytes += per_hypothesis(&hypotheses[end]);
                 end += 1;
             }
-            let chunk = &hypotheses[start..end];
+            chunks.push(start..end);
+            start = end;
+        }
+        let shadow_pass = settings.shadow.mode.shadows(sensor.theta_deg);
+        let verify_chunk = |range: Range<usize>| -> Result<Vec<Verification>> {
+            let chunk = &hypotheses[range];
             let mut offset = 0;
             let items: Vec<BatchItem> = chunk
                 .iter()
@@ -313,8 +347,7 @@ impl Verifier {
                 })
                 .collect();
             let words = count_batch(&self.renderer, &self.score_pass, &batch, &items, offset)?;
-            let shadow_pass = settings.shadow.mode.shadows(sensor.theta_deg);
-            for (h, item) in chunk.iter().zip(&items) {
+            let verified = chunk.iter().zip(&items).map(|(h, item)| {
                 let l = layout(h);
                 let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()], sensed.valid);
                 let scores = score(&counts, sensed, &h.bindings);
@@ -327,10 +360,22 @@ impl Verifier {
                     Some(_) => Some((counts.clone(), scores.clone())),
                     None => None,
                 };
-                results.push(Verification { id: h.id.clone(), counts, scores, unshadowed });
+                Verification { id: h.id.clone(), counts, scores, unshadowed }
+            });
+            Ok(verified.collect())
+        };
+        let mut results = Vec::with_capacity(hypotheses.len());
+        let mut hand_on = |chunk: usize, verified: Vec<Verification>| {
+            results.extend(verified);
+            progress(chunks[chunk].end);
+        };
+        // Two chunks in flight where there are two and the budget holds both (lanes.rs).
+        if plan.lanes == 2 && chunks.len() > 1 {
+            in_two_lanes(chunks.len(), |chunk| verify_chunk(chunks[chunk].clone()), hand_on)?;
+        } else {
+            for (chunk, range) in chunks.iter().enumerate() {
+                hand_on(chunk, verify_chunk(range.clone())?);
             }
-            start = end;
-            progress(start);
         }
         Ok(results)
     }

@@ -22,14 +22,20 @@ use rangesynth::{RenderOutput, Renderer, Scene};
 use std::sync::{Arc, LazyLock};
 
 /// The test binary's one verifier; its renderer is the one every GPU test uses. It keeps as
-/// many slots a batch as `RANGESYNTH_TEST_SLOTS` says (the device's default unless it is set:
-/// tools/test.sh runs the verification suite again with a GPU's 16).
+/// many slots a batch, and chunks in flight, as `RANGESYNTH_TEST_SLOTS` and
+/// `RANGESYNTH_TEST_CHUNKS_IN_FLIGHT` say (the device's defaults unless they are set:
+/// tools/test.sh runs the verification suite again with a GPU's, 16 and 2).
 pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
-    let verifier = Verifier::new(test_renderer(None)).expect("verifier");
-    match std::env::var("RANGESYNTH_TEST_SLOTS") {
-        Ok(n) => verifier.with_slots(n.parse().expect("RANGESYNTH_TEST_SLOTS is a count")),
-        Err(_) => verifier,
+    let count =
+        |name: &str| std::env::var(name).ok().map(|n| n.parse().unwrap_or_else(|_| panic!("{name} is a count")));
+    let mut verifier = Verifier::new(test_renderer(None)).expect("verifier");
+    if let Some(n) = count("RANGESYNTH_TEST_SLOTS") {
+        verifier = verifier.with_slots(n);
     }
+    if let Some(n) = count("RANGESYNTH_TEST_CHUNKS_IN_FLIGHT") {
+        verifier = verifier.with_chunks_in_flight(n);
+    }
+    verifier
 });
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan

@@ -1,0 +1,145 @@
+//! Two chunks of a verification in flight: while the device runs one chunk's command buffer,
+//! the host records the next. A chunk's recording is host work: 5.6–7.8 µs a hypothesis on
+//! this project's 2-core machine, with 0.5–1.8 µs more to plan it (batches of 64 to 256,
+//! timed around `count_batch`'s recording, 2026-11-25). Recorded and run one after the other,
+//! that adds to every hypothesis' time on a GPU, whose passes for a 10k-triangle model at 256²
+//! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So on a GPU a call's chunks go to two lanes, the caller's thread and one
+//! more, each taking the next chunk when it is done with its last: each lane has at most one
+//! chunk in flight, and the verifier's plan counts the memory of two.
+
+use crate::gpu::GpuContext;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+
+/// Chunks a verification keeps in flight unless the caller says otherwise
+/// (`Verifier::with_chunks_in_flight`): 2 on a GPU; 1 on a CPU device such as lavapipe, whose
+/// device work runs on the host's own cores, where a second lane only contends with it.
+pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
+    if ctx.is_cpu() {
+        1
+    } else {
+        2
+    }
+}
+
+/// Runs `job` on chunks `0..count` in two lanes (the calling thread, and one more where one
+/// can be started; else all on the caller's), and hands each chunk's output to `done`, on the
+/// calling thread, in chunk order. The first failure, in chunk order, stops the lanes from
+/// starting further chunks and is returned; the outputs before it have been handed on.
+pub(crate) fn in_two_lanes<T: Send, E: Send>(
+    count: usize,
+    job: impl Fn(usize) -> Result<T, E> + Sync,
+    mut done: impl FnMut(usize, T),
+) -> Result<(), E> {
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    // The next chunk a lane runs, and its output; none once every chunk is taken or one failed.
+    let take = || {
+        if failed.load(Ordering::Acquire) {
+            return None;
+        }
+        let chunk = next.fetch_add(1, Ordering::AcqRel);
+        if chunk >= count {
+            return None;
+        }
+        let output = job(chunk);
+        if output.is_err() {
+            failed.store(true, Ordering::Release);
+        }
+        Some((chunk, output))
+    };
+    let take = &take;
+    std::thread::scope(|scope| {
+        let (send, receive) = mpsc::channel();
+        // Without a second thread, the caller's lane takes every chunk.
+        let _ =
+            std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, move || {
+                while let Some(ran) = take() {
+                    if send.send(ran).is_err() {
+                        return;
+                    }
+                }
+            });
+        let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
+        // The caller's lane, handing on what is ready after each of its chunks.
+        while let Some((chunk, output)) = take() {
+            order.waiting[chunk] = Some(output);
+            for (chunk, output) in receive.try_iter() {
+                order.waiting[chunk] = Some(output);
+            }
+            order.hand_on(&mut done)?;
+        }
+        // The other lane's last chunks.
+        for (chunk, output) in receive {
+            order.waiting[chunk] = Some(output);
+            order.hand_on(&mut done)?;
+        }
+        Ok(())
+    })
+}
+
+/// Outputs that came before the ones ahead of them in chunk order, and how many were handed on.
+struct InOrder<T, E> {
+    waiting: Vec<Option<Result<T, E>>>,
+    handed: usize,
+}
+
+impl<T, E> InOrder<T, E> {
+    /// Hands on the outputs now next in chunk order, up to the first failure, which it returns.
+    fn hand_on(&mut self, done: &mut impl FnMut(usize, T)) -> Result<(), E> {
+        while let Some(output) = self.waiting.get_mut(self.handed).and_then(Option::take) {
+            done(self.handed, output?);
+            self.handed += 1;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::in_two_lanes;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Barrier;
+
+    #[test]
+    fn outputs_come_in_chunk_order_from_two_threads_at_once() {
+        // Both lanes must be inside a chunk at once to pass the barrier: one lane alone
+        // would wait on it for ever, so the test would hang, not pass.
+        let both = Barrier::new(2);
+        let mut handed = Vec::new();
+        let result: Result<(), ()> = in_two_lanes(
+            6,
+            |chunk| {
+                if chunk < 2 {
+                    both.wait();
+                }
+                Ok(chunk * 10)
+            },
+            |chunk, output| handed.push((chunk, output)),
+        );
+        assert_eq!(result, Ok(()));
+        assert_eq!(handed, (0..6).map(|c| (c, c * 10)).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn the_first_failure_in_chunk_order_stops_the_lanes() {
+        let started = AtomicUsize::new(0);
+        let mut handed = Vec::new();
+        let result = in_two_lanes(
+            100,
+            |chunk| {
+                started.fetch_add(1, Ordering::Relaxed);
+                if chunk == 3 {
+                    Err(chunk)
+                } else {
+                    Ok(chunk)
+                }
+            },
+            |chunk, _| handed.push(chunk),
+        );
+        assert_eq!(result, Err(3));
+        assert_eq!(handed, [0, 1, 2]);
+        // Each lane starts at most one chunk after the failure is known.
+        assert!(started.load(Ordering::Relaxed) <= 6, "{} chunks started", started.load(Ordering::Relaxed));
+    }
+}
