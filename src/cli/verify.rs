@@ -240,12 +240,12 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
         let n = renderer.hypotheses_per_dispatch();
         println!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
     }
+    let (slots, chunks) = (verifier.slots(), verifier.chunks_in_flight());
     println!(
-        "batches: up to {} hypotheses side by side (slots), up to {} chunk{} in flight (fewer where the memory budget \
-         holds fewer)",
-        verifier.slots(),
-        verifier.chunks_in_flight(),
-        if verifier.chunks_in_flight() == 1 { "" } else { "s" }
+        "batches: up to {slots} hypothes{} side by side (slots), up to {chunks} chunk{} in flight (fewer where the \
+         memory budget holds fewer)",
+        if slots == 1 { "is" } else { "es" },
+        if chunks == 1 { "" } else { "s" }
     );
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));

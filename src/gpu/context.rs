@@ -83,7 +83,7 @@ pub struct GpuContext {
     recorders: Mutex<Vec<Recorder>>,
     /// Pipeline barriers recorded so far ([`GpuContext::barriers_recorded`]).
     barriers: AtomicU64,
-    /// Submissions the device has now, and the most it has had at once
+    /// Submissions whose wait is not over, and the most there have been at once
     /// ([`GpuContext::most_submissions_in_flight`]).
     in_flight: AtomicU64,
     most_in_flight: AtomicU64,
@@ -377,8 +377,8 @@ impl GpuContext {
         self.barriers.load(Ordering::Relaxed)
     }
 
-    /// The most submissions this context has had in flight at once (submitted, not yet seen
-    /// to finish): 2 where a verification recorded a chunk while the device ran another
+    /// The most submissions this context has had in flight at once (submitted, their wait not
+    /// yet over): 2 where a verification recorded a chunk while the device ran another
     /// (verify/lanes.rs; tests/verify.rs reads it).
     pub fn most_submissions_in_flight(&self) -> u64 {
         self.most_in_flight.load(Ordering::Relaxed)
@@ -454,9 +454,7 @@ impl GpuContext {
             self.most_in_flight.fetch_max(now, Ordering::Relaxed);
             // SAFETY: the fence was just submitted.
             let waited = unsafe { d.wait_for_fences(&[recorder.fence], true, SUBMIT_TIMEOUT_NS) }.vk(name);
-            if waited.is_ok() {
-                self.in_flight.fetch_sub(1, Ordering::Relaxed);
-            }
+            self.in_flight.fetch_sub(1, Ordering::Relaxed);
             match waited {
                 Err(Error::Vulkan { result: vk::Result::TIMEOUT, .. }) => Err(Error::DeviceLost(format!(
                     "{name}: the GPU did not finish within {} s",

@@ -10,9 +10,10 @@ use crate::error::Result;
 use crate::gpu::GpuContext;
 use std::sync::{Arc, Mutex};
 
-/// Views' targets the pool keeps when no call uses them: the most slots a batch may keep,
-/// each with a range and a shadow view (a call returns only those it used).
-pub const KEPT: usize = 2 * MAX_SLOTS;
+/// Views' targets the pool keeps when no call uses them: those of a verification's two chunks
+/// in flight (src/verify/lanes.rs), each of the most slots a batch may keep, each slot with a
+/// range and a shadow view (a call returns only those it used).
+pub const KEPT: usize = 2 * 2 * MAX_SLOTS;
 
 /// Free targets with their kind and size.
 type Kept = (ViewKind, (u32, u32), ViewTargets);

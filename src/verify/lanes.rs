@@ -3,9 +3,10 @@
 //! this project's 2-core machine, with 0.5–1.8 µs more to plan it (batches of 64 to 256,
 //! timed around `count_batch`'s recording, 2026-11-25). Recorded and run one after the other,
 //! that adds to every hypothesis' time on a GPU, whose passes for a 10k-triangle model at 256²
-//! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So on a GPU a call's chunks go to two lanes, the caller's thread and one
-//! more, each taking the next chunk when it is done with its last: each lane has at most one
-//! chunk in flight, and the verifier's plan counts the memory of two.
+//! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So
+//! on a GPU a call's chunks go to two lanes, the caller's thread and one more, each taking the
+//! next chunk when it is done with its last: each lane has at most one chunk in flight, and
+//! the verifier's plan counts the memory of two.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -25,7 +26,8 @@ pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
 /// Runs `job` on chunks `0..count` in two lanes (the calling thread, and one more where one
 /// can be started; else all on the caller's), and hands each chunk's output to `done`, on the
 /// calling thread, in chunk order. The first failure, in chunk order, stops the lanes from
-/// starting further chunks and is returned; the outputs before it have been handed on.
+/// starting further chunks and is returned; the outputs before it have been handed on. A job
+/// that panics stops them too, and its panic goes on in the caller's thread.
 pub(crate) fn in_two_lanes<T: Send, E: Send>(
     count: usize,
     job: impl Fn(usize) -> Result<T, E> + Sync,
@@ -42,9 +44,11 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
         if chunk >= count {
             return None;
         }
+        // Marks the lanes failed unless the job returns Ok: an Err, or a panic unwinding.
+        let stop = StopUnlessDone(&failed);
         let output = job(chunk);
-        if output.is_err() {
-            failed.store(true, Ordering::Release);
+        if output.is_ok() {
+            std::mem::forget(stop);
         }
         Some((chunk, output))
     };
@@ -52,7 +56,7 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
     std::thread::scope(|scope| {
         let (send, receive) = mpsc::channel();
         // Without a second thread, the caller's lane takes every chunk.
-        let _ =
+        let helper =
             std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, move || {
                 while let Some(ran) = take() {
                     if send.send(ran).is_err() {
@@ -74,8 +78,21 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
             order.waiting[chunk] = Some(output);
             order.hand_on(&mut done)?;
         }
+        // A panic in the other lane goes on here, as it would have in one lane.
+        if let Ok(Err(panic)) = helper.map(|lane| lane.join()) {
+            std::panic::resume_unwind(panic);
+        }
         Ok(())
     })
+}
+
+/// Sets the flag when dropped: forgotten once a job succeeds.
+struct StopUnlessDone<'a>(&'a AtomicBool);
+
+impl Drop for StopUnlessDone<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
+    }
 }
 
 /// Outputs that came before the ones ahead of them in chunk order, and how many were handed on.
@@ -99,19 +116,26 @@ impl<T, E> InOrder<T, E> {
 mod tests {
     use super::in_two_lanes;
     use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Barrier;
+    use std::time::{Duration, Instant};
 
     #[test]
     fn outputs_come_in_chunk_order_from_two_threads_at_once() {
-        // Both lanes must be inside a chunk at once to pass the barrier: one lane alone
-        // would wait on it for ever, so the test would hang, not pass.
-        let both = Barrier::new(2);
+        // Chunks 0 and 1 each wait, up to 10 s, until both are running: in one lane they
+        // cannot be, and the first fails.
+        let inside = AtomicUsize::new(0);
         let mut handed = Vec::new();
-        let result: Result<(), ()> = in_two_lanes(
+        let result = in_two_lanes(
             6,
             |chunk| {
                 if chunk < 2 {
-                    both.wait();
+                    inside.fetch_add(1, Ordering::SeqCst);
+                    let start = Instant::now();
+                    while inside.load(Ordering::SeqCst) < 2 {
+                        if start.elapsed() > Duration::from_secs(10) {
+                            return Err(format!("chunk {chunk} ran alone"));
+                        }
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
                 }
                 Ok(chunk * 10)
             },
@@ -123,12 +147,15 @@ mod tests {
 
     #[test]
     fn the_first_failure_in_chunk_order_stops_the_lanes() {
+        // Every chunk takes a millisecond, so the lanes learn of chunk 3's failure long before
+        // they could run the other 96.
         let started = AtomicUsize::new(0);
         let mut handed = Vec::new();
         let result = in_two_lanes(
             100,
             |chunk| {
                 started.fetch_add(1, Ordering::Relaxed);
+                std::thread::sleep(Duration::from_millis(1));
                 if chunk == 3 {
                     Err(chunk)
                 } else {
@@ -139,7 +166,29 @@ mod tests {
         );
         assert_eq!(result, Err(3));
         assert_eq!(handed, [0, 1, 2]);
-        // Each lane starts at most one chunk after the failure is known.
-        assert!(started.load(Ordering::Relaxed) <= 6, "{} chunks started", started.load(Ordering::Relaxed));
+        assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
+    }
+
+    #[test]
+    fn a_panicking_chunk_stops_the_lanes_and_goes_on_in_the_caller() {
+        // The lanes learn of the panic once the panic hook has run (printing a backtrace can
+        // take tens of milliseconds) and the unwinding begins: chunks of 20 ms leave room.
+        let started = AtomicUsize::new(0);
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            in_two_lanes(
+                100,
+                |chunk| -> Result<usize, ()> {
+                    started.fetch_add(1, Ordering::Relaxed);
+                    std::thread::sleep(Duration::from_millis(20));
+                    assert!(chunk != 3, "chunk 3 panics");
+                    Ok(chunk)
+                },
+                |_, _| {},
+            )
+        }));
+        let panic = outcome.expect_err("the panic goes on");
+        let message = panic.downcast_ref::<String>().map(String::as_str).or(panic.downcast_ref::<&str>().copied());
+        assert_eq!(message, Some("chunk 3 panics"));
+        assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
     }
 }

@@ -5,12 +5,12 @@
 //! A call splits its hypotheses into chunks, each recorded into one command buffer; a chunk's
 //! size comes from the device (a sixteenth of its device-local heap, at most
 //! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
-//! length runs in bounded memory: the render-target slots, one chunk's counts and the sensed
-//! image. A batch keeps as many slots as the verifier asks for ([`Verifier::with_slots`]) and
-//! the memory budget holds, at least one. On a GPU, two chunks are in flight at once, one
-//! recorded while the device runs the other (lanes.rs). In shadow mode `exact` a chunk holds
-//! at most [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is
-//! submitted.
+//! length runs in bounded memory: the render-target slots and counts of the chunks in flight
+//! (one, or two on a GPU), and the sensed image. A batch keeps as many slots as the verifier
+//! asks for ([`Verifier::with_slots`]) and the memory budget holds, at least one. On a GPU,
+//! two chunks are in flight at once, one recorded while the device runs the other
+//! (lanes.rs). In shadow mode `exact` a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose
+//! images are cast on the CPU before it is submitted.
 
 use super::area::unit_scale;
 use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers};
