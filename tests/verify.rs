@@ -290,6 +290,47 @@ fn a_chunk_is_recorded_while_the_device_runs_another() {
     assert!(messages.is_empty(), "validation reported:\n{}", messages.join("\n"));
 }
 
+/// `verify_each` hands the verifications chunk by chunk, in order, as `verify` returns them;
+/// an error from the caller's handler stops the call, which returns it.
+#[test]
+fn verifications_come_chunk_by_chunk_and_a_handlers_error_stops_them() {
+    let sensor = centred_sensor(64, 64, 0.07, [0.0, 0.0], 45.0);
+    let (_, sensed) = sensed(sensor);
+    let hypotheses: Vec<Hypothesis> = (0..40)
+        .map(|i| {
+            hypothesis(
+                &format!("h{i}"),
+                "builtin:step",
+                step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.01),
+                &[(1, 1)],
+            )
+        })
+        .collect();
+    let settings = VerifySettings { chunk_size: 16, ..settings(sensor, ShadowMode::Depth) };
+    let whole = verify(&sensed, &settings, &hypotheses);
+    let mut chunks = Vec::new();
+    VERIFIER
+        .verify_each(&sensed, &settings, &hypotheses, &mut |chunk| {
+            chunks.push(chunk);
+            Ok(())
+        })
+        .expect("verification runs");
+    assert_eq!(chunks.iter().map(Vec::len).collect::<Vec<_>>(), [16, 16, 8]);
+    for (v, w) in chunks.iter().flatten().zip(&whole) {
+        assert_eq!((&v.id, &v.counts), (&w.id, &w.counts));
+    }
+    let mut handed = 0;
+    let err = VERIFIER
+        .verify_each(&sensed, &settings, &hypotheses, &mut |_| {
+            handed += 1;
+            Err(rangesynth::Error::Scene("the handler stops here".into()))
+        })
+        .unwrap_err();
+    assert!(err.to_string().contains("the handler stops here"), "{err}");
+    assert_eq!(handed, 1);
+    assert_no_validation_messages();
+}
+
 #[test]
 fn bad_verification_input_is_refused() {
     let sensor = test_sensor(45.0);

@@ -162,15 +162,18 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     let mut pending = PendingFile::new(&args.out)?;
     let mut out = BufWriter::new(pending.file());
     let mut rows = Vec::with_capacity(hypotheses.len());
-    for (k, slice) in hypotheses.chunks(SLICE).enumerate() {
-        let done = k * SLICE;
-        let results = verifier.verify(&sensed, &settings, slice, &mut |n| bar.set_position((done + n) as u64))?;
-        for v in &results {
-            serde_json::to_writer(&mut out, &Record::new(v, &sensed))?;
-            out.write_all(b"\n")?;
+    // Each chunk's records written as it comes (Verifier::verify_each): one chunk's results
+    // held at a time, however many hypotheses.
+    let written = |e: std::io::Error| rangesynth::Error::Io { path: args.out.clone(), source: e };
+    verifier.verify_each(&sensed, &settings, &hypotheses, &mut |chunk| {
+        for v in &chunk {
+            serde_json::to_writer(&mut out, &Record::new(v, &sensed)).map_err(|e| written(e.into()))?;
+            out.write_all(b"\n").map_err(written)?;
             rows.push(SummaryRow::from(v));
         }
-    }
+        bar.set_position(rows.len() as u64);
+        Ok(())
+    })?;
     out.flush().with_context(|| format!("writing {}", args.out.display()))?;
     drop(out);
     pending.commit()?;
@@ -202,9 +205,6 @@ fn sensor_differences(given: &Sensor, header: &Sensor) -> String {
 fn effects_text(effects: &Effects) -> String {
     serde_json::to_string(effects).unwrap_or_else(|e| format!("(unprintable: {e})"))
 }
-
-/// Hypotheses verified per call, and so held in memory with their full results at once.
-const SLICE: usize = 4 * MAX_CHUNK;
 
 /// What the ranked summary needs of one hypothesis.
 struct SummaryRow {

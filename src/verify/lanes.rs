@@ -25,13 +25,14 @@ pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
 
 /// Runs `job` on chunks `0..count` in two lanes (the calling thread, and one more where one
 /// can be started; else all on the caller's), and hands each chunk's output to `done`, on the
-/// calling thread, in chunk order. The first failure, in chunk order, stops the lanes from
-/// starting further chunks and is returned; the outputs before it have been handed on. A job
-/// that panics stops them too, and its panic goes on in the caller's thread.
+/// calling thread, in chunk order. The first failure, a job's in chunk order or `done`'s,
+/// stops the lanes from starting further chunks and is returned; the outputs before it have
+/// been handed on. A job that panics stops them too, and its panic goes on in the caller's
+/// thread.
 pub(crate) fn in_two_lanes<T: Send, E: Send>(
     count: usize,
     job: impl Fn(usize) -> Result<T, E> + Sync,
-    mut done: impl FnMut(usize, T),
+    mut done: impl FnMut(usize, T) -> Result<(), E>,
 ) -> Result<(), E> {
     let next = AtomicUsize::new(0);
     let failed = AtomicBool::new(false);
@@ -65,18 +66,26 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
                 }
             });
         let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
-        // The caller's lane, handing on what is ready after each of its chunks.
-        while let Some((chunk, output)) = take() {
-            order.waiting[chunk] = Some(output);
-            for (chunk, output) in receive.try_iter() {
+        let handed = (|| {
+            // The caller's lane, handing on what is ready after each of its chunks.
+            while let Some((chunk, output)) = take() {
                 order.waiting[chunk] = Some(output);
+                for (chunk, output) in receive.try_iter() {
+                    order.waiting[chunk] = Some(output);
+                }
+                order.hand_on(&mut done)?;
             }
-            order.hand_on(&mut done)?;
-        }
-        // The other lane's last chunks.
-        for (chunk, output) in receive {
-            order.waiting[chunk] = Some(output);
-            order.hand_on(&mut done)?;
+            // The other lane's last chunks.
+            for (chunk, output) in receive {
+                order.waiting[chunk] = Some(output);
+                order.hand_on(&mut done)?;
+            }
+            Ok(())
+        })();
+        if handed.is_err() {
+            // `done` may have failed with the other lane still running: it starts no more.
+            failed.store(true, Ordering::Release);
+            return handed;
         }
         // A panic in the other lane goes on here, as it would have in one lane.
         if let Ok(Err(panic)) = helper.map(|lane| lane.join()) {
@@ -102,10 +111,11 @@ struct InOrder<T, E> {
 }
 
 impl<T, E> InOrder<T, E> {
-    /// Hands on the outputs now next in chunk order, up to the first failure, which it returns.
-    fn hand_on(&mut self, done: &mut impl FnMut(usize, T)) -> Result<(), E> {
+    /// Hands on the outputs now next in chunk order, up to the first failure, a job's or
+    /// `done`'s, which it returns.
+    fn hand_on(&mut self, done: &mut impl FnMut(usize, T) -> Result<(), E>) -> Result<(), E> {
         while let Some(output) = self.waiting.get_mut(self.handed).and_then(Option::take) {
-            done(self.handed, output?);
+            done(self.handed, output?)?;
             self.handed += 1;
         }
         Ok(())
@@ -139,7 +149,10 @@ mod tests {
                 }
                 Ok(chunk * 10)
             },
-            |chunk, output| handed.push((chunk, output)),
+            |chunk, output| {
+                handed.push((chunk, output));
+                Ok(())
+            },
         );
         assert_eq!(result, Ok(()));
         assert_eq!(handed, (0..6).map(|c| (c, c * 10)).collect::<Vec<_>>());
@@ -162,10 +175,29 @@ mod tests {
                     Ok(chunk)
                 }
             },
-            |chunk, _| handed.push(chunk),
+            |chunk, _| {
+                handed.push(chunk);
+                Ok(())
+            },
         );
         assert_eq!(result, Err(3));
         assert_eq!(handed, [0, 1, 2]);
+        assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
+    }
+
+    #[test]
+    fn a_failure_to_take_an_output_stops_the_lanes() {
+        let started = AtomicUsize::new(0);
+        let result = in_two_lanes(
+            100,
+            |chunk| -> Result<usize, usize> {
+                started.fetch_add(1, Ordering::Relaxed);
+                std::thread::sleep(Duration::from_millis(1));
+                Ok(chunk)
+            },
+            |chunk, _| if chunk == 2 { Err(1000 + chunk) } else { Ok(()) },
+        );
+        assert_eq!(result, Err(1002));
         assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
     }
 
@@ -183,7 +215,7 @@ mod tests {
                     assert!(chunk != 3, "chunk 3 panics");
                     Ok(chunk)
                 },
-                |_, _| {},
+                |_, _| Ok(()),
             )
         }));
         let panic = outcome.expect_err("the panic goes on");

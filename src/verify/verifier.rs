@@ -288,6 +288,27 @@ impl Verifier {
         hypotheses: &[Hypothesis],
         progress: &mut dyn FnMut(usize),
     ) -> Result<Vec<Verification>> {
+        let mut results = Vec::with_capacity(hypotheses.len());
+        self.verify_each(sensed, settings, hypotheses, &mut |chunk| {
+            results.extend(chunk);
+            progress(results.len());
+            Ok(())
+        })?;
+        Ok(results)
+    }
+
+    /// Scores every hypothesis against the sensed image, handing the verifications to `each`
+    /// chunk by chunk, in order, as soon as a chunk and those before it are done: a caller that
+    /// writes them out holds a chunk's at a time, however long the call, and the chunks in
+    /// flight never wait for the results of a slice to be gathered. An error from `each` stops
+    /// the call (no further chunk starts) and is returned.
+    pub fn verify_each(
+        &self,
+        sensed: &SensedImage,
+        settings: &VerifySettings,
+        hypotheses: &[Hypothesis],
+        each: &mut dyn FnMut(Vec<Verification>) -> Result<()>,
+    ) -> Result<()> {
         let plan = self.plan(sensed, settings, hypotheses)?;
         let sensor = &settings.sensor;
         let ctx = self.renderer.context();
@@ -364,19 +385,11 @@ impl Verifier {
             });
             Ok(verified.collect())
         };
-        let mut results = Vec::with_capacity(hypotheses.len());
-        let mut hand_on = |chunk: usize, verified: Vec<Verification>| {
-            results.extend(verified);
-            progress(chunks[chunk].end);
-        };
         // Two chunks in flight where there are two and the budget holds both (lanes.rs).
         if plan.lanes == 2 && chunks.len() > 1 {
-            in_two_lanes(chunks.len(), |chunk| verify_chunk(chunks[chunk].clone()), hand_on)?;
+            in_two_lanes(chunks.len(), |chunk| verify_chunk(chunks[chunk].clone()), |_, verified| each(verified))
         } else {
-            for (chunk, range) in chunks.iter().enumerate() {
-                hand_on(chunk, verify_chunk(range.clone())?);
-            }
+            chunks.iter().try_for_each(|range| each(verify_chunk(range.clone())?))
         }
-        Ok(results)
     }
 }
