@@ -162,8 +162,8 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     let mut pending = PendingFile::new(&args.out)?;
     let mut out = BufWriter::new(pending.file());
     let mut rows = Vec::with_capacity(hypotheses.len());
-    // Each chunk's records written as it comes (Verifier::verify_each): one chunk's results
-    // held at a time, however many hypotheses.
+    // Each chunk's records written as it comes (Verifier::verify_each): a few chunks' results
+    // held at a time at most, however many hypotheses.
     let written = |e: std::io::Error| rangesynth::Error::Io { path: args.out.clone(), source: e };
     verifier.verify_each(&sensed, &settings, &hypotheses, &mut |chunk| {
         for v in &chunk {

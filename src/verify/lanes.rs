@@ -55,7 +55,10 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
     };
     let take = &take;
     std::thread::scope(|scope| {
-        let (send, receive) = mpsc::channel();
+        // The other lane waits to send a second output until the first is taken: neither
+        // lane runs more than a chunk ahead of those handed on, so a call holds the outputs
+        // of a few chunks at most.
+        let (send, receive) = mpsc::sync_channel(1);
         // Without a second thread, the caller's lane takes every chunk.
         let helper =
             std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, move || {
@@ -67,13 +70,21 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
             });
         let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
         let handed = (|| {
-            // The caller's lane, handing on what is ready after each of its chunks.
-            while let Some((chunk, output)) = take() {
-                order.waiting[chunk] = Some(output);
+            // The caller's lane, handing on what is ready before each of its chunks.
+            loop {
                 for (chunk, output) in receive.try_iter() {
                     order.waiting[chunk] = Some(output);
                 }
                 order.hand_on(&mut done)?;
+                // Two chunks taken and not handed on: the other lane's is next; wait for it.
+                if next.load(Ordering::Acquire) >= order.handed + 2 {
+                    if let Ok((chunk, output)) = receive.recv() {
+                        order.waiting[chunk] = Some(output);
+                        continue;
+                    }
+                }
+                let Some((chunk, output)) = take() else { break };
+                order.waiting[chunk] = Some(output);
             }
             // The other lane's last chunks.
             for (chunk, output) in receive {
@@ -156,6 +167,29 @@ mod tests {
         );
         assert_eq!(result, Ok(()));
         assert_eq!(handed, (0..6).map(|c| (c, c * 10)).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn no_lane_runs_far_ahead_of_a_slow_chunk() {
+        // While chunk 0 takes 200 ms, the other lane may run a chunk and hold one more
+        // output: chunks 0 to 3 have started by its end, not the other 96.
+        let started = AtomicUsize::new(0);
+        let started_by_the_end_of_0 = AtomicUsize::new(0);
+        let result: Result<(), ()> = in_two_lanes(
+            100,
+            |chunk| {
+                started.fetch_add(1, Ordering::SeqCst);
+                if chunk == 0 {
+                    std::thread::sleep(Duration::from_millis(200));
+                    started_by_the_end_of_0.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
+                }
+                Ok(chunk)
+            },
+            |_, _| Ok(()),
+        );
+        assert_eq!(result, Ok(()));
+        let ahead = started_by_the_end_of_0.load(Ordering::SeqCst);
+        assert!(ahead <= 4, "{ahead} chunks had started when chunk 0 ended");
     }
 
     #[test]
