@@ -14,8 +14,9 @@ use rangesynth::limits::{MemoryBudget, DEFAULT_MEMORY_BUDGET};
 use rangesynth::render::Raster;
 use rangesynth::sensor::Sensor;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
-use rangesynth::verify::{Counts, Hypothesis, SensedImage, Verification, Verifier, VerifySettings};
+use rangesynth::verify::{Counts, Hypothesis, Model, SensedImage, Verification, Verifier, VerifySettings};
 use std::path::Path;
+use std::sync::Arc;
 
 const TOLERANCE: f64 = 0.05;
 
@@ -44,9 +45,27 @@ fn hypothesis(id: &str, model: &str, pose: DMat4, bindings: &[(u32, u32)]) -> Hy
     }
 }
 
+/// The step, as the test binary's verifier loaded it.
+fn step_model() -> Arc<Model> {
+    VERIFIER.model("builtin:step", Path::new(".")).unwrap()
+}
+
 /// The step's surfaces are labels 1..=8 in the sensed image: the correct binding is identity.
 fn correct() -> Hypothesis {
     hypothesis("correct", "builtin:step", step_pose(), &(1..=8).map(|l| (l, l)).collect::<Vec<_>>())
+}
+
+/// `n` hypotheses of `model`: the step's pose turned about z by `step` radians more each,
+/// with these bindings.
+fn turning(model: &Arc<Model>, n: usize, step: f64, bindings: &[(u32, u32)]) -> Vec<Hypothesis> {
+    (0..n)
+        .map(|i| Hypothesis {
+            id: format!("h{i}"),
+            model: model.clone(),
+            pose: step_pose() * DMat4::from_rotation_z(step * i as f64),
+            bindings: bindings.to_vec(),
+        })
+        .collect()
 }
 
 fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
@@ -234,12 +253,7 @@ fn exact_mode_scores_the_same_alone_or_in_chunks() {
 fn a_batch_of_1024_runs_in_chunks() {
     let sensor = centred_sensor(64, 64, 0.07, [0.0, 0.0], 45.0);
     let (_, sensed) = sensed(sensor);
-    let hypotheses: Vec<Hypothesis> = (0..1024)
-        .map(|i| {
-            let pose = step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.001);
-            hypothesis(&format!("h{i}"), "builtin:step", pose, &[(1, 1), (2, 2)])
-        })
-        .collect();
+    let hypotheses = turning(&step_model(), 1024, 0.001, &[(1, 1), (2, 2)]);
     let mut reports = Vec::new();
     let settings = VerifySettings { chunk_size: 256, ..settings(sensor, ShadowMode::Depth) };
     let results = VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |done| reports.push(done)).unwrap();
@@ -261,14 +275,7 @@ fn a_chunk_is_recorded_while_the_device_runs_another() {
     let (_, sensed) = sensed(sensor);
     let verifier = Verifier::new(test_renderer(None)).expect("verifier").with_chunks_in_flight(2);
     let model = verifier.model("builtin:step", Path::new(".")).expect("model");
-    let hypotheses: Vec<Hypothesis> = (0..512)
-        .map(|i| Hypothesis {
-            id: format!("h{i}"),
-            model: model.clone(),
-            pose: step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.001),
-            bindings: vec![(1, 1), (2, 2)],
-        })
-        .collect();
+    let hypotheses = turning(&model, 512, 0.001, &[(1, 1), (2, 2)]);
     let one_chunk = settings(sensor, ShadowMode::Depth);
     let whole = verifier.verify(&sensed, &one_chunk, &hypotheses, &mut |_| {}).expect("one chunk");
     assert_eq!(verifier.renderer().context().most_submissions_in_flight(), 1);
@@ -296,16 +303,7 @@ fn a_chunk_is_recorded_while_the_device_runs_another() {
 fn verifications_come_chunk_by_chunk_and_a_handlers_error_stops_them() {
     let sensor = centred_sensor(64, 64, 0.07, [0.0, 0.0], 45.0);
     let (_, sensed) = sensed(sensor);
-    let hypotheses: Vec<Hypothesis> = (0..40)
-        .map(|i| {
-            hypothesis(
-                &format!("h{i}"),
-                "builtin:step",
-                step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.01),
-                &[(1, 1)],
-            )
-        })
-        .collect();
+    let hypotheses = turning(&step_model(), 40, 0.01, &[(1, 1)]);
     let settings = VerifySettings { chunk_size: 16, ..settings(sensor, ShadowMode::Depth) };
     let whole = verify(&sensed, &settings, &hypotheses);
     let mut chunks = Vec::new();
@@ -373,16 +371,7 @@ fn one_verifier_serves_several_threads_at_once() {
     let sensor = test_sensor(45.0);
     let (_, sensed) = sensed(sensor);
     let base = settings(sensor, ShadowMode::Depth);
-    let hypotheses: Vec<Hypothesis> = (0..12)
-        .map(|i| {
-            hypothesis(
-                &format!("h{i}"),
-                "builtin:step",
-                step_pose() * DMat4::from_rotation_z(f64::from(i) * 0.05),
-                &[(1, 1), (2, 2)],
-            )
-        })
-        .collect();
+    let hypotheses = turning(&step_model(), 12, 0.05, &[(1, 1), (2, 2)]);
     let sequential = verify(&sensed, &base, &hypotheses);
     std::thread::scope(|scope| {
         let runs: Vec<_> = (0..4)
@@ -456,17 +445,9 @@ fn a_batch_waits_once_a_stage_for_each_run_of_slots() {
             let renderer = test_renderer(None).with_raster(raster).with_hypotheses_per_dispatch(PER_DISPATCH);
             let verifier = Verifier::new(renderer).expect("verifier").with_slots(slots);
             let model = verifier.model("builtin:step", Path::new(".")).expect("model");
-            let hypotheses = |n: usize| -> Vec<Hypothesis> {
-                (0..n)
-                    .map(|i| Hypothesis {
-                        id: format!("h{i}"),
-                        model: model.clone(),
-                        pose: DMat4::from_rotation_z(0.01 * i as f64) * step_pose(),
-                        bindings: vec![(1, 1)],
-                    })
-                    .collect()
+            let barriers = |runs: usize| {
+                barriers_verifying(&verifier, &sensed, &settings, &turning(&model, runs * slots, 0.01, &[(1, 1)])).0
             };
-            let barriers = |runs: usize| barriers_verifying(&verifier, &sensed, &settings, &hypotheses(runs * slots)).0;
             // The first uploads the sensed image and the mesh, which take barriers of their own.
             barriers(1);
             let (one_run, three_runs) = (barriers(1), barriers(3));
@@ -508,14 +489,7 @@ fn a_batch_keeps_the_slots_the_memory_budget_holds() {
         let renderer = test_renderer(None).with_memory_budget(MemoryBudget::new(budget));
         let verifier = Verifier::new(renderer).expect("verifier").with_slots(SLOTS);
         let model = verifier.model("builtin:step", Path::new(".")).expect("model");
-        let hypotheses: Vec<Hypothesis> = (0..SLOTS)
-            .map(|i| Hypothesis {
-                id: format!("h{i}"),
-                model: model.clone(),
-                pose: DMat4::from_rotation_z(0.01 * i as f64) * step_pose(),
-                bindings: (1..=8).map(|l| (l, l)).collect(),
-            })
-            .collect();
+        let hypotheses = turning(&model, SLOTS, 0.01, &(1..=8).map(|l| (l, l)).collect::<Vec<_>>());
         // The first uploads the sensed image and the mesh, which take barriers of their own.
         let _ = barriers_verifying(&verifier, &sensed, &settings, &hypotheses);
         barriers_verifying(&verifier, &sensed, &settings, &hypotheses)
