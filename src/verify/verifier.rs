@@ -300,8 +300,8 @@ impl Verifier {
     /// Scores every hypothesis against the sensed image, handing the verifications to `each`
     /// chunk by chunk, in order, as soon as a chunk and those before it are done: a caller that
     /// writes them out holds a few chunks' at a time at most (lanes.rs), however long the
-    /// call, and the chunks in flight never wait for the results of a slice to be gathered. An error from `each` stops
-    /// the call (no further chunk starts) and is returned.
+    /// call, and the chunks in flight never wait for the results of a slice to be gathered.
+    /// An error from `each` stops the call (no further chunk starts) and is returned.
     pub fn verify_each(
         &self,
         sensed: &SensedImage,
