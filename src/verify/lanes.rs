@@ -6,7 +6,8 @@
 //! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So
 //! on a GPU a call's chunks go to two lanes, the caller's thread and one more, each taking the
 //! next chunk when it is done with its last: each lane has at most one chunk in flight, and
-//! the verifier's plan counts the memory of two.
+//! the verifier's plan counts the memory of two. A call is then split into a few chunks at
+//! least (verifier.rs, `LANE_CHUNKS`), or one chunk's recording would overlap nothing.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};

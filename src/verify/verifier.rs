@@ -44,6 +44,13 @@ pub const EXACT_CHUNK: usize = 16;
 /// Most bytes of counts one chunk may hold (less on a device with a small heap).
 pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
 
+/// Chunks a call is split into, at least, where two are in flight (lanes.rs): all but the
+/// first one's recording (a quarter of the host's work) overlaps the device's work.
+const LANE_CHUNKS: usize = 4;
+/// Fewest hypotheses in such a chunk: a chunk's own set-up (its slots, counts and readback,
+/// one submission and wait) is paid over at least this many.
+const MIN_LANE_CHUNK: usize = 64;
+
 /// A model uploaded once and shared by every hypothesis that names it.
 pub struct Model {
     pub mesh: Arc<Mesh>,
@@ -328,6 +335,13 @@ impl Verifier {
         let chunk_cap = match settings.shadow.mode {
             ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
             _ => settings.chunk_size.clamp(1, MAX_CHUNK),
+        };
+        // In two lanes, a call of one chunk would overlap nothing: it goes in a few
+        // (LANE_CHUNKS), so that every chunk's recording but the first's overlaps the device's
+        // work on another.
+        let chunk_cap = match plan.lanes {
+            2 => chunk_cap.min(hypotheses.len().div_ceil(LANE_CHUNKS).max(MIN_LANE_CHUNK)),
+            _ => chunk_cap,
         };
         // Each chunk as long as its cap and the counts budget allow.
         let mut chunks: Vec<Range<usize>> = Vec::new();
