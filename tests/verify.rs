@@ -285,10 +285,13 @@ fn a_chunk_is_recorded_while_the_device_runs_another() {
     assert_eq!(reports, [128, 256, 384, 512]);
     let mut reports = Vec::new();
     let chunked = VerifySettings { chunk_size: 64, ..one_chunk };
+    let context = verifier.renderer().context();
+    let recorded_before = context.recording_time();
     let lanes = verifier.verify(&sensed, &chunked, &hypotheses, &mut |done| reports.push(done)).expect("chunks");
+    // The host's share, which the lanes overlap: counted in both lanes' recordings.
+    assert!(context.recording_time() > recorded_before, "the recording was timed");
     // On lavapipe a chunk runs for milliseconds, far longer than the other lane takes to record
     // and submit its own; a GPU may finish one before the other is submitted.
-    let context = verifier.renderer().context();
     if context.is_cpu() {
         assert_eq!(context.most_submissions_in_flight(), 2);
     }

@@ -288,8 +288,8 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
     let names: Vec<String> =
         configurations.iter().map(|(members, slots, chunks)| format!("{members}×{slots}×{chunks} hyp/s")).collect();
     println!(
-        "{:<26} {:>14} {:>14} {:>14} {:>14} {:>24}",
-        "model (triangles)", names[0], names[1], names[2], names[3], "barriers a hyp."
+        "{:<26} {:>14} {:>14} {:>14} {:>14} {:>24} {:>26}",
+        "model (triangles)", names[0], names[1], names[2], names[3], "barriers a hyp.", "recording µs a hyp."
     );
     let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor, ShadowMode::Label) };
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
@@ -300,19 +300,22 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             batches.push(hypotheses);
         }
         let rates = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
-        // Barriers a GPU waits at, a hypothesis: counted over one more batch of each (the
-        // two-lane configuration's are its runs'; it adds none).
-        let mut barriers = Vec::new();
-        for (verifier, hypotheses) in verifiers.iter().zip(&batches).take(3) {
+        // Barriers a GPU waits at, and the host's time recording command buffers (which two
+        // chunks in flight overlap with the device's work), a hypothesis: over one more batch
+        // of each (the two-lane configuration's barriers are its runs'; it adds none).
+        let (mut barriers, mut recording) = (Vec::new(), Vec::new());
+        for (verifier, hypotheses) in verifiers.iter().zip(&batches) {
             let context = verifier.renderer().context();
-            let before = context.barriers_recorded();
+            let before = (context.barriers_recorded(), context.recording_time());
             verifier.verify(sensed, &settings, hypotheses, &mut |_| {})?;
-            barriers.push(format!("{:.2}", (context.barriers_recorded() - before) as f64 / hypotheses.len() as f64));
+            let n = hypotheses.len() as f64;
+            barriers.push(format!("{:.2}", (context.barriers_recorded() - before.0) as f64 / n));
+            recording.push(format!("{:.1}", (context.recording_time() - before.1).as_secs_f64() * 1e6 / n));
         }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
-        let barriers = barriers.join(" / ");
+        let (barriers, recording) = (barriers[..3].join(" / "), recording.join(" / "));
         let [a, b, c, d] = [rates[0], rates[1], rates[2], rates[3]];
-        println!("{name:<26} {a:>14.1} {b:>14.1} {c:>14.1} {d:>14.1} {barriers:>24}");
+        println!("{name:<26} {a:>14.1} {b:>14.1} {c:>14.1} {d:>14.1} {barriers:>24} {recording:>26}");
     }
     Ok(())
 }

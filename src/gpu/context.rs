@@ -87,6 +87,8 @@ pub struct GpuContext {
     /// ([`GpuContext::most_submissions_in_flight`]).
     in_flight: AtomicU64,
     most_in_flight: AtomicU64,
+    /// Nanoseconds spent recording command buffers ([`GpuContext::recording_time`]).
+    recording_nanos: AtomicU64,
 }
 
 /// What one submission records into and waits on; one per submission in flight.
@@ -234,6 +236,7 @@ impl GpuContext {
             barriers: AtomicU64::new(0),
             in_flight: AtomicU64::new(0),
             most_in_flight: AtomicU64::new(0),
+            recording_nanos: AtomicU64::new(0),
         }))
     }
 
@@ -384,6 +387,13 @@ impl GpuContext {
         self.most_in_flight.load(Ordering::Relaxed)
     }
 
+    /// Host time spent recording command buffers through this context so far, in every
+    /// thread: the host's share of a verification, which two chunks in flight overlap with the
+    /// device's work (verify/lanes.rs; bench_verify prints it a hypothesis).
+    pub fn recording_time(&self) -> std::time::Duration {
+        std::time::Duration::from_nanos(self.recording_nanos.load(Ordering::Relaxed))
+    }
+
     /// Whether the device is a CPU (a software rasterizer such as lavapipe), not a GPU.
     pub fn is_cpu(&self) -> bool {
         self.is_cpu
@@ -437,11 +447,14 @@ impl GpuContext {
             unsafe { d.reset_command_pool(recorder.pool, vk::CommandPoolResetFlags::empty()) }
                 .vk("resetting a command pool")?;
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            let recording = std::time::Instant::now();
             // SAFETY: a reset command buffer.
             unsafe { d.begin_command_buffer(cmd, &begin) }.vk("beginning a command buffer")?;
             record(cmd)?;
             // SAFETY: recording started above.
             unsafe { d.end_command_buffer(cmd) }.vk("ending a command buffer")?;
+            let nanos = u64::try_from(recording.elapsed().as_nanos()).unwrap_or(u64::MAX);
+            self.recording_nanos.fetch_add(nanos, Ordering::Relaxed);
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
             {

@@ -1,7 +1,8 @@
 //! Two chunks of a verification in flight: while the device runs one chunk's command buffer,
-//! the host records the next. A chunk's recording is host work: 5.6–7.8 µs a hypothesis on
-//! this project's 2-core machine, with 0.5–1.8 µs more to plan it (batches of 64 to 256,
-//! timed around `count_batch`'s recording, 2026-11-25). Recorded and run one after the other,
+//! the host records the next. A chunk's recording is host work: 5.0–8.2 µs a hypothesis on
+//! this project's 2-core machine (`GpuContext::recording_time`, which bench_verify's grouping
+//! table prints, 2026-11-25), with 0.5–1.8 µs more to plan it. Recorded and run one after the
+//! other,
 //! that adds to every hypothesis' time on a GPU, whose passes for a 10k-triangle model at 256²
 //! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So
 //! on a GPU a call's chunks go to two lanes, the caller's thread and one more, each taking the
