@@ -519,6 +519,36 @@ fn a_batch_keeps_the_slots_the_memory_budget_holds() {
     }
 }
 
+/// A verifier that times its stages (`Verifier::with_stage_times`) reports the GPU time of
+/// each stage it ran, by name, once: the rasters, masks and scores with the graphics
+/// pipeline; the coverage's three, masks and scores with the compute rasterizer. One that does
+/// not reports nothing.
+#[test]
+fn a_timed_verification_reports_each_stage_it_ran() {
+    let sensor = test_sensor(20.0);
+    let (_, sensed) = sensed(sensor);
+    let settings = settings(sensor, ShadowMode::Label);
+    let cases = [
+        (Raster::Graphics, vec!["range", "shadow", "shadow mask", "score"]),
+        (Raster::Compute, vec!["coverage: set-up", "coverage", "coverage: large triangles", "shadow mask", "score"]),
+    ];
+    for (raster, stages) in cases {
+        let verifier = Verifier::new(test_renderer(None).with_raster(raster)).expect("verifier").with_stage_times();
+        let model = verifier.model("builtin:step", Path::new(".")).expect("model");
+        let (barriers, out) = barriers_verifying(&verifier, &sensed, &settings, &turning(&model, 8, 0.01, &[(1, 1)]));
+        assert!(barriers > 0 && out.is_ok());
+        let times = verifier.take_stage_times();
+        for stage in &stages {
+            let ms = times.iter().find(|(name, _)| name == stage).map(|&(_, ms)| ms);
+            assert!(ms.is_some_and(|ms| ms >= 0.0), "{raster:?}: {stage:?} in {times:?}");
+        }
+        let busy = |stage: &str| times.iter().any(|&(name, ms)| name == stage && ms > 0.0);
+        assert!(busy("shadow mask") && busy("score"), "{raster:?}: {times:?}");
+        assert!(verifier.take_stage_times().is_empty(), "taken once");
+    }
+    assert!(VERIFIER.take_stage_times().is_empty(), "untimed by default");
+}
+
 /// Vulkan lets a device's square root err by a few ulp (NVIDIA's approximates it), and the
 /// areas the GPU counts must be the host's to the bit (the CPU scorer's, and the sensed
 /// image's own, for a ratio of exactly 1): the score pass corrects the device's root to the

@@ -142,6 +142,14 @@ fn resident_kib(field: &str) -> Option<f64> {
 /// render as the sensed image, 16 poses about the true one, with label-mode and depth-mode
 /// shadows (the fastest of five batches each, the rasterizers in turn).
 fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
+    // The same two rasterizers timing their stages, for a breakdown under each row (apart:
+    // the timestamps are left out of the rows' own timings).
+    let timed: Vec<Verifier> = [Raster::Graphics, Raster::Compute]
+        .into_iter()
+        .map(|raster| {
+            Ok(Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(raster))?.with_stage_times())
+        })
+        .collect::<rangesynth::Result<_>>()?;
     println!("\nrasterizers, a model filling the image: batches of 16, ms per hypothesis");
     println!(
         "{:<34} {:>6} {:>12} {:>12} {:>10}",
@@ -162,8 +170,7 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
             for verifier in verifiers {
                 let model = verifier.model(model_name, Path::new("."))?;
                 triangles = model.mesh.triangles.len();
-                let (centre, _) = model.mesh.bounding_sphere();
-                let at = DMat4::from_translation(DVec3::new(-centre.x, -centre.y, 0.0));
+                let (at, hypotheses) = centred_hypotheses(&model);
                 let scene = Scene {
                     sensor,
                     shadow: settings.shadow,
@@ -176,14 +183,6 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
                     }],
                 };
                 let sensed = SensedImage::new(&RangeImage::from(&verifiers[0].renderer().render(&scene)?), &sensor)?;
-                let hypotheses: Vec<Hypothesis> = (0..16)
-                    .map(|i| Hypothesis {
-                        id: format!("h{i}"),
-                        model: model.clone(),
-                        pose: DMat4::from_rotation_z(0.002 * i as f64) * at,
-                        bindings: vec![(1, 1)],
-                    })
-                    .collect();
                 verifier.verify(&sensed, &settings, &hypotheses[..1], &mut |_| {})?;
                 inputs.push((sensed, hypotheses));
             }
@@ -204,9 +203,45 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
                 millis[1],
                 millis[0] / millis[1]
             );
+            for (verifier, (sensed, _)) in timed.iter().zip(&inputs) {
+                println!("    {}", stage_breakdown(verifier, model_name, sensed, &settings)?);
+            }
         }
     }
     Ok(())
+}
+
+/// The pose that centres a model's bounding sphere on the image (x, y), and 16 hypotheses of
+/// it turned about z by 0.002 rad each.
+fn centred_hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>) -> (DMat4, Vec<Hypothesis>) {
+    let (centre, _) = model.mesh.bounding_sphere();
+    let at = DMat4::from_translation(DVec3::new(-centre.x, -centre.y, 0.0));
+    let hypotheses = (0..16)
+        .map(|i| Hypothesis {
+            id: format!("h{i}"),
+            model: model.clone(),
+            pose: DMat4::from_rotation_z(0.002 * i as f64) * at,
+            bindings: vec![(1, 1)],
+        })
+        .collect();
+    (at, hypotheses)
+}
+
+/// A verifier's GPU time by stage (`Verifier::with_stage_times`), ms a hypothesis, over one
+/// batch of 16 of the model about the image's centre, after one to warm up.
+fn stage_breakdown(
+    verifier: &Verifier,
+    model_name: &str,
+    sensed: &SensedImage,
+    settings: &VerifySettings,
+) -> anyhow::Result<String> {
+    let (_, hypotheses) = centred_hypotheses(&verifier.model(model_name, Path::new("."))?);
+    verifier.verify(sensed, settings, &hypotheses[..1], &mut |_| {})?;
+    verifier.take_stage_times();
+    verifier.verify(sensed, settings, &hypotheses, &mut |_| {})?;
+    let stages: Vec<String> =
+        verifier.take_stage_times().iter().map(|(name, ms)| format!("{name} {:.2}", ms / 16.0)).collect();
+    Ok(format!("{} stages: {}", verifier.renderer().raster().as_str(), stages.join(", ")))
 }
 
 /// Hypotheses per second with each rasterizer, depth-mode shadows, batches of 64.

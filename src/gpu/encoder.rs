@@ -28,11 +28,21 @@ pub struct Encoder<'a> {
     pub cmd: vk::CommandBuffer,
     /// By object type and handle: handles of different types may coincide.
     current: HashMap<(vk::ObjectType, u64), Access>,
+    /// Called after each stage recorded together that has a timed step, with that step's name
+    /// (the first of the stage's): where a caller times stages (with_stage_laps).
+    stage_lap: Option<&'a mut dyn FnMut(vk::CommandBuffer, &'static str)>,
 }
 
 impl<'a> Encoder<'a> {
     pub fn new(ctx: &'a GpuContext, cmd: vk::CommandBuffer) -> Self {
-        Self { ctx, cmd, current: HashMap::new() }
+        Self { ctx, cmd, current: HashMap::new(), stage_lap: None }
+    }
+
+    /// The same encoder, calling `lap` after each stage recorded together whose steps include
+    /// a timed one, with the first such step's name: a caller writes a timestamp there to
+    /// time a batch's stages (verify/batch.rs).
+    pub fn with_stage_laps(self, lap: &'a mut dyn FnMut(vk::CommandBuffer, &'static str)) -> Self {
+        Self { stage_lap: Some(lap), ..self }
     }
 
     pub fn ctx(&self) -> &'a GpuContext {
@@ -82,8 +92,12 @@ impl<'a> Encoder<'a> {
             .filter(|&(buffer, to)| first_use((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to))
             .collect();
         self.access(&images, &buffers);
+        let lap = steps.iter().find_map(|step| step.lap);
         for step in steps {
             (step.record)(self.ctx, self.cmd);
+        }
+        if let (Some(stage_lap), Some(name)) = (&mut self.stage_lap, lap) {
+            stage_lap(self.cmd, name);
         }
     }
 

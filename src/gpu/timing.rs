@@ -27,6 +27,11 @@ impl Timestamps {
         Ok(Self { ctx: ctx.clone(), pool, count })
     }
 
+    /// Timestamps it holds.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
     /// Resets the queries; record before the first `write`.
     pub fn reset(&self, cmd: vk::CommandBuffer) {
         if let Some(pool) = self.pool {

@@ -545,9 +545,10 @@ impl CoverageGroup {
         let large =
             move |_: &GpuContext, cmd| buffers.set.dispatch_indirect(cmd, &coverage.large, &[], &buffers.large_args);
         Ok(vec![
-            Step::new(Vec::new(), cleared, prepare),
-            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover),
-            Step::new(Vec::new(), uses(Access::ComputeRead, Access::IndirectAndComputeRead), large),
+            Step::new(Vec::new(), cleared, prepare).timed("coverage: set-up"),
+            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover).timed("coverage"),
+            Step::new(Vec::new(), uses(Access::ComputeRead, Access::IndirectAndComputeRead), large)
+                .timed("coverage: large triangles"),
         ])
     }
 }

@@ -27,7 +27,7 @@ pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use host_view::HostView;
 pub use passes::MAX_SLOTS;
-pub(crate) use passes::{draw_table, Job, JobImages, Passes, Sink, SinkKind, Slot, SlotShape};
+pub(crate) use passes::{draw_table, Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
 pub(crate) use targets::ViewKind;
 
 use crate::effects::{Effects, Reason};
@@ -41,7 +41,6 @@ use crate::sensor::{depth_bounds, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::DVec3;
 use mesh_cache::MeshCache;
-use passes::PassClock;
 use pipelines::Pipelines;
 use std::sync::Arc;
 use std::time::Instant;

@@ -23,16 +23,17 @@ use super::score_pass::{ScoreBindings, ScoreConstants, ScoreInputs, ScorePass, S
 use crate::effects::Effects;
 use crate::error::Result;
 use crate::exact::{render_exact, ExactObject};
-use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step};
+use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestamps};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, Renderer, Sink,
-    SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
+    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock,
+    PassTime, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
+use std::sync::Mutex;
 
 /// Render-target slots a batch keeps unless the caller says otherwise: the hypotheses of a
 /// run go side by side, a barrier a stage for all of them. On a GPU a barrier drains the
@@ -65,6 +66,33 @@ pub struct BatchSettings<'a> {
     pub sensed: SensedBuffers<'a>,
     /// Render-target slots: hypotheses recorded side by side in a run.
     pub slots: usize,
+    /// Where the batch adds its GPU time by stage, if it is timed.
+    pub stage_times: Option<&'a StageTimes>,
+}
+
+/// A verification's GPU time by stage of its batches (`Verifier::with_stage_times`): each
+/// stage recorded together (a run's coverage set-up, coverage, large triangles, rasters,
+/// masks, effects, scores) is timed from the end of the one before, under the name of its
+/// first timed pass, and the milliseconds are summed by name, in the order first met.
+#[derive(Default)]
+pub(crate) struct StageTimes(Mutex<Vec<(&'static str, f64)>>);
+
+impl StageTimes {
+    fn add(&self, times: &[PassTime]) {
+        let mut summed = self.0.lock().unwrap_or_else(|p| p.into_inner());
+        for time in times {
+            let Some(ms) = time.ms else { continue };
+            match summed.iter_mut().find(|(name, _)| *name == time.name) {
+                Some((_, total)) => *total += ms,
+                None => summed.push((time.name, ms)),
+            }
+        }
+    }
+
+    /// The sums so far, which start again from nothing.
+    pub fn take(&self) -> Vec<(&'static str, f64)> {
+        std::mem::take(&mut *self.0.lock().unwrap_or_else(|p| p.into_inner()))
+    }
 }
 
 /// One hypothesis: a posed mesh and where its counts go (word offsets into the batch's counts).
@@ -290,8 +318,23 @@ pub(crate) fn count_batch(
         .collect::<Result<_>>()?;
 
     let passes = renderer.passes(sensor, settings.shadow, settings.effects, compute)?;
+    // Timed stages: a run's three of coverage, its jobs' passes (PassClock::QUERIES less the
+    // start) and two of scores at most.
+    let laps = recorded.len().div_ceil(slots.len()) * (PassClock::QUERIES as usize + 4) + 1;
+    let timestamps = settings
+        .stage_times
+        .map(|_| Timestamps::new(ctx, u32::try_from(laps).unwrap_or(u32::MAX), "verification stage timestamps"))
+        .transpose()?;
+    let mut clock = timestamps.as_ref().map(PassClock::new);
     ctx.submit_and_wait("verification batch", |cmd| {
+        let mut lap = clock.as_mut().map(|clock| {
+            clock.start(cmd);
+            move |cmd, name| clock.lap(cmd, name)
+        });
         let mut enc = Encoder::new(ctx, cmd);
+        if let Some(lap) = &mut lap {
+            enc = enc.with_stage_laps(lap);
+        }
         let zeroed: Vec<_> = slot_counts.iter().map(|counts| (counts, Access::TransferWrite)).collect();
         enc.access(&[], &zeroed);
         for counts in &slot_counts {
@@ -337,6 +380,9 @@ pub(crate) fn count_batch(
     // for a hypothesis that recorded nothing.
     let slot_bases: Vec<usize> =
         slot_words.iter().scan(0, |base, &words| Some(std::mem::replace(base, *base + words))).collect();
+    if let (Some(times), Some(clock)) = (settings.stage_times, &clock) {
+        times.add(&clock.times()?);
+    }
     let read: Vec<u32> = readback.read()?;
     let mut words = vec![0; counts_words];
     for (&(item, _), &(slot, at)) in recorded.iter().zip(&placed) {
@@ -376,13 +422,13 @@ impl<'a> ScoreJob<'a> {
             };
             let first = self.constants(at);
             let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
-            let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record)];
+            let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record).timed("score")];
             if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
                 debug_assert!((item.counts_offset..item.counts_offset + item.counts_words).contains(&offset));
                 let again = self.constants(at + offset - item.counts_offset);
                 let unshadowed = ScoreSources { shadowed: false, ..sources };
                 let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
-                steps.push(Step::new(reads, buffers, record));
+                steps.push(Step::new(reads, buffers, record).timed("score (unshadowed)"));
             }
             steps
         };

@@ -13,7 +13,7 @@
 //! images are cast on the CPU before it is submitted.
 
 use super::area::unit_scale;
-use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers};
+use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers, StageTimes};
 use super::counts::{Counts, CountsLayout};
 use super::lanes::{default_chunks_in_flight, in_two_lanes};
 use super::score_pass::ScorePass;
@@ -124,6 +124,8 @@ pub struct Verifier {
     slots: usize,
     /// Most chunks in flight at once (with_chunks_in_flight).
     chunks_in_flight: usize,
+    /// GPU time by stage, where asked for (with_stage_times).
+    stage_times: Option<StageTimes>,
 }
 
 impl Verifier {
@@ -132,7 +134,8 @@ impl Verifier {
         let score_pass = ScorePass::new(renderer.context())?;
         let slots = default_slots(renderer.context());
         let chunks_in_flight = default_chunks_in_flight(renderer.context());
-        Ok(Self { score_pass, renderer, models: Mutex::new(HashMap::new()), slots, chunks_in_flight })
+        let models = Mutex::new(HashMap::new());
+        Ok(Self { score_pass, renderer, models, slots, chunks_in_flight, stage_times: None })
     }
 
     /// The same verifier, keeping up to `n` render-target slots a batch (clamped to 1 to
@@ -163,6 +166,21 @@ impl Verifier {
     /// Most chunks of a call in flight at once.
     pub fn chunks_in_flight(&self) -> usize {
         self.chunks_in_flight
+    }
+
+    /// The same verifier, timing its batches on the GPU stage by stage (a timestamp after each
+    /// stage a run's hypotheses share: coverage set-up, coverage, large triangles, rasters,
+    /// masks, effects, scores), for [`Verifier::take_stage_times`]: where a verification spends
+    /// its device time (`bench_verify` prints it). The timestamps cost a little; off by default.
+    pub fn with_stage_times(self) -> Self {
+        Self { stage_times: Some(StageTimes::default()), ..self }
+    }
+
+    /// GPU milliseconds by stage, each summed over the hypotheses verified since the last
+    /// call (by every thread), named by the stage's first timed pass, in the order first met;
+    /// nothing unless the verifier times its stages, or on a device without timestamps.
+    pub fn take_stage_times(&self) -> Vec<(&'static str, f64)> {
+        self.stage_times.as_ref().map(StageTimes::take).unwrap_or_default()
     }
 
     /// This verifier as on a device whose square root errs by `ulps`, which the score pass
@@ -331,6 +349,7 @@ impl Verifier {
             area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
             sensed: SensedBuffers { pixels: &on_gpu.pixels, segment_count: sensed.segments.len() as u32 },
             slots: plan.slots,
+            stage_times: self.stage_times.as_ref(),
         };
         let chunk_cap = match settings.shadow.mode {
             ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
