@@ -19,6 +19,15 @@
 // indirectly, gives each queued (triangle, view) a workgroup whose 64 invocations share its
 // rows, in 64-bit arithmetic: one invocation never serialises thousands of pixels.
 //
+// A view of several draws (TIES): its draws are the members of one dispatch, sharing the
+// view's words, each triangle's index tagged with its member's place in the order the
+// graphics path draws them in its ties pass (draw.rs: the lowest label last). The graphics
+// path keeps, among the fragments within the tie depth of the nearest (tie_depth, draw.glsl),
+// the last drawn. Here the first passes keep the nearest (depth, tagged triangle) as for one
+// draw; then the TIES variants cover every triangle again, the large ones from the queue the
+// first filled, and where a triangle's depth less its draw's tie depth is no more than the
+// nearest's, keep the larger tagged triangle with an atomicMax: the last drawn.
+//
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
 // as much as this one doing its work), so the small triangles' pass holds no 64-bit path of
@@ -52,7 +61,8 @@ struct Member {
     uint triangles;      // the mesh's triangle count; 0 for a member with nothing to cover
     int cull;            // skip triangles whose view-frame normal z has the opposite sign; 0: none
     uint dealt_rows;     // blocks of the workgroups dealt over the stripes, per stripe (main)
-    uint pad;
+    uint place;          // where members share words, its place in the ties order, which tags
+                         // its triangles there (above bit MEMBER_SHIFT); else 0
 };
 layout(set = 0, binding = 1, std140) uniform Members { Member members[MAX_MEMBERS]; };
 
@@ -75,7 +85,6 @@ layout(set = 0, binding = 10, std430) buffer Large { uint large[]; };
 layout(set = 0, binding = 11, std430) buffer LargeArgs { uvec4 large_args; };
 
 const uint VIEW_BIT = 31u;
-const uint MEMBER_SHIFT = 29u;
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -148,6 +157,8 @@ bool culled(int cull, DrawData d, vec3 model_normal) {
 // pixels of its bounding box within the view's area, and its plane's depth.
 struct Setup {
     uint member, view;      // whose words it keeps (keep_word)
+    uint tag;               // its member's place, above bit MEMBER_SHIFT (Member)
+    float tie;              // TIES: its draw's tie depth
     uint stride;            // the view's pixels a row
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
@@ -159,6 +170,10 @@ Setup set_up(uint member, uint v, DrawData d, RasterView view, MeshTriangle m) {
     Setup s;
     s.member = member;
     s.view = v;
+    s.tag = members[member].place << MEMBER_SHIFT;
+#ifdef TIES
+    s.tie = tie_depth(d);
+#endif
     s.stride = view.stride;
     vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
     precise vec3 v0 = window(d, corner);
@@ -183,23 +198,29 @@ vec2 box_origin(Setup s) {
     return vec2(s.first) * 256.0 + 128.0;
 }
 
-// Keeps the nearer of `word` and member m's word at `at` in view v. A member's words are a
-// binding of their own, so it is picked by branches, the same for a whole workgroup (with one
-// member, constant: a software rasterizer runs every branch).
-void keep_word(uint m, uint v, uint at, uint64_t word) {
+// Keeps the nearer of `word` and member m's word at `at` in view v (TIES: the larger, their
+// depths the same); returns the word that was there. A member's words are a binding of their
+// own, so it is picked by branches, the same for a whole workgroup (with one member,
+// constant: a software rasterizer runs every branch).
+#ifdef TIES
+#define KEEP atomicMax
+#else
+#define KEEP atomicMin
+#endif
+uint64_t keep_word(uint m, uint v, uint at, uint64_t word) {
     if (v == 0u) {
         switch (m) {
-            case 0u: atomicMin(range_words0.words[at], word); break;
-            case 1u: atomicMin(range_words1.words[at], word); break;
-            case 2u: atomicMin(range_words2.words[at], word); break;
-            default: atomicMin(range_words3.words[at], word); break;
+            case 0u: return KEEP(range_words0.words[at], word);
+            case 1u: return KEEP(range_words1.words[at], word);
+            case 2u: return KEEP(range_words2.words[at], word);
+            default: return KEEP(range_words3.words[at], word);
         }
     } else {
         switch (m) {
-            case 0u: atomicMin(shadow_words0.words[at], word); break;
-            case 1u: atomicMin(shadow_words1.words[at], word); break;
-            case 2u: atomicMin(shadow_words2.words[at], word); break;
-            default: atomicMin(shadow_words3.words[at], word); break;
+            case 0u: return KEEP(shadow_words0.words[at], word);
+            case 1u: return KEEP(shadow_words1.words[at], word);
+            case 2u: return KEEP(shadow_words2.words[at], word);
+            default: return KEEP(shadow_words3.words[at], word);
         }
     }
 }
@@ -212,8 +233,18 @@ void keep(uint t, Setup s, ivec2 pixel) {
     if (!(depth >= 0.0 && depth < 1.0)) {
         return;
     }
-    uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(t);
-    keep_word(s.member, s.view, word_index(s.stride, pixel), word);
+    uint at = word_index(s.stride, pixel);
+#ifdef TIES
+    // The nearest depth, which this pass leaves as it is: read by a keep that changes nothing
+    // (the lowest word there can be), atomic as the keeps of other invocations are.
+    uint64_t nearest = keep_word(s.member, s.view, at, 0ul) & 0xffffffff00000000ul;
+    if (max(depth - s.tie, 0.0) <= uintBitsToFloat(uint(nearest >> 32))) {
+        keep_word(s.member, s.view, at, nearest | uint64_t(s.tag | t));
+    }
+#else
+    uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(s.tag | t);
+    keep_word(s.member, s.view, at, word);
+#endif
 }
 
 #ifdef LARGE_TRIANGLES
@@ -329,7 +360,9 @@ void cover(uint member, uint v, DrawData d, RasterView view, uint t, MeshTriangl
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
     if (!near) {
+#ifndef TIES
         queue_large(t, s);
+#endif
         return;
     }
     Edges32 e = edges_of(ivec2(a), ivec2(b), ivec2(c));

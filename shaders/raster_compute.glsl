@@ -15,5 +15,10 @@ struct RasterView {
     uint pad0, pad1;
 };
 
+// Where a member's place starts, above a triangle's index (meshes have fewer than 2^29
+// triangles: src/mesh/adjacency.rs): in the queue of large triangles, and in the words of a
+// view of several draws, which tag each triangle with its draw's place (raster.comp).
+const uint MEMBER_SHIFT = 29u;
+
 // No triangle at this pixel.
 const uint64_t EMPTY = (uint64_t(EMPTY_HALF) << 32) | uint64_t(EMPTY_HALF);

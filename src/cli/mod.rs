@@ -35,10 +35,11 @@ pub struct Cli {
     /// RANGESYNTH_MEMORY_BUDGET; default 4G).
     #[arg(long, global = true, value_name = "SIZE")]
     memory_budget: Option<String>,
-    /// Render with the graphics pipeline or the compute rasterizer, which renders views of one
-    /// object (every verify hypothesis) and leaves the others to the graphics pipeline; auto
-    /// (the default) takes the compute rasterizer for models of at least 0.0001 triangles per
-    /// pixel of their footprint (render::COMPUTE_CROSSOVER), where the device has it.
+    /// Render with the graphics pipeline or the compute rasterizer, which renders views of up
+    /// to four objects (every verify hypothesis) and leaves the others to the graphics
+    /// pipeline; auto (the default) takes the compute rasterizer for models of at least 0.0001
+    /// triangles per pixel of their footprint (render::COMPUTE_CROSSOVER), where the device has
+    /// it.
     #[arg(long, global = true, value_name = "auto|graphics|compute", default_value = "auto")]
     raster: Raster,
     #[command(subcommand)]

@@ -12,7 +12,11 @@ pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/
 pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
 pub const RASTER_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.comp.spv"));
 pub const RASTER_LARGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large.comp.spv"));
+pub const RASTER_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_ties.comp.spv"));
+pub const RASTER_LARGE_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large_ties.comp.spv"));
 pub const RASTER_RESOLVE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve.comp.spv"));
+pub const RASTER_RESOLVE_SHADOW_COMP: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve_shadow.comp.spv"));
 pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
 pub const SHADOW_MASK_WORDS_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask_words.comp.spv"));
 pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));

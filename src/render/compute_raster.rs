@@ -34,14 +34,22 @@
 //!   mask does it as it tests each pixel, and reads the shadow view's words as they are
 //!   (shadow_pass.rs): neither view takes a pass of its own. Without one, the resolve pass
 //!   (shaders/raster_resolve.comp) does it.
+//! - Views of several draws (a scene of up to [`COVERAGE_MEMBERS`] objects,
+//!   [`CoverageGroup::of_draws`]): the draws are the members of one coverage dispatch and
+//!   share the view's words, each triangle tagged with its draw's place in the order the
+//!   graphics path's ties pass draws them (draw.rs; `render` numbers its draws in that
+//!   order). After the passes that keep the nearest, two ties passes (shaders/raster.comp,
+//!   TIES) keep, among the triangles within the tie depth of the nearest, the last drawn, as
+//!   the graphics path's tie rule does (lavapipe: the same labels, shadowed labels and z bits,
+//!   tests/compute_raster.rs). Resolve passes then write both views' attachments, and the
+//!   shadow mask reads them as it reads the graphics path's.
 //!
 //! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
 //! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
-//! a compute pass spreads the triangles over every core. So far it renders views of one draw
-//! (every `verify` hypothesis, a scene of one object); a view of several draws keeps the
-//! graphics path, whose tie rule the compute path does not implement yet, and so does a view
-//! whose visibility words the device cannot bind as one storage buffer, or whose draw reaches
-//! beyond [`MAX_REACH_PIXELS`] (Renderer::computes).
+//! a compute pass spreads the triangles over every core. A view of more draws than a
+//! dispatch's members keeps the graphics path, and so does a view whose visibility words the
+//! device cannot bind as one storage buffer, or whose draw reaches beyond
+//! [`MAX_REACH_PIXELS`] (Renderer::computes).
 //!
 //! [`Raster::Auto`], the default, picks per view: the compute rasterizer where the device has
 //! it and the model has at least [`COMPUTE_CROSSOVER`] triangles per pixel of the footprint it
@@ -66,8 +74,8 @@ pub enum Raster {
     Auto,
     /// The graphics pipeline (the prescribed path).
     Graphics,
-    /// The compute rasterizer, for views of one draw whose visibility words the device can
-    /// bind; needs 64-bit buffer atomics.
+    /// The compute rasterizer, for views of up to [`COVERAGE_MEMBERS`] draws whose visibility
+    /// words the device can bind; needs 64-bit buffer atomics.
     Compute,
 }
 
@@ -95,14 +103,17 @@ impl Raster {
 
     /// Whether this choice renders a view of `draws` draws, with `triangles` triangles in all
     /// over a footprint of `footprint_pixels`, with the compute rasterizer, on a device that
-    /// `has_compute` (64-bit buffer atomics) or not. `Compute` on a device without them is
-    /// refused where its pipelines are built.
+    /// `has_compute` (64-bit buffer atomics) or not: 1 to [`COVERAGE_MEMBERS`] draws, the
+    /// members of one coverage dispatch. `Compute` on a device without them is refused where
+    /// its pipelines are built.
     pub fn computes(self, has_compute: bool, draws: usize, triangles: u64, footprint_pixels: u64) -> bool {
         match self {
             Raster::Graphics => false,
-            Raster::Compute => draws == 1,
+            Raster::Compute => (1..=COVERAGE_MEMBERS).contains(&draws),
             Raster::Auto => {
-                has_compute && draws == 1 && triangles as f64 >= COMPUTE_CROSSOVER * footprint_pixels as f64
+                has_compute
+                    && (1..=COVERAGE_MEMBERS).contains(&draws)
+                    && triangles as f64 >= COMPUTE_CROSSOVER * footprint_pixels as f64
             }
         }
     }
@@ -140,13 +151,16 @@ struct MemberConstants {
     triangles: u32,
     cull: i32,
     dealt_rows: u32,
-    _pad: u32,
+    /// Where the members share words (a view of several draws), the member's place in the
+    /// ties order; else 0.
+    place: u32,
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, triangles) == 64);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, cull) == 68);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, dealt_rows) == 72);
+const _: () = assert!(std::mem::offset_of!(MemberConstants, place) == 76);
 const _: () = assert!(size_of::<MemberConstants>() == 80);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
@@ -204,7 +218,8 @@ pub const COVERAGE_MEMBERS: usize = 4;
 /// compute rasterizer; Vulkan guarantees 4, the GPUs it targets bind thousands).
 pub const COVERAGE_STORAGE_BUFFERS: usize = 2 * COVERAGE_MEMBERS + 2;
 
-/// The coverage passes' pipelines for dispatches of `members` jobs.
+/// The coverage passes' pipelines for dispatches of `members` jobs, or (`Ties`) the passes
+/// after them that decide the ties between draws sharing words.
 struct CoveragePipelines {
     /// The small triangles' coverage of the range view alone, and of both views.
     range: ComputePipeline,
@@ -212,8 +227,17 @@ struct CoveragePipelines {
     large: ComputePipeline,
 }
 
+/// Which of shaders/raster.comp's two kinds of coverage passes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Coverage {
+    /// The nearest triangle a pixel.
+    Nearest,
+    /// Among the triangles within the tie depth of the nearest, the last drawn (TIES).
+    Ties,
+}
+
 impl CoveragePipelines {
-    fn new(ctx: &Arc<GpuContext>, members: u32) -> Result<Self> {
+    fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage) -> Result<Self> {
         // Both uniform blocks (the members' draws, then their constants), each member's words
         // in each view, the large-triangle queue and its dispatch arguments.
         let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
@@ -222,23 +246,37 @@ impl CoveragePipelines {
         // workgroups, and whether a dispatch covers one job or up to COVERAGE_MEMBERS.
         let covering = |code, views: u32, name: &str| {
             let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members];
-            let dispatch = if members == 1 { "one job" } else { "grouped" };
+            let dispatch = match (kind, members) {
+                (Coverage::Ties, _) => "ties",
+                (Coverage::Nearest, 1) => "one job",
+                (Coverage::Nearest, _) => "grouped",
+            };
             ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {dispatch}"))
         };
+        let (small, large) = match kind {
+            Coverage::Nearest => (shaders::RASTER_COMP, shaders::RASTER_LARGE_COMP),
+            Coverage::Ties => (shaders::RASTER_TIES_COMP, shaders::RASTER_LARGE_TIES_COMP),
+        };
         Ok(Self {
-            range: covering(shaders::RASTER_COMP, 1, "compute raster coverage (range view)")?,
-            both: covering(shaders::RASTER_COMP, 2, "compute raster coverage (both views)")?,
-            large: covering(shaders::RASTER_LARGE_COMP, 2, "compute raster coverage (large triangles)")?,
+            range: covering(small, 1, "compute raster coverage (range view)")?,
+            both: covering(small, 2, "compute raster coverage (both views)")?,
+            large: covering(large, 2, "compute raster coverage (large triangles)")?,
         })
     }
 }
 
 pub struct ComputeRasterPipelines {
     ctx: Arc<GpuContext>,
-    /// Coverage a job a dispatch; coverage of several, built on first use.
+    /// Coverage a job a dispatch; coverage of several, and the ties passes of a view of
+    /// several draws, built on first use.
     single: CoveragePipelines,
     grouped: OnceLock<CoveragePipelines>,
+    ties: OnceLock<CoveragePipelines>,
+    /// The range view's resolve where its words hold one draw, and where they hold several;
+    /// the shadow view's where they hold several.
     resolve: ComputePipeline,
+    resolve_several: ComputePipeline,
+    resolve_shadow: ComputePipeline,
     /// The shadow mask reading the shadow view's words (shadow_pass.rs), writing the range
     /// view's attachments whole, or only its z for a score pass.
     pub mask: MaskPipelines,
@@ -247,18 +285,28 @@ pub struct ComputeRasterPipelines {
 
 impl ComputeRasterPipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
+        // A view's attachments, its table and its words; whether the words hold several draws.
+        let resolve = |kind: ViewKind, code, several: bool, name: &str| {
+            let shape = SetShape::storage(kind.colour_attachments().len(), 2);
+            ComputePipeline::new(ctx, shape, size_of::<RasterView>(), code, &[u32::from(several)], name)
+        };
         Ok(Self {
             ctx: ctx.clone(),
-            single: CoveragePipelines::new(ctx, 1)?,
+            single: CoveragePipelines::new(ctx, 1, Coverage::Nearest)?,
             grouped: OnceLock::new(),
-            // The range view's attachments, its table and its words.
-            resolve: ComputePipeline::new(
-                ctx,
-                SetShape::storage(ViewKind::Range.colour_attachments().len(), 2),
-                size_of::<RasterView>(),
+            ties: OnceLock::new(),
+            resolve: resolve(ViewKind::Range, shaders::RASTER_RESOLVE_COMP, false, "compute raster resolve")?,
+            resolve_several: resolve(
+                ViewKind::Range,
                 shaders::RASTER_RESOLVE_COMP,
-                &[],
-                "compute raster resolve",
+                true,
+                "compute raster resolve (several draws)",
+            )?,
+            resolve_shadow: resolve(
+                ViewKind::Shadow,
+                shaders::RASTER_RESOLVE_SHADOW_COMP,
+                true,
+                "compute raster resolve (shadow view, several draws)",
             )?,
             mask: MaskPipelines::new(ctx, MaskVariant::Words)?,
             mask_for_scoring: MaskPipelines::new(ctx, MaskVariant::WordsForScoring)?,
@@ -271,11 +319,16 @@ impl ComputeRasterPipelines {
         if members == 1 {
             return Ok(&self.single);
         }
-        if let Some(built) = self.grouped.get() {
+        self.built(&self.grouped, Coverage::Nearest)
+    }
+
+    /// The grouped pipelines of `kind`, in `cell`, built on first use.
+    fn built<'s>(&self, cell: &'s OnceLock<CoveragePipelines>, kind: Coverage) -> Result<&'s CoveragePipelines> {
+        if let Some(built) = cell.get() {
             return Ok(built);
         }
-        let built = CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32)?;
-        Ok(self.grouped.get_or_init(|| built))
+        let built = CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind)?;
+        Ok(cell.get_or_init(|| built))
     }
 }
 
@@ -294,14 +347,17 @@ struct ViewWords<'a> {
 }
 
 /// One slot's visibility words: the range view's and (where a shadow pass runs) the shadow
-/// view's, which a [`CoverageGroup`] fills, and the binding that resolves the range view's.
-/// The range view's words are resolved into its attachments, by the shadow mask where there
-/// is a shadow view and by the resolve pass where there is none; the shadow view's are read by
-/// the shadow mask as they are.
+/// view's, which a [`CoverageGroup`] fills, and the bindings that resolve each view's. Where
+/// they hold one draw, the range view's words are resolved into its attachments, by the
+/// shadow mask where there is a shadow view and by the resolve pass where there is none, and
+/// the shadow view's are read by the shadow mask as they are. Where they hold several, the
+/// resolve passes write both views' attachments, which the shadow mask then reads as the
+/// graphics path leaves them.
 pub(crate) struct ComputeViews<'a> {
     range: ViewWords<'a>,
     shadow: Option<ViewWords<'a>>,
     resolve: StorageSet,
+    resolve_shadow: Option<StorageSet>,
 }
 
 impl<'a> ComputeViews<'a> {
@@ -311,7 +367,7 @@ impl<'a> ComputeViews<'a> {
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
         (range, range_targets): (ComputeTarget<'a>, &ViewTargets),
-        shadow: Option<ComputeTarget<'a>>,
+        shadow: Option<(ComputeTarget<'a>, &ViewTargets)>,
         name: &str,
     ) -> Result<Self> {
         let words = |kind: ViewKind, view: ComputeTarget<'a>| -> Result<ViewWords<'a>> {
@@ -321,17 +377,22 @@ impl<'a> ComputeViews<'a> {
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
             Ok(ViewWords { nearest, stride: width, draw_table: view.draw_table })
         };
+        let resolving = |pipeline: &ComputePipeline, targets: &ViewTargets, words: &ViewWords, kind: ViewKind| {
+            let images: Vec<&Image> = targets.colour.iter().collect();
+            let buffers = [words.draw_table, &words.nearest];
+            StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), &format!("{name} {kind:?} resolve"))
+        };
         let range = words(ViewKind::Range, range)?;
-        let shadow = shadow.map(|view| words(ViewKind::Shadow, view)).transpose()?;
-        let images: Vec<&Image> = range_targets.colour.iter().collect();
-        let resolve = StorageSet::new(
-            ctx,
-            pipelines.resolve.set_layout,
-            &images,
-            (&[], &[range.draw_table, &range.nearest]),
-            &format!("{name} resolve bindings"),
-        )?;
-        Ok(Self { range, shadow, resolve })
+        let resolve = resolving(&pipelines.resolve, range_targets, &range, ViewKind::Range)?;
+        let (shadow, resolve_shadow) = match shadow {
+            Some((view, targets)) => {
+                let shadow = words(ViewKind::Shadow, view)?;
+                let set = resolving(&pipelines.resolve_shadow, targets, &shadow, ViewKind::Shadow)?;
+                (Some(shadow), Some(set))
+            }
+            None => (None, None),
+        };
+        Ok(Self { range, shadow, resolve, resolve_shadow })
     }
 
     /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
@@ -355,22 +416,45 @@ impl<'a> ComputeViews<'a> {
         RasterView { area: [area.col, area.row, area.width, area.height], draw, stride: view.stride, _pad: [0; 2] }
     }
 
-    /// The resolve pass of the range view's words over `range_area`, draw `index`
-    /// having been covered there (where no shadow mask follows to resolve them): it writes the
-    /// range view's colour attachments, in GENERAL layout as a compute pass leaves them.
+    /// The resolve pass of the range view's words over `area` into `targets`, its colour
+    /// attachments, which it leaves in GENERAL layout as a compute pass does. The words hold
+    /// `draws` draws, from number `first` in the draw table. Words of one draw are resolved
+    /// this way only where no shadow mask follows to resolve them.
     pub fn resolve_step<'s>(
         &'s self,
         pipelines: &'s ComputeRasterPipelines,
-        (range_targets, range_area): (&'s ViewTargets, PixelRect),
-        index: u32,
+        area_in: (&'s ViewTargets, PixelRect),
+        (first, draws): (u32, usize),
     ) -> Step<'s> {
-        let writes: Vec<_> = range_targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
-        let reads = vec![(&self.range.nearest, Access::ComputeRead), (self.range.draw_table, Access::ComputeRead)];
-        let pixels = [range_area.width, range_area.height].map(|n| n.div_ceil(8));
-        let range = Self::raster_view(&self.range, range_area, index);
-        Step::new(writes, reads, move |_, cmd| {
-            self.resolve.dispatch(cmd, &pipelines.resolve, bytemuck::bytes_of(&range), pixels)
-        })
+        let pipeline = if draws == 1 { &pipelines.resolve } else { &pipelines.resolve_several };
+        Self::resolving(&self.range, &self.resolve, pipeline, area_in, first)
+    }
+
+    /// The shadow view's resolve pass, as [`ComputeViews::resolve_step`], where its words hold
+    /// several draws (the shadow mask reads one draw's as they are); none where these words
+    /// have no shadow view.
+    pub fn resolve_shadow_step<'s>(
+        &'s self,
+        pipelines: &'s ComputeRasterPipelines,
+        area_in: (&'s ViewTargets, PixelRect),
+        first: u32,
+    ) -> Option<Step<'s>> {
+        let (words, set) = self.shadow.as_ref().zip(self.resolve_shadow.as_ref())?;
+        Some(Self::resolving(words, set, &pipelines.resolve_shadow, area_in, first))
+    }
+
+    fn resolving<'s>(
+        words: &'s ViewWords,
+        set: &'s StorageSet,
+        pipeline: &'s ComputePipeline,
+        (targets, area): (&'s ViewTargets, PixelRect),
+        first: u32,
+    ) -> Step<'s> {
+        let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
+        let reads = vec![(&words.nearest, Access::ComputeRead), (words.draw_table, Access::ComputeRead)];
+        let pixels = [area.width, area.height].map(|n| n.div_ceil(8));
+        let view = Self::raster_view(words, area, first);
+        Step::new(writes, reads, move |_, cmd| set.dispatch(cmd, pipeline, bytemuck::bytes_of(&view), pixels))
     }
 }
 
@@ -389,9 +473,14 @@ pub(crate) struct CoverageMember<'v, 'a> {
 /// its slots' words, queue of large triangles, draws and members' constants, so that a batch
 /// may record every run's coverage side by side (`Passes::record_coverage`); each is reused
 /// by the run's slots' next jobs.
+///
+/// Or the coverage of one job's several draws (a view of several objects), its members,
+/// which share its words: the passes that keep the nearest, then the ties passes, which keep
+/// the one the graphics path's ties rule keeps ([`CoverageGroup::of_draws`]).
 pub(crate) struct CoverageGroup {
     members: usize,
     runs: Vec<CoverageRun>,
+    shared_words: bool,
 }
 
 /// What one run of slots' coverage dispatches use.
@@ -432,7 +521,29 @@ impl CoverageGroup {
             .enumerate()
             .map(|(run, slots)| CoverageRun::new(ctx, layout, slots, member_bytes * members as u64, run))
             .collect::<Result<_>>()?;
-        Ok(Self { members, runs })
+        Ok(Self { members, runs, shared_words: false })
+    }
+
+    /// The coverage of one job of `draws` draws (2 to [`COVERAGE_MEMBERS`]) into `views`, in
+    /// one dispatch, the draws of up to `max_triangles` each; refused where its queue of large
+    /// triangles would be more than the device binds (`Renderer::computes` leaves such a view
+    /// to the graphics pipeline).
+    pub fn of_draws(
+        ctx: &Arc<GpuContext>,
+        pipelines: &ComputeRasterPipelines,
+        views: &ComputeViews,
+        draws: usize,
+        max_triangles: u32,
+    ) -> Result<Self> {
+        assert!((2..=COVERAGE_MEMBERS).contains(&draws), "2 to {COVERAGE_MEMBERS} draws share a view's words");
+        let group = Self::new(ctx, pipelines, &vec![views; draws], draws, max_triangles)?;
+        if group.members < draws {
+            return Err(crate::error::Error::Unsupported(format!(
+                "the compute rasterizer's queue of large triangles for {draws} draws of up to {max_triangles} \
+                 triangles is more than this device binds in one buffer"
+            )));
+        }
+        Ok(Self { shared_words: true, ..group })
     }
 
     /// Jobs a coverage dispatch covers.
@@ -443,7 +554,8 @@ impl CoverageGroup {
     /// The coverage passes of one run of slots (number `run`), `members[m]` the job of its
     /// slot m, where the compute rasterizer renders it: three steps, the run's words and
     /// buffers made ready, the coverage dispatch and the large triangles' (none where no
-    /// member is covered). Both views' words are left for the shadow mask, which resolves the
+    /// member is covered); for one job's draws, `members[m]` its draw m, and two more, the
+    /// ties passes'. Both views' words are left for the shadow mask, which resolves the
     /// range view (shadow_pass.rs), or for the resolve pass where there is no shadow view
     /// ([`ComputeViews::resolve_step`]).
     pub fn steps<'s>(
@@ -464,13 +576,16 @@ impl CoverageGroup {
         // word beyond the area's rows, as nothing reads the attachments beyond the area that
         // the graphics pass clears (draw.rs).
         let mut emptied: Vec<(&'s Buffer, u64, u64)> = Vec::new();
-        for (_, member) in &covered {
+        // One job's draws share its words and areas: the first's are all of them.
+        let emptying = if self.shared_words { &covered[..1] } else { &covered[..] };
+        for (_, member) in emptying {
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
             for (view, area) in std::iter::once((&member.views.range, member.range_area)).chain(shadow) {
                 let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
                 emptied.push((&view.nearest, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
             }
         }
+        let covered_words: Vec<&'s Buffer> = emptied.iter().map(|&(words, ..)| words).collect();
         // Only the covered members' words are declared: the others bound beside them (a
         // graphics job's slot, slots past a short run's end) are never touched, their members
         // covering no triangles.
@@ -496,7 +611,7 @@ impl CoverageGroup {
                 triangles,
                 cull: cull_sign(member.draw.mesh.solidity),
                 dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
-                _pad: 0,
+                place: if self.shared_words { m as u32 } else { 0 },
             };
             for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
                 let copy = vk::BufferCopy {
@@ -526,10 +641,7 @@ impl CoverageGroup {
             }
         };
         let uses = |queue: Access, args: Access| {
-            let mut uses: Vec<_> = covered
-                .iter()
-                .flat_map(|(_, member)| member.views.views().map(|v| (&v.nearest, Access::ComputeWrite)))
-                .collect();
+            let mut uses: Vec<_> = covered_words.iter().map(|&words| (words, Access::ComputeWrite)).collect();
             uses.extend([(&buffers.large, queue), (&buffers.large_args, args)]);
             uses.extend([&buffers.draws, &buffers.constants].map(|b| (b, Access::UniformRead)));
             uses
@@ -538,18 +650,31 @@ impl CoverageGroup {
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         let both = covered.iter().any(|(_, member)| member.shadow_area.is_some() && member.views.shadow.is_some());
-        let pipeline = if both { &coverage.both } else { &coverage.range };
         // Slices up to the last member covered; the others' triangle counts are 0.
         let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
-        let cover = move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, pipeline, &[], coverage_groups, slices);
-        let large =
-            move |_: &GpuContext, cmd| buffers.set.dispatch_indirect(cmd, &coverage.large, &[], &buffers.large_args);
-        Ok(vec![
+        let passes = |pipelines: &'s CoveragePipelines| {
+            let small = if both { &pipelines.both } else { &pipelines.range };
+            let cover =
+                move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
+            let large = move |_: &GpuContext, cmd| {
+                buffers.set.dispatch_indirect(cmd, &pipelines.large, &[], &buffers.large_args)
+            };
+            (cover, large)
+        };
+        let (cover, large) = passes(coverage);
+        // The ties passes read the queue and its dispatch as the first passes left them.
+        let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
+        let mut steps = vec![
             Step::new(Vec::new(), cleared, prepare).timed("coverage: set-up"),
             Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover).timed("coverage"),
-            Step::new(Vec::new(), uses(Access::ComputeRead, Access::IndirectAndComputeRead), large)
-                .timed("coverage: large triangles"),
-        ])
+            Step::new(Vec::new(), reading_queue(), large).timed("coverage: large triangles"),
+        ];
+        if self.shared_words {
+            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?);
+            steps.push(Step::new(Vec::new(), reading_queue(), cover_ties).timed("coverage: ties"));
+            steps.push(Step::new(Vec::new(), reading_queue(), large_ties).timed("coverage: large triangles' ties"));
+        }
+        Ok(steps)
     }
 }
 

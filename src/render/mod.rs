@@ -110,13 +110,19 @@ pub(crate) fn plan_views(
     Ok(Views { origin, range, shadow: shadow_grid })
 }
 
+/// Triangles a queue of large triangles has room for, in each view, for `draws` draws of up to
+/// `largest` (compute_raster.rs: room for every triangle of every member).
+fn queued_triangles(draws: usize, largest: u64) -> u64 {
+    largest.saturating_mul(draws as u64)
+}
+
 /// Bytes a render of these views takes at its peak, and writing its files after it (the
 /// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
 /// readback buffers (12) and the returned label, unshadowed label, z and reason (16), and with
 /// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). With the compute rasterizer (covering `compute_triangles`), each view's 8-byte
+/// (4). With the compute rasterizer (with room for `compute_triangles` in its queue), each view's 8-byte
 /// visibility words a pixel and its queue of large triangles. In shadow mode `exact`, the
 /// CPU's casters and image (exact.rs) and their upload (host_view.rs). Measured before the
 /// range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
@@ -191,8 +197,8 @@ impl Renderer {
         })
     }
 
-    /// The same renderer, rendering with `raster` (views of several objects stay on the
-    /// graphics path; see compute_raster.rs).
+    /// The same renderer, rendering with `raster` (views of more objects than
+    /// [`COVERAGE_MEMBERS`] stay on the graphics path; see compute_raster.rs).
     pub fn with_raster(self, raster: Raster) -> Self {
         Self { raster, ..self }
     }
@@ -215,23 +221,24 @@ impl Renderer {
         self.hypotheses_per_dispatch
     }
 
-    /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, over
-    /// `footprint_pixels` (compute_raster.rs), into visibility words for views of at most
-    /// `view_pixels`, its draws reaching `reach_pixels` from the views' first pixels
-    /// ([`Views::reach`]). Words this device cannot bind as one storage buffer (its
-    /// maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), a queue of large
-    /// triangles with room for every triangle in both views (16.7 million triangles there), or
-    /// corners beyond [`MAX_REACH_PIXELS`] leave the view to the graphics pipeline.
+    /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, the
+    /// largest of `largest`, over `footprint_pixels` (compute_raster.rs), into visibility
+    /// words for views of at most `view_pixels`, its draws reaching `reach_pixels` from the
+    /// views' first pixels ([`Views::reach`]). Words this device cannot bind as one storage
+    /// buffer (its maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), a queue
+    /// of large triangles with room for every triangle of `draws` of the largest in both views
+    /// (16.7 million triangles there), or corners beyond [`MAX_REACH_PIXELS`] leave the view
+    /// to the graphics pipeline.
     pub(crate) fn computes(
         &self,
         draws: usize,
-        triangles: u64,
+        (triangles, largest): (u64, u64),
         (footprint_pixels, reach_pixels): (u64, f64),
         view_pixels: u64,
     ) -> bool {
         let range = self.ctx.max_storage_buffer_range();
         let words_fit = view_pixels.saturating_mul(VISIBILITY_WORD_BYTES) <= range;
-        let queue_fits = large_queue_bytes(triangles, 2) <= range;
+        let queue_fits = large_queue_bytes(queued_triangles(draws, largest), 2) <= range;
         words_fit
             && queue_fits
             && reach_pixels <= MAX_REACH_PIXELS
@@ -322,12 +329,17 @@ impl Renderer {
         // Each model once, however many objects share it, and kept for the next render.
         let uploaded: Vec<Arc<GpuMesh>> =
             scene.objects.iter().map(|object| self.meshes.get(&self.ctx, &object.mesh)).collect::<Result<_>>()?;
-        let draws: Vec<Draw> = uploaded
+        let mut draws: Vec<Draw> = uploaded
             .iter()
             .zip(&scene.objects)
             .zip(&label_bases)
             .map(|((mesh, object), &label_base)| Draw { mesh, pose: object.pose, label_base })
             .collect();
+        // In the order the graphics path's ties pass draws them (draw.rs: the lowest label
+        // last), so that the compute rasterizer's members, which share a view's words and are
+        // tagged there with their place in that order, are numbered as their draws
+        // (compute_raster.rs).
+        draws.sort_by_key(|draw| std::cmp::Reverse(draw.label_base));
         let spheres: Vec<_> = scene
             .objects
             .iter()
@@ -338,6 +350,7 @@ impl Renderer {
             .collect();
         let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.limits.max_image_dimension2_d)?;
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
+        let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
         let exact_triangles = (scene.shadow.mode == ShadowMode::Exact).then_some(triangles);
         // The compute rasterizer's choice reads the pixels the objects can cover.
         let footprint: u64 = spheres
@@ -352,11 +365,12 @@ impl Renderer {
         let pixels = |g: &ViewGrid| u64::from(g.width) * u64::from(g.height);
         let view_pixels = pixels(&views.range).max(views.shadow.as_ref().map_or(0, pixels));
         let reach = spheres.iter().map(|&sphere| views.reach(&scene.sensor, sphere)).fold(0.0, f64::max);
-        let compute =
-            exact_triangles.is_none() && self.computes(draws.len(), triangles, (footprint, reach), view_pixels);
+        let compute = exact_triangles.is_none()
+            && self.computes(draws.len(), (triangles, largest), (footprint, reach), view_pixels);
+        let queued = queued_triangles(draws.len(), largest);
         self.budget.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, compute.then_some(triangles), exact_triangles),
+            render_memory(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws, compute)
     }
@@ -411,9 +425,13 @@ impl Renderer {
             from_host: host_view.is_some(),
         };
         let slot = self.slot(&shape, "render")?;
+        let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
         let coverage = slot
             .compute_views()
-            .map(|views| self.coverage_group(&[views], 1, draws[0].mesh.index_count / 3))
+            .map(|views| match draws.len() {
+                1 => self.coverage_group(&[views], 1, largest),
+                several => CoverageGroup::of_draws(ctx, self.pipelines.compute_raster()?, views, several, largest),
+            })
             .transpose()?;
         let label_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "unshadowed labels readback")?;
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;

@@ -102,29 +102,34 @@ impl<'a> Slot<'a> {
                 SinkKind::Compute => BufferDesc::gpu_storage(bytes),
             }
         };
+        let shadow = shape
+            .shadow
+            .map(|(shadow_width, _)| {
+                pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))
+            })
+            .transpose()?;
         // Before the mask's bindings: the mask reads the compute rasterizer's shadow words.
         let compute = match (shape.compute_raster, raster_pipelines) {
             (Some(range_table), Some(rp)) => {
                 let range_view = ComputeTarget { size: (w, h), draw_table: range_table };
-                let shadow_view = shape
-                    .shadow
-                    .map(|(shadow_width, table)| ComputeTarget { size: (shadow_width, h), draw_table: table });
+                let shadow_view = shape.shadow.zip(shadow.as_deref()).map(|((shadow_width, table), targets)| {
+                    (ComputeTarget { size: (shadow_width, h), draw_table: table }, targets)
+                });
                 Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, name)?)
             }
             _ => None,
         };
-        let (shadow, masked, mask_bindings) = match shape.shadow {
-            None if shape.from_host => {
+        let (shadow, masked, mask_bindings) = match (shape.shadow, shadow) {
+            (None, _) if shape.from_host => {
                 (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None)
             }
-            None => (None, None, None),
-            Some((shadow_width, draw_table)) => {
-                let shadow = pool.take(ctx, ViewKind::Shadow, (shadow_width, h), &format!("{name} shadow view"))?;
+            (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
                 let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words.as_ref())?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
+            _ => (None, None, None),
         };
         let effects = match (&shape.effects, effect_pipelines) {
             (Some(effect_shape), Some(pipelines)) => {
@@ -257,7 +262,7 @@ impl<'t> PassClock<'t> {
 /// What is constant over the jobs of one submission.
 pub(crate) struct Passes<'a> {
     pub pipelines: &'a Pipelines,
-    /// Present where the compute rasterizer renders views of one draw.
+    /// Present where the compute rasterizer renders views.
     pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
@@ -270,16 +275,16 @@ pub(crate) struct Passes<'a> {
 /// shadow view's targets, grid and area, the mask's output and bindings, and the test.
 type ShadowPass<'s> = (&'s ViewTargets, &'s ViewGrid, PixelRect, &'s Buffer, &'s MaskBindings, ShadowTest);
 
+/// A job the compute rasterizer renders: its slot's words, the pipelines, the first draw's
+/// index in the draw tables and the draws.
+type ComputeJob<'s, 'p> = (&'s ComputeViews<'s>, &'p ComputeRasterPipelines, (u32, &'s [Draw<'s>]));
+
 impl<'p> Passes<'p> {
-    /// The compute rasterizer's state and pipelines for a job it renders (views of one draw,
-    /// compute_raster.rs), with the draw and its index in the draw tables.
-    fn compute_job<'s>(
-        &self,
-        slot: &'s Slot<'s>,
-        job: &'s Job<'s>,
-    ) -> Option<(&'s ComputeViews<'s>, &'p ComputeRasterPipelines, (u32, &'s Draw<'s>))> {
-        match (&slot.compute, self.raster_pipelines, job.draws, job.host_view) {
-            (Some(state), Some(rp), [draw], None) if job.compute => Some((state, rp, (job.first_draw_index, draw))),
+    /// The compute rasterizer's state and pipelines for a job it renders (compute_raster.rs),
+    /// with its draws and the first's index in the draw tables.
+    fn compute_job<'s>(&self, slot: &'s Slot<'s>, job: &'s Job<'s>) -> Option<ComputeJob<'s, 'p>> {
+        match (&slot.compute, self.raster_pipelines, job.host_view) {
+            (Some(state), Some(rp), None) if job.compute => Some((state, rp, (job.first_draw_index, job.draws))),
             _ => None,
         }
     }
@@ -298,17 +303,22 @@ impl<'p> Passes<'p> {
     /// [`Passes::record_run`]): `group`'s runs of its members, each in one dispatch, the runs
     /// side by side (their buffers made ready behind one barrier, then their coverage
     /// dispatches behind another, then their large triangles' behind a third). Jobs the
-    /// graphics pipeline renders are left to their passes.
+    /// graphics pipeline renders are left to their passes. A job of several draws has a
+    /// group of its own ([`CoverageGroup::of_draws`]), its draws the members.
     pub fn record_coverage(&self, enc: &mut Encoder, group: &CoverageGroup, jobs: &[(&Slot, &Job)]) -> Result<()> {
         let Some(rp) = self.raster_pipelines else {
             return Ok(());
         };
         let members: Vec<Option<CoverageMember>> = jobs
             .iter()
-            .map(|&(slot, job)| {
-                let (views, _, (index, draw)) = self.compute_job(slot, job)?;
-                let shadow_area = self.shadow_pass(slot, job).map(|(_, _, area, ..)| area);
-                Some(CoverageMember { views, range_area: job.area, shadow_area, index, draw })
+            .flat_map(|&(slot, job)| match self.compute_job(slot, job) {
+                None => vec![None],
+                Some((views, _, (first, draws))) => {
+                    let shadow_area = self.shadow_pass(slot, job).map(|(_, _, area, ..)| area);
+                    let member =
+                        |(index, draw)| CoverageMember { views, range_area: job.area, shadow_area, index, draw };
+                    (first..).zip(draws).map(|indexed| Some(member(indexed))).collect()
+                }
             })
             .collect();
         let mut runs = Vec::new();
@@ -362,10 +372,18 @@ impl<'p> Passes<'p> {
         let compute = self.compute_job(slot, job);
         let shadow = self.shadow_pass(slot, job);
         match compute {
-            // Both views were covered in one pass (compute_raster.rs); without a shadow mask
-            // to resolve the range view's words, the resolve pass does.
+            // Both views were covered in one pass (compute_raster.rs). Words of several draws
+            // are resolved into both views' attachments, for the shadow mask that reads them.
+            Some((state, rp, (first, draws))) if draws.len() > 1 => {
+                steps.push(state.resolve_step(rp, (&slot.range, job.area), (first, draws.len())).timed("range"));
+                if let Some((targets, _, area, ..)) = shadow {
+                    steps.extend(state.resolve_shadow_step(rp, (targets, area), first).map(|s| s.timed("shadow")));
+                }
+            }
+            // Without a shadow mask to resolve the range view's words of one draw, the resolve
+            // pass does.
             Some((state, rp, (index, _))) => match shadow {
-                None => steps.push(state.resolve_step(rp, (&slot.range, job.area), index).timed("range")),
+                None => steps.push(state.resolve_step(rp, (&slot.range, job.area), (index, 1)).timed("range")),
                 // The coverage's time, up to here; and a step of nothing in place of the shadow
                 // raster, so that in a run the masks and scores of jobs either rasterizer
                 // rendered fall in the same stages.
@@ -420,7 +438,7 @@ impl<'p> Passes<'p> {
             // range view's use. It writes the range view's label and gradient only where a
             // pass after it reads them: an effect, or the sink.
             let reading_words = match (compute, &words) {
-                (Some((_, rp, (index, _))), Some((_, strides))) => {
+                (Some((_, rp, (index, [_]))), Some((_, strides))) => {
                     let read_later = slot.effects.is_some() || sink.reads_range_label();
                     let mask = if read_later { &rp.mask } else { &rp.mask_for_scoring };
                     Some((mask, constants.reading_words(index, *strides)))

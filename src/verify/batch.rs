@@ -230,7 +230,8 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
-                compute: host_views.is_empty() && renderer.computes(1, triangles, (footprint, reach), slot_view_pixels),
+                compute: host_views.is_empty()
+                    && renderer.computes(1, (triangles, triangles), (footprint, reach), slot_view_pixels),
             })
         })
         .collect();
