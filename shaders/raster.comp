@@ -33,6 +33,9 @@
 // as much as this one doing its work), so the small triangles' pass holds no 64-bit path of
 // its own: dense sphere at 256², coverage 5.2–5.3 → 4.65–4.8 ms.
 layout(local_size_x = 64) in;
+#ifdef TIES
+#extension GL_KHR_memory_scope_semantics : require
+#endif
 #include "raster_compute.glsl"
 
 // Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
@@ -199,31 +202,41 @@ vec2 box_origin(Setup s) {
 }
 
 // Keeps the nearer of `word` and member m's word at `at` in view v (TIES: the larger, their
-// depths the same); returns the word that was there. A member's words are a binding of their
-// own, so it is picked by branches, the same for a whole workgroup (with one member,
-// constant: a software rasterizer runs every branch).
+// depths the same). A member's words are a binding of their own, so it is picked by
+// branches, the same for a whole workgroup (with one member, constant: a software rasterizer
+// runs every branch).
 #ifdef TIES
 #define KEEP atomicMax
 #else
 #define KEEP atomicMin
 #endif
-uint64_t keep_word(uint m, uint v, uint at, uint64_t word) {
+void keep_word(uint m, uint v, uint at, uint64_t word) {
     if (v == 0u) {
         switch (m) {
-            case 0u: return KEEP(range_words0.words[at], word);
-            case 1u: return KEEP(range_words1.words[at], word);
-            case 2u: return KEEP(range_words2.words[at], word);
-            default: return KEEP(range_words3.words[at], word);
+            case 0u: KEEP(range_words0.words[at], word); break;
+            case 1u: KEEP(range_words1.words[at], word); break;
+            case 2u: KEEP(range_words2.words[at], word); break;
+            default: KEEP(range_words3.words[at], word); break;
         }
     } else {
         switch (m) {
-            case 0u: return KEEP(shadow_words0.words[at], word);
-            case 1u: return KEEP(shadow_words1.words[at], word);
-            case 2u: return KEEP(shadow_words2.words[at], word);
-            default: return KEEP(shadow_words3.words[at], word);
+            case 0u: KEEP(shadow_words0.words[at], word); break;
+            case 1u: KEEP(shadow_words1.words[at], word); break;
+            case 2u: KEEP(shadow_words2.words[at], word); break;
+            default: KEEP(shadow_words3.words[at], word); break;
         }
     }
 }
+
+#ifdef TIES
+// The word at `at` in view v that the members share (member 0's binding, as every member's
+// is the same buffer), read atomically (relaxed), as other invocations keep theirs there.
+uint64_t read_shared_word(uint v, uint at) {
+    const int device = gl_ScopeDevice, storage = gl_StorageSemanticsBuffer, relaxed = gl_SemanticsRelaxed;
+    return v == 0u ? atomicLoad(range_words0.words[at], device, storage, relaxed)
+                   : atomicLoad(shadow_words0.words[at], device, storage, relaxed);
+}
+#endif
 
 // Keeps the triangle at a covered pixel of its view if it is the nearest there so far.
 void keep(uint t, Setup s, ivec2 pixel) {
@@ -235,11 +248,13 @@ void keep(uint t, Setup s, ivec2 pixel) {
     }
     uint at = word_index(s.stride, pixel);
 #ifdef TIES
-    // The nearest depth, which this pass leaves as it is: read by a keep that changes nothing
-    // (the lowest word there can be), atomic as the keeps of other invocations are.
-    uint64_t nearest = keep_word(s.member, s.view, at, 0ul) & 0xffffffff00000000ul;
-    if (max(depth - s.tie, 0.0) <= uintBitsToFloat(uint(nearest >> 32))) {
-        keep_word(s.member, s.view, at, nearest | uint64_t(s.tag | t));
+    // The nearest depth, which this pass leaves as it is, and the tagged triangle kept so far:
+    // a keep only where this one is within the tie depth and would replace it (it is then
+    // rare: most pixels hold one triangle within the tie depth, the nearest, already kept).
+    uint64_t word = read_shared_word(s.view, at), tagged = uint64_t(s.tag | t);
+    bool tied = max(depth - s.tie, 0.0) <= uintBitsToFloat(uint(word >> 32));
+    if (tied && tagged > (word & 0xfffffffful)) {
+        keep_word(0u, s.view, at, (word & 0xffffffff00000000ul) | tagged);
     }
 #else
     uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(s.tag | t);
