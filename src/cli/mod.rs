@@ -14,7 +14,7 @@ use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
-use rangesynth::render::{Raster, COMPUTE_CROSSOVER};
+use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS};
 use rangesynth::shadow::ShadowMode;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
@@ -133,7 +133,8 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     match (scene.shadow.mode, renderer.raster()) {
         (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
         (_, Raster::Auto) => println!(
-            "raster: {} (auto: compute for one object of at least {COMPUTE_CROSSOVER} triangles per footprint pixel)",
+            "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of at least {COMPUTE_CROSSOVER} triangles \
+             per footprint pixel)",
             out.raster.as_str()
         ),
         _ => println!("raster: {}", out.raster.as_str()),
