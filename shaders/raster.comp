@@ -169,11 +169,12 @@ struct Setup {
     ivec2 first, last;
 };
 
-Setup set_up(uint member, uint v, DrawData d, RasterView view, MeshTriangle m) {
+Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) {
+    RasterView view = constants.views[v];
     Setup s;
     s.member = member;
     s.view = v;
-    s.tag = members[member].place << MEMBER_SHIFT;
+    s.tag = constants.place << MEMBER_SHIFT;
 #ifdef TIES
     s.tie = tie_depth(d);
 #endif
@@ -282,7 +283,7 @@ void main() {
         DrawData d = draws[2u * member + v];
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
-        Setup s = set_up(member, v, d, members[member].views[v], read_triangle(d, t, normal, third_z));
+        Setup s = set_up(member, v, d, members[member], read_triangle(d, t, normal, third_z));
         // Exact anywhere in the view: 64-bit edge functions, relative to the box.
         i64vec2 origin = i64vec2(box_origin(s));
         Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
@@ -363,8 +364,8 @@ void cover_tiles(uint t, Setup s, Edges32 e) {
 }
 
 // Covers a triangle's pixels in view v of a member, or queues it there if its corners are far.
-void cover(uint member, uint v, DrawData d, RasterView view, uint t, MeshTriangle m) {
-    Setup s = set_up(member, v, d, view, m);
+void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriangle m) {
+    Setup s = set_up(member, v, d, constants, m);
     ivec2 box = s.last - s.first + 1;
     if (box.x <= 0 || box.y <= 0) {
         return;
@@ -375,6 +376,9 @@ void cover(uint member, uint v, DrawData d, RasterView view, uint t, MeshTriangl
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
     if (!near) {
+        // The ties pass finds the same triangles far as the pass before it (the same precise
+        // arithmetic on the same inputs) and leaves them to the large triangles' ties pass,
+        // which reads the queue that pass filled.
 #ifndef TIES
         queue_large(t, s);
 #endif
@@ -421,10 +425,10 @@ void main() {
     }
     MeshTriangle m = read_triangle(range_draw, t, normal, third_z);
     if (in_range) {
-        cover(member, 0u, range_draw, constants.views[0], t, m);
+        cover(member, 0u, range_draw, constants, t, m);
     }
     if (in_shadow) {
-        cover(member, 1u, shadow_draw, constants.views[1], t, m);
+        cover(member, 1u, shadow_draw, constants, t, m);
     }
 }
 #endif

@@ -6,8 +6,8 @@
 //!   invocation per triangle reads its corners and normal once (reading them is most of a small
 //!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
-//!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle) on that
-//!   view's words, by tiles of 8 × 8 pixels. A triangle whose corners lie too far from its
+//!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle; tagged
+//!   with its draw's place in a view of several draws, below) on that view's words, by tiles of 8 × 8 pixels. A triangle whose corners lie too far from its
 //!   box for 32 bits (more than 32 pixels) is queued for that view instead, and a second,
 //!   indirect dispatch gives each queued (triangle, view) a workgroup of 64 invocations, in
 //!   64-bit arithmetic. Each view's draw reaches both as a uniform block, copied from its draw
@@ -29,11 +29,11 @@
 //!   coverage pass of one job always ran. The images and counts are the same either way.
 //!   Each group has buffers of its own, so a batch records all of a run of slots' groups side
 //!   by side, one barrier a stage for them all (`Passes::record_coverage`).
-//! - Resolve, the range view's: one invocation per pixel writes what the graphics path's
-//!   fragment shader would have written for that triangle. Where a shadow mask follows, the
-//!   mask does it as it tests each pixel, and reads the shadow view's words as they are
-//!   (shadow_pass.rs): neither view takes a pass of its own. Without one, the resolve pass
-//!   (shaders/raster_resolve.comp) does it.
+//! - Resolve, the range view's (a view of one draw): one invocation per pixel writes what the
+//!   graphics path's fragment shader would have written for that triangle. Where a shadow
+//!   mask follows, the mask does it as it tests each pixel, and reads the shadow view's words
+//!   as they are (shadow_pass.rs): neither view takes a pass of its own. Without one, the
+//!   resolve pass (shaders/raster_resolve.comp) does it.
 //! - Views of several draws (a scene of up to [`COVERAGE_MEMBERS`] objects,
 //!   [`CoverageGroup::of_draws`]): the draws are the members of one coverage dispatch and
 //!   share the view's words, each triangle tagged with its draw's place in the order the
@@ -213,6 +213,11 @@ const MAX_GROUPS: u32 = 65_535;
 /// each member's words).
 pub const COVERAGE_MEMBERS: usize = 4;
 
+// A member's place (below COVERAGE_MEMBERS) goes above a triangle's index in the words and in
+// the queue of large triangles, at MEMBER_SHIFT = 29 (shaders/raster_compute.glsl), below the
+// queue's view bit 31: both fit only while meshes have fewer than 2^29 triangles.
+const _: () = assert!(crate::mesh::MAX_LINKED_TRIANGLES <= 1 << 29 && COVERAGE_MEMBERS <= 4);
+
 /// Storage buffers the coverage passes bind: each member's words in each view, the queue of
 /// large triangles and its dispatch arguments (a device binding fewer a stage cannot run the
 /// compute rasterizer; Vulkan guarantees 4, the GPUs it targets bind thousands).
@@ -362,12 +367,13 @@ pub(crate) struct ComputeViews<'a> {
 
 impl<'a> ComputeViews<'a> {
     /// Visibility words for the views, and the bindings that resolve the range view's into
-    /// `range_targets`.
+    /// `range_targets`, and where they hold `several_draws`, the shadow view's into its targets.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
         (range, range_targets): (ComputeTarget<'a>, &ViewTargets),
         shadow: Option<(ComputeTarget<'a>, &ViewTargets)>,
+        several_draws: bool,
         name: &str,
     ) -> Result<Self> {
         let words = |kind: ViewKind, view: ComputeTarget<'a>| -> Result<ViewWords<'a>> {
@@ -387,8 +393,10 @@ impl<'a> ComputeViews<'a> {
         let (shadow, resolve_shadow) = match shadow {
             Some((view, targets)) => {
                 let shadow = words(ViewKind::Shadow, view)?;
-                let set = resolving(&pipelines.resolve_shadow, targets, &shadow, ViewKind::Shadow)?;
-                (Some(shadow), Some(set))
+                let set = several_draws
+                    .then(|| resolving(&pipelines.resolve_shadow, targets, &shadow, ViewKind::Shadow))
+                    .transpose()?;
+                (Some(shadow), set)
             }
             None => (None, None),
         };
@@ -432,7 +440,7 @@ impl<'a> ComputeViews<'a> {
 
     /// The shadow view's resolve pass, as [`ComputeViews::resolve_step`], where its words hold
     /// several draws (the shadow mask reads one draw's as they are); none where these words
-    /// have no shadow view.
+    /// have no shadow view or were made for one draw.
     pub fn resolve_shadow_step<'s>(
         &'s self,
         pipelines: &'s ComputeRasterPipelines,
@@ -566,6 +574,12 @@ impl CoverageGroup {
     ) -> Result<Vec<Step<'s>>> {
         let covered: Vec<(usize, &CoverageMember)> =
             members.iter().enumerate().filter_map(|(m, member)| Some((m, member.as_ref()?))).collect();
+        // A member's place is its index: one job's draws come in the ties order (the lowest
+        // label last, as `render` numbers them), as the ties passes and the resolve read them.
+        debug_assert!(
+            !self.shared_words || covered.windows(2).all(|pair| pair[0].1.draw.label_base >= pair[1].1.draw.label_base),
+            "a view's draws come in the ties order"
+        );
         if covered.is_empty() {
             return Ok(Vec::new());
         }
@@ -670,9 +684,14 @@ impl CoverageGroup {
             Step::new(Vec::new(), reading_queue(), large).timed("coverage: large triangles"),
         ];
         if self.shared_words {
+            // Both ties passes only raise the words' tagged triangles (their depths stay), so
+            // they need no barrier between them.
             let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?);
-            steps.push(Step::new(Vec::new(), reading_queue(), cover_ties).timed("coverage: ties"));
-            steps.push(Step::new(Vec::new(), reading_queue(), large_ties).timed("coverage: large triangles' ties"));
+            let ties = move |ctx: &GpuContext, cmd| {
+                cover_ties(ctx, cmd);
+                large_ties(ctx, cmd);
+            };
+            steps.push(Step::new(Vec::new(), reading_queue(), ties).timed("coverage: ties"));
         }
         Ok(steps)
     }

@@ -422,6 +422,7 @@ impl Renderer {
             effects: (!effects.is_empty())
                 .then(|| EffectShape { changes_z: effects.changes_z(), reflectivities: reflectivities.as_ref() }),
             compute_raster: range_table.as_ref(),
+            several_draws: draws.len() > 1,
             from_host: host_view.is_some(),
         };
         let slot = self.slot(&shape, "render")?;

@@ -67,6 +67,9 @@ pub(crate) struct SlotShape<'a> {
     /// The range view's draw table, where the compute rasterizer renders (it reads the shadow
     /// view's table from `shadow`).
     pub compute_raster: Option<&'a Buffer>,
+    /// The compute rasterizer's views hold several draws (a scene of several objects): the
+    /// slot resolves the shadow view's words too (compute_raster.rs).
+    pub several_draws: bool,
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
     pub from_host: bool,
@@ -115,7 +118,7 @@ impl<'a> Slot<'a> {
                 let shadow_view = shape.shadow.zip(shadow.as_deref()).map(|((shadow_width, table), targets)| {
                     (ComputeTarget { size: (shadow_width, h), draw_table: table }, targets)
                 });
-                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, name)?)
+                Some(ComputeViews::new(ctx, rp, (range_view, &range), shadow_view, shape.several_draws, name)?)
             }
             _ => None,
         };
@@ -304,7 +307,8 @@ impl<'p> Passes<'p> {
     /// side by side (their buffers made ready behind one barrier, then their coverage
     /// dispatches behind another, then their large triangles' behind a third). Jobs the
     /// graphics pipeline renders are left to their passes. A job of several draws has a
-    /// group of its own ([`CoverageGroup::of_draws`]), its draws the members.
+    /// group of its own ([`CoverageGroup::of_draws`]), its draws the members, and a fourth
+    /// stage, its ties passes.
     pub fn record_coverage(&self, enc: &mut Encoder, group: &CoverageGroup, jobs: &[(&Slot, &Job)]) -> Result<()> {
         let Some(rp) = self.raster_pipelines else {
             return Ok(());

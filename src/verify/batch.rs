@@ -251,6 +251,7 @@ pub(crate) fn count_batch(
         effects: (!settings.effects.is_empty())
             .then(|| EffectShape { changes_z: settings.effects.changes_z(), reflectivities: reflectivities.as_ref() }),
         compute_raster: range_table.as_ref(),
+        several_draws: false,
         from_host: !host_views.is_empty(),
     };
     let slots: Vec<Slot> = (0..settings.slots.min(items.len()))

@@ -76,9 +76,9 @@ pub fn assert_no_validation_messages() {
 pub fn render(scene: &Scene) -> RenderOutput {
     let out = renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
     assert_no_validation_messages();
-    // A suite run with the compute rasterizer renders every view of one object with it.
-    let one_object = scene.objects.len() == 1 && scene.shadow.mode != rangesynth::shadow::ShadowMode::Exact;
-    if renderer().raster() == Raster::Compute && one_object {
+    // A suite run with the compute rasterizer renders every view of one to four objects with it.
+    let objects = (1..=rangesynth::render::COVERAGE_MEMBERS).contains(&scene.objects.len());
+    if renderer().raster() == Raster::Compute && objects && scene.shadow.mode != rangesynth::shadow::ShadowMode::Exact {
         assert_eq!(out.raster, Raster::Compute, "the compute rasterizer rendered the view");
     }
     out
