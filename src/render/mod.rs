@@ -122,8 +122,8 @@ fn queued_triangles(draws: usize, largest: u64) -> u64 {
 /// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
 /// visibility and depth attachments (20). Writing: the returned image (16), the range image's
 /// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). With the compute rasterizer (with room for `compute_triangles` in its queue), each view's 8-byte
-/// visibility words a pixel and its queue of large triangles. In shadow mode `exact`, the
+/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel and its
+/// queue of large triangles, with room for `compute_triangles`. In shadow mode `exact`, the
 /// CPU's casters and image (exact.rs) and their upload (host_view.rs). Measured before the
 /// range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
 fn render_memory(
