@@ -278,7 +278,7 @@ void main() {
     // The workgroups stride over the queue, which may be longer than a dispatch's groups.
     for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
         uint entry = large[queued];
-        uint v = entry >> VIEW_BIT, t = entry & ((1u << MEMBER_SHIFT) - 1u);
+        uint v = entry >> VIEW_BIT, t = untagged(entry);
         uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & 3u;
         DrawData d = draws[2u * member + v];
         float third_z;

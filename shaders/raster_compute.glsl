@@ -20,5 +20,10 @@ struct RasterView {
 // view of several draws, which tag each triangle with its draw's place (raster.comp).
 const uint MEMBER_SHIFT = 29u;
 
+// The triangle's index in a tagged triangle or a queue entry: the bits below MEMBER_SHIFT.
+uint untagged(uint tagged) {
+    return tagged & ((1u << MEMBER_SHIFT) - 1u);
+}
+
 // No triangle at this pixel.
 const uint64_t EMPTY = (uint64_t(EMPTY_HALF) << 32) | uint64_t(EMPTY_HALF);

@@ -48,7 +48,7 @@ void main() {
     uint64_t word = nearest[word_index(r.view.stride, pixel)];
     uint tagged = uint(word & 0xffffffffUL), t = tagged, draw = r.view.draw;
     if (SEVERAL_DRAWS != 0u && word != EMPTY) {
-        t = tagged & ((1u << MEMBER_SHIFT) - 1u);
+        t = untagged(tagged);
         draw += tagged >> MEMBER_SHIFT;
         d = draws[draw];
     }

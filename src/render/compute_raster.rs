@@ -7,8 +7,9 @@
 //!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
 //!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle; tagged
-//!   with its draw's place in a view of several draws, below) on that view's words, by tiles of 8 × 8 pixels. A triangle whose corners lie too far from its
-//!   box for 32 bits (more than 32 pixels) is queued for that view instead, and a second,
+//!   with its draw's place in a view of several draws, below) on that view's words, by tiles
+//!   of 8 × 8 pixels. A triangle whose corners lie too far from its box for 32 bits (more
+//!   than 32 pixels) is queued for that view instead, and a second,
 //!   indirect dispatch gives each queued (triangle, view) a workgroup of 64 invocations, in
 //!   64-bit arithmetic. Each view's draw reaches both as a uniform block, copied from its draw
 //!   table before them. The coverage pass deals its workgroups over the mesh ([`DEAL_BLOCK`]),
@@ -107,14 +108,11 @@ impl Raster {
     /// members of one coverage dispatch. `Compute` on a device without them is refused where
     /// its pipelines are built.
     pub fn computes(self, has_compute: bool, draws: usize, triangles: u64, footprint_pixels: u64) -> bool {
+        let members = (1..=COVERAGE_MEMBERS).contains(&draws);
         match self {
             Raster::Graphics => false,
-            Raster::Compute => (1..=COVERAGE_MEMBERS).contains(&draws),
-            Raster::Auto => {
-                has_compute
-                    && (1..=COVERAGE_MEMBERS).contains(&draws)
-                    && triangles as f64 >= COMPUTE_CROSSOVER * footprint_pixels as f64
-            }
+            Raster::Compute => members,
+            Raster::Auto => has_compute && members && triangles as f64 >= COMPUTE_CROSSOVER * footprint_pixels as f64,
         }
     }
 }
@@ -383,18 +381,18 @@ impl<'a> ComputeViews<'a> {
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
             Ok(ViewWords { nearest, stride: width, draw_table: view.draw_table })
         };
-        let resolving = |pipeline: &ComputePipeline, targets: &ViewTargets, words: &ViewWords, kind: ViewKind| {
+        let resolve_set = |pipeline: &ComputePipeline, targets: &ViewTargets, words: &ViewWords, kind: ViewKind| {
             let images: Vec<&Image> = targets.colour.iter().collect();
             let buffers = [words.draw_table, &words.nearest];
             StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), &format!("{name} {kind:?} resolve"))
         };
         let range = words(ViewKind::Range, range)?;
-        let resolve = resolving(&pipelines.resolve, range_targets, &range, ViewKind::Range)?;
+        let resolve = resolve_set(&pipelines.resolve, range_targets, &range, ViewKind::Range)?;
         let (shadow, resolve_shadow) = match shadow {
             Some((view, targets)) => {
                 let shadow = words(ViewKind::Shadow, view)?;
                 let set = several_draws
-                    .then(|| resolving(&pipelines.resolve_shadow, targets, &shadow, ViewKind::Shadow))
+                    .then(|| resolve_set(&pipelines.resolve_shadow, targets, &shadow, ViewKind::Shadow))
                     .transpose()?;
                 (Some(shadow), set)
             }
