@@ -13,7 +13,8 @@ struct DrawData {
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
     uvec2 triangles;         // device addresses of the mesh's triangles (TriangleRecord:
                              // corners, then the unit normal, model frame, f64-derived),
-    uvec2 pad;               // (unused)
+    float viewport_half_side; // half the side of the graphics pipeline's viewport (draw.rs)
+    uint pad;                // (unused)
     uvec2 surface_ids;       // and of its per-triangle surface ids
     uvec2 pad2;              // (unused)
     uint label_base;         // label = label_base + surface id
@@ -42,6 +43,20 @@ vec3 to_view(DrawData d, vec3 model) {
                           rotate_row(d.view_from_model[1], model) + d.view_from_model[1].w,
                           rotate_row(d.view_from_model[2], model) + d.view_from_model[2].w);
     return v;
+}
+
+// Clip coordinates (w = 1) of a view-frame point: what raster.vert hands the graphics
+// pipeline, and what the compute rasterizer's coverage passes turn into window coordinates as
+// the viewport transform does (raster.comp, `window`). The viewport is centred on the view's
+// pixels and 2 × viewport_half_side pixels a side, a power of two (src/render/draw.rs,
+// `viewport`), so dividing by it here and the viewport transform's multiplying by it again are
+// exact: the window coordinates are the same bits whether a device fuses the transform's
+// multiply-add or not.
+vec3 clip_position(DrawData d, vec3 v) {
+    precise vec2 pixel = vec2((v.x - d.grid.x) / d.grid.z, (d.grid.y - v.y) / d.grid.w) + 0.5;
+    precise vec2 xy = (pixel - 0.5 * d.size) / d.viewport_half_side;
+    precise float depth = (d.z_range.y - v.z) / (d.z_range.y - d.z_range.x);
+    return vec3(xy, depth);
 }
 
 // The rotation part alone: directions (normals) do not translate.

@@ -107,13 +107,12 @@ layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 layout(constant_id = 4) const uint MEMBERS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
-// viewport transform compute them.
+// viewport transform compute them (its scale the viewport's half side, its offset the view's
+// centre: src/render/draw.rs, `viewport`).
 vec3 window(DrawData d, vec3 v) {
-    precise vec2 pixel = vec2((v.x - d.grid.x) / d.grid.z, (d.grid.y - v.y) / d.grid.w) + 0.5;
-    precise vec2 ndc = 2.0 * pixel / d.size - 1.0;
-    precise vec2 w = ndc * (0.5 * d.size) + 0.5 * d.size;
-    precise float depth = (d.z_range.y - v.z) / (d.z_range.y - d.z_range.x);
-    return vec3(w, depth);
+    precise vec3 clip = clip_position(d, v);
+    precise vec2 w = clip.xy * d.viewport_half_side + 0.5 * d.size;
+    return vec3(w, clip.z);
 }
 
 // Window coordinates snapped to 1/256 pixel, in those units: whole numbers.

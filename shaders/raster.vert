@@ -1,6 +1,7 @@
 #version 460
 // Both views are orthographic: pixel (c, r) has its centre at x = x0 + c·dx, y = y0 − r·dy
-// (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½).
+// (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½) through the
+// viewport (src/render/draw.rs).
 #include "draw.glsl"
 
 layout(push_constant, std430) uniform Draw {
@@ -14,8 +15,6 @@ void main() {
     // two pipelines: `precise` forbids fusing these operations differently in each, so both
     // compute the same depth for the same vertex. (`invariant gl_Position` would say so too,
     // but SPIR-V validation rejects it on the gl_PerVertex block glslang emits.)
-    precise vec3 v = to_view(draw, position);
-    precise vec2 pixel = vec2((v.x - draw.grid.x) / draw.grid.z, (draw.grid.y - v.y) / draw.grid.w) + 0.5;
-    precise float depth = (draw.z_range.y - v.z) / (draw.z_range.y - draw.z_range.x);
-    gl_Position = vec4(2.0 * pixel / draw.size - 1.0, depth, 1.0);
+    precise vec3 clip = clip_position(draw, to_view(draw, position));
+    gl_Position = vec4(clip, 1.0);
 }

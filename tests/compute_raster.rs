@@ -1,19 +1,12 @@
 //! The compute rasterizer (src/render/compute_raster.rs) against the graphics pipeline: the
 //! same coverage rule (top-left), the same sub-pixel precision (1/256) and the same plane z
 //! should give the same images. The allowance is stated here: none. Measured on lavapipe:
-//! every label, shadowed label and z bit identical on every case below. (Outside these cases:
-//! where triangles with corners tens of thousands of pixels outside the view overlap at nearly
-//! equal depths, a few pixels keep a different one; see
-//! `a_queue_longer_than_a_dispatch_is_covered_whole`. And one found on 2026-11-25, not yet
-//! explained: the step posed Rx(0.5)·Ry(−0.35) in a 96² view, pitch 0.03, centred at (0.1,
-//! 0.1), θ = −30°, label mode: shadow-view pixel (96, 94), whose centre lies 0.0012 pixel
-//! inside an edge of triangle 2 by corners snapped in f64, is covered by the compute
-//! rasterizer and left empty by lavapipe, so one range pixel's shadowed label differs. It is
-//! the same with culling off and with the viewport transform fused; single triangles whose
-//! snapped edges pass from −400 to 400 units (1/256² pixel) from a pixel centre render alike
-//! by both.) (Both skip a solid's
+//! every label, shadowed label and z bit identical on every case below. (Both skip a solid's
 //! triangles facing away, the graphics pipeline judging by the snapped corners, the compute
-//! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on.)
+//! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on. And
+//! the graphics pipeline clips a triangle reaching past its viewport, 8,192 pixels from the
+//! view's centre on lavapipe, and snaps the clipper's corners anew, which the compute
+//! rasterizer does not: see `triangles_crossing_the_views_edge_render_as_the_graphics_pipeline_renders_them`.)
 
 mod common;
 
@@ -405,15 +398,35 @@ fn a_model_reaching_beyond_the_compute_rasterizers_reach_stays_on_the_graphics_p
 }
 
 /// More queued triangles than one indirect dispatch has workgroups (65,535): the large
-/// triangles' workgroups stride over the rest of the queue. Tips 54 pixels left of the view,
-/// not 57,000: 5,000 spikes that far away, their depths 0.001 apart, kept a different
-/// spike at 3 of 2,477 pixels (z differs, labels equal) with this build of the compute
-/// rasterizer and the one before it; not analysed further, likely the depth each path
-/// computes across so distant a corner (README, "Rasterizers").
+/// triangles' workgroups stride over the rest of the queue. Tips 54 pixels left of the view.
 #[test]
 fn a_queue_longer_than_a_dispatch_is_covered_whole() {
     let (sc, graphics) = spikes(70_000, -3.0);
     assert_renders_as(&render_compute(&sc), &graphics);
+}
+
+/// Triangles crossing the view's edge. The graphics pipeline clips a triangle that crosses its
+/// viewport's edge (lavapipe has no guard band with a depth attachment bound) and snaps the
+/// corners the clipper makes anew, which moves the kept part's edges by up to a snapping step;
+/// the compute rasterizer covers the whole triangle. When the viewport was the view itself,
+/// these differed: the step's shadow view, where the centre of pixel (96, 94) lies 0.0012
+/// pixel inside the edge of a triangle that crosses the view's right edge (one shadowed label);
+/// 5,000 spikes from 57,000 pixels left of the view, their depths 0.001 apart (3 of 2,477
+/// pixels kept another spike: z differs); and 5,000 from about 250 pixels (1 pixel). The viewport
+/// is now 16,384 pixels a side on lavapipe (src/render/draw.rs, `viewport`): a spike from
+/// 57,000 pixels away is still clipped, 8,192 pixels from the view's centre, where moving its
+/// corner by a snapping step moves its edge in the view by a hundredth of that or less.
+#[test]
+fn triangles_crossing_the_views_edge_render_as_the_graphics_pipeline_renders_them() {
+    let lean = DMat4::from_rotation_x(0.5) * DMat4::from_rotation_y(-0.35);
+    let step = scene(centred_sensor(96, 96, 0.03, [0.1, 0.1], -30.0), ShadowMode::Label, &[("builtin:step", lean)]);
+    let (compute, graphics) = (render_compute(&step), render(&step));
+    assert!(graphics.label.iter().filter(|&&l| l != 0).count() > 1000, "the step in view");
+    assert_renders_as(&compute, &graphics);
+    for tip in [-2000.0, -10.0] {
+        let (sc, graphics) = spikes(5_000, tip);
+        assert_renders_as(&render_compute(&sc), &graphics);
+    }
 }
 
 #[test]

@@ -253,6 +253,20 @@ impl GpuContext {
         u64::from(self.limits.max_storage_buffer_range)
     }
 
+    /// Half the side of the square viewport through which the graphics pipeline draws every
+    /// view (src/render/draw.rs, `viewport`): half the largest power of two within the device's
+    /// viewport dimensions (maxViewportDimensions; 8,192 on lavapipe).
+    pub fn viewport_half_side(&self) -> f32 {
+        let [width, height] = self.limits.max_viewport_dimensions;
+        (1u32 << width.min(height).max(1).ilog2()) as f32 / 2.0
+    }
+
+    /// The most pixels a view may have on a side: an image the device can create, inside the
+    /// viewport.
+    pub fn max_view_side(&self) -> u32 {
+        self.limits.max_image_dimension2_d.min(2 * self.viewport_half_side() as u32)
+    }
+
     /// Whether the device runs the core Vulkan 1.3 path (else the 1.2 extensions).
     pub fn core_vulkan_1_3(&self) -> bool {
         matches!(self.commands, Vulkan13Commands::Core)

@@ -22,7 +22,8 @@ pub struct DrawConstants {
     size: [f32; 2],
     z_range: [f32; 2],
     triangles: [u32; 2],
-    _pad: [u32; 2],
+    viewport_half_side: f32,
+    _pad: u32,
     surface_ids: [u32; 2],
     _pad2: [u32; 2],
     label_base: u32,
@@ -38,6 +39,7 @@ const _: () = {
     use std::mem::offset_of;
     assert!(offset_of!(DrawConstants, grid) == 48 && offset_of!(DrawConstants, size) == 64);
     assert!(offset_of!(DrawConstants, z_range) == 72 && offset_of!(DrawConstants, triangles) == 80);
+    assert!(offset_of!(DrawConstants, viewport_half_side) == 88);
     assert!(offset_of!(DrawConstants, surface_ids) == 96 && offset_of!(DrawConstants, label_base) == 112);
     assert!(offset_of!(DrawConstants, draw_index) == 116 && offset_of!(DrawConstants, links) == 120);
 };
@@ -54,8 +56,15 @@ impl DrawConstants {
     /// Composes, in f64, the move to the view's local origin (`origin`, range frame:
     /// `ViewGrid::local_origin`) ∘ view rotation ∘ pose, and rounds once to f32; the grid and
     /// depth range are offsets from that origin too. `draw_index` is the draw's entry in the
-    /// draw table.
-    pub fn new(grid: &ViewGrid, view_from_range: DMat4, origin: DVec3, draw: &Draw, draw_index: u32) -> Self {
+    /// draw table; `viewport_half_side` the device's (`GpuContext::viewport_half_side`).
+    pub fn new(
+        grid: &ViewGrid,
+        view_from_range: DMat4,
+        origin: DVec3,
+        draw: &Draw,
+        draw_index: u32,
+        viewport_half_side: f32,
+    ) -> Self {
         let local = view_from_range.transform_point3(origin);
         let view_from_model = DMat4::from_translation(-local) * view_from_range * draw.pose;
         let row = |i| view_from_model.row(i).as_vec4().to_array();
@@ -66,7 +75,8 @@ impl DrawConstants {
             size: [grid.width as f32, grid.height as f32],
             z_range: [grid.z_range.0 - local.z, grid.z_range.1 - local.z].map(|v| v as f32),
             triangles: draw.mesh.triangles.address_words(),
-            _pad: [0; 2],
+            viewport_half_side,
+            _pad: 0,
             surface_ids: draw.mesh.surface_ids.address_words(),
             _pad2: [0; 2],
             label_base: draw.label_base,
@@ -96,8 +106,8 @@ pub struct ViewPass<'a> {
 pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw], first_draw_index: u32) {
     let d = &ctx.device;
     let targets = pass.targets;
-    // The attachments may be larger than the grid (batch slots fit their largest view).
-    let extent = vk::Extent2D { width: pass.grid.width, height: pass.grid.height };
+    // The attachments may be larger than the grid (batch slots fit their largest view): the
+    // render area is within the grid.
     let a = pass.area;
     let area = vk::Rect2D {
         offset: vk::Offset2D { x: a.col as i32, y: a.row as i32 },
@@ -128,14 +138,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
         .layer_count(1)
         .color_attachments(&attachments)
         .depth_attachment(&depth);
-    let viewport = vk::Viewport {
-        x: 0.0,
-        y: 0.0,
-        width: extent.width as f32,
-        height: extent.height as f32,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
+    let viewport = viewport(pass.grid, ctx.viewport_half_side());
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
         ctx.cmd_begin_rendering(cmd, &info);
@@ -158,6 +161,29 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
     }
 }
 
+/// The viewport a view is drawn through: a square of 2 × `half_side` pixels (a power of two)
+/// centred on the view's pixels, far larger than the view; the render area keeps the
+/// fragments to the view. The graphics pipeline clips a triangle that crosses the viewport's
+/// edge (lavapipe has no guard band where a depth attachment is bound), and the corners the
+/// clipper makes are snapped anew: the kept part's edges move by up to a snapping step, and
+/// pixel centres that close to them could be covered otherwise than the whole triangle covers
+/// them, as the compute rasterizer, which never clips, covers them. So only a triangle
+/// reaching `half_side` pixels from the view's centre is clipped. raster.vert divides by
+/// `half_side` and the viewport transform multiplies by it again, both exactly (a power of
+/// two), so the window coordinates are the same bits whether a device fuses the transform's
+/// multiply-add or not (shaders/draw.glsl, `clip_position`).
+fn viewport(grid: &ViewGrid, half_side: f32) -> vk::Viewport {
+    let centre = [grid.width as f32 / 2.0, grid.height as f32 / 2.0];
+    vk::Viewport {
+        x: centre[0] - half_side,
+        y: centre[1] - half_side,
+        width: 2.0 * half_side,
+        height: 2.0 * half_side,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }
+}
+
 /// Which of a mesh's triangles the graphics pipeline culls: a solid's facing away from the
 /// camera, which are never the first hit (src/mesh/solid.rs), and none of an open mesh's. The
 /// compute rasterizer skips the same ones (compute_raster.rs).
@@ -174,7 +200,8 @@ fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
 fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
     let d = &ctx.device;
     for &(index, draw) in draws {
-        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index);
+        let half_side = ctx.viewport_half_side();
+        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
         // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
         // bound, its cull mode dynamic; the meshes outlive the submission.
         unsafe {

@@ -102,7 +102,7 @@ pub(crate) fn plan_views(
     for grid in std::iter::once(&range).chain(shadow_grid.as_ref()) {
         if grid.width > max_side || grid.height > max_side {
             return Err(Error::Scene(format!(
-                "a {}×{} view exceeds this device's image limit of {max_side} pixels per side",
+                "a {}×{} view exceeds this device's limit of {max_side} pixels per side (its largest image and viewport)",
                 grid.width, grid.height
             )));
         }
@@ -348,7 +348,7 @@ impl Renderer {
                 (o.pose.transform_point3(centre), radius)
             })
             .collect();
-        let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.limits.max_image_dimension2_d)?;
+        let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.max_view_side())?;
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
         let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
         let exact_triangles = (scene.shadow.mode == ShadowMode::Exact).then_some(triangles);

@@ -585,7 +585,8 @@ pub(crate) fn draw_table<'a>(
         };
         for draw in draws {
             let index = entries.len() as u32;
-            entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index));
+            let half_side = ctx.viewport_half_side();
+            entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index, half_side));
         }
     }
     let name = format!("{kind:?} view draw table");

@@ -134,7 +134,7 @@ pub(crate) fn slot_memory(
     posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
     max_triangles: u64,
 ) -> Result<u64> {
-    let max_side = renderer.context().limits.max_image_dimension2_d;
+    let max_side = renderer.context().max_view_side();
     let mut shadow_width = 0;
     for sphere in posed_spheres {
         let views = plan_views(sensor, shadow, &[sphere], max_side)?;
@@ -165,7 +165,7 @@ pub(crate) fn count_batch(
     }
     let ctx = renderer.context();
     let sensor = settings.sensor;
-    let max_side = ctx.limits.max_image_dimension2_d;
+    let max_side = ctx.max_view_side();
     let to_shadow = sensor.to_shadow_frame();
     let views: Vec<Views> = items
         .iter()
