@@ -45,16 +45,22 @@ vec3 to_view(DrawData d, vec3 model) {
     return v;
 }
 
+// The centre of the graphics pipeline's viewport, in window coordinates: the view's centre,
+// rounded down to a whole pixel, as a device may hold the viewport's corner to whole pixels
+// (viewportSubPixelBits is 0 on lavapipe; src/render/draw.rs, `viewport`).
+vec2 viewport_centre(DrawData d) {
+    return floor(0.5 * d.size);
+}
+
 // Clip coordinates (w = 1) of a view-frame point: what raster.vert hands the graphics
 // pipeline, and what the compute rasterizer's coverage passes turn into window coordinates as
-// the viewport transform does (raster.comp, `window`). The viewport is centred on the view's
-// pixels and 2 × viewport_half_side pixels a side, a power of two (src/render/draw.rs,
-// `viewport`), so dividing by it here and the viewport transform's multiplying by it again are
-// exact: the window coordinates are the same bits whether a device fuses the transform's
-// multiply-add or not.
+// the viewport transform does (raster.comp, `window`). The viewport is 2 ×
+// viewport_half_side pixels a side, a power of two, so dividing by it here and the viewport
+// transform's multiplying by it again are exact: the window coordinates are the same bits
+// whether a device fuses the transform's multiply-add or not.
 vec3 clip_position(DrawData d, vec3 v) {
     precise vec2 pixel = vec2((v.x - d.grid.x) / d.grid.z, (d.grid.y - v.y) / d.grid.w) + 0.5;
-    precise vec2 xy = (pixel - 0.5 * d.size) / d.viewport_half_side;
+    precise vec2 xy = (pixel - viewport_centre(d)) / d.viewport_half_side;
     precise float depth = (d.z_range.y - v.z) / (d.z_range.y - d.z_range.x);
     return vec3(xy, depth);
 }

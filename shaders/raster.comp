@@ -107,11 +107,11 @@ layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 layout(constant_id = 4) const uint MEMBERS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
-// viewport transform compute them (its scale the viewport's half side, its offset the view's
-// centre: src/render/draw.rs, `viewport`).
+// viewport transform compute them (its scale the viewport's half side, its offset the
+// viewport's centre: src/render/draw.rs, `viewport`).
 vec3 window(DrawData d, vec3 v) {
     precise vec3 clip = clip_position(d, v);
-    precise vec2 w = clip.xy * d.viewport_half_side + 0.5 * d.size;
+    precise vec2 w = clip.xy * d.viewport_half_side + viewport_centre(d);
     return vec3(w, clip.z);
 }
 

@@ -162,8 +162,9 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 }
 
 /// The viewport a view is drawn through: a square of 2 × `half_side` pixels (a power of two)
-/// centred on the view's pixels, far larger than the view; the render area keeps the
-/// fragments to the view. The graphics pipeline clips a triangle that crosses the viewport's
+/// centred on the view's centre rounded down to a whole pixel (a device may hold a viewport's
+/// corner to whole pixels: viewportSubPixelBits), far larger than the view; the render area
+/// keeps the fragments to the view (shaders/draw.glsl, `viewport_centre`). The graphics pipeline clips a triangle that crosses the viewport's
 /// edge (lavapipe has no guard band where a depth attachment is bound), and the corners the
 /// clipper makes are snapped anew: the kept part's edges move by up to a snapping step, and
 /// pixel centres that close to them could be covered otherwise than the whole triangle covers
@@ -173,7 +174,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 /// two), so the window coordinates are the same bits whether a device fuses the transform's
 /// multiply-add or not (shaders/draw.glsl, `clip_position`).
 fn viewport(grid: &ViewGrid, half_side: f32) -> vk::Viewport {
-    let centre = [grid.width as f32 / 2.0, grid.height as f32 / 2.0];
+    let centre = [(grid.width / 2) as f32, (grid.height / 2) as f32];
     vk::Viewport {
         x: centre[0] - half_side,
         y: centre[1] - half_side,
