@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# The GPU checks, for a machine with a Vulkan GPU but neither a Rust toolchain nor a package
+# registry (such as the device machine some sessions are lent: README, "Tests").
+#
+#   tools/device_kit.sh pack   here: builds the benchmark and the GPU test suites (release
+#                              profile) and downloads the Vulkan loader and the validation
+#                              layers as Debian packages, into target/device-kit
+#   tools/device_kit.sh run    there, with target/device-kit carried: unpacks the packages the
+#                              machine lacks, runs the rasterizers' benchmark, then every suite
+#                              with the graphics pipeline and again with the compute
+#                              rasterizer, validation on, on the GPU; five files (the device,
+#                              the benchmark, a log a rasterizer, a summary) under $OUT (or
+#                              target/device-kit/out). Exits 0 when every suite passed.
+#
+# RANGESYNTH_EXPECT_DEVICE (default NVIDIA) is what the device's name must contain, and
+# DEVICE_KIT_BENCH_SECONDS (default 300) bounds the benchmark, so that the whole fits in one
+# command of the device tool (10 minutes).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+kit=target/device-kit
+suites=(conformance stability analytic compute_raster verify effects portability)
+
+pack() {
+    tools/setup.sh
+    rm -rf "$kit"
+    mkdir -p "$kit/bin" "$kit/debs"
+    cargo build --release --locked --example bench_verify
+    cp target/release/examples/bench_verify "$kit/bin/"
+    local tests=()
+    for suite in "${suites[@]}"; do tests+=(--test "$suite"); done
+    # cargo names each test binary it built: "Executable tests/NAME.rs (target/release/deps/NAME-HASH)".
+    cargo test --release --locked --no-run "${tests[@]}" 2>&1 | tee "$kit/build.log" >&2
+    for suite in "${suites[@]}"; do
+        local binary
+        binary=$(sed -n "s|.*Executable tests/$suite.rs (\(.*\))|\1|p" "$kit/build.log")
+        [ -x "$binary" ] || { echo "no test binary for $suite in cargo's output" >&2; exit 1; }
+        cp "$binary" "$kit/bin/$suite"
+    done
+    strip "$kit"/bin/*
+    (cd "$kit/debs" && { apt-get download libvulkan1 vulkan-validationlayers 2>/dev/null ||
+        { apt-get update -qq && apt-get download libvulkan1 vulkan-validationlayers; }; })
+    du -sh "$kit" >&2
+}
+
+run() {
+    local out=${OUT:-$kit/out}
+    mkdir -p "$out"
+    # The loader and the layers from the kit, only where the machine lacks them.
+    if ! ldconfig -p | grep 'libvulkan\.so\.1 ' > /dev/null; then
+        dpkg -x "$kit"/debs/libvulkan1_*.deb /
+    fi
+    if [ ! -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ]; then
+        dpkg -x "$kit"/debs/vulkan-validationlayers_*.deb /
+    fi
+    ldconfig
+    local nvidia=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+    if [ -z "${VK_DRIVER_FILES:-}" ] && [ -e "$nvidia" ]; then
+        export VK_DRIVER_FILES=$nvidia
+    fi
+    export RANGESYNTH_EXPECT_DEVICE=${RANGESYNTH_EXPECT_DEVICE:-NVIDIA}
+    (nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true) > "$out/device.txt" 2>&1
+    timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/bench_verify" --rasters > "$out/bench.log" 2>&1 ||
+        echo "bench_verify: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$out/bench.log"
+    # As tools/test.sh runs them: every suite with the graphics pipeline, then all but
+    # compute_raster (which compares the two itself) with the compute rasterizer, which on a
+    # GPU covers four hypotheses a dispatch, in runs of 16 slots, two chunks in flight. One log
+    # a rasterizer: the device tool brings back at most 8 files.
+    for raster in graphics compute; do
+        for suite in "${suites[@]}"; do
+            [ "$raster/$suite" != compute/compute_raster ] || continue
+            local log=$out/suites-$raster.log status=passed
+            echo "=== $suite ($raster)" >> "$log"
+            RANGESYNTH_TEST_RASTER=$raster "$kit/bin/$suite" >> "$log" 2>&1 || status=FAILED
+            echo "$suite ($raster): $status"
+        done
+    done | tee "$out/summary.txt"
+    ! grep -q FAILED "$out/summary.txt"
+}
+
+case "${1:-}" in
+    pack) pack ;;
+    run) run ;;
+    *)
+        echo "usage: tools/device_kit.sh pack|run" >&2
+        exit 2
+        ;;
+esac
