@@ -164,12 +164,14 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 /// The viewport a view is drawn through: a square of 2 × `half_side` pixels (a power of two)
 /// centred on the view's centre rounded down to a whole pixel (a device may hold a viewport's
 /// corner to whole pixels: viewportSubPixelBits), far larger than the view; the render area
-/// keeps the fragments to the view (shaders/draw.glsl, `viewport_centre`). The graphics pipeline clips a triangle that crosses the viewport's
-/// edge (lavapipe has no guard band where a depth attachment is bound), and the corners the
-/// clipper makes are snapped anew: the kept part's edges move by up to a snapping step, and
-/// pixel centres that close to them could be covered otherwise than the whole triangle covers
-/// them, as the compute rasterizer, which never clips, covers them. So only a triangle
-/// reaching `half_side` pixels from the view's centre is clipped. raster.vert divides by
+/// keeps the fragments to the view (shaders/draw.glsl, `viewport_centre`).
+///
+/// Why so large: the graphics pipeline clips a triangle that crosses the viewport's edge
+/// (lavapipe has no guard band where a depth attachment is bound), and the corners the
+/// clipper makes are snapped anew, so the kept part's edges move by up to a snapping step and
+/// pixel centres that close to them are covered otherwise than the whole triangle covers
+/// them, as the compute rasterizer, which never clips, covers them. Only a triangle reaching
+/// `half_side` pixels from the view's centre is clipped now. raster.vert divides by
 /// `half_side` and the viewport transform multiplies by it again, both exactly (a power of
 /// two), so the window coordinates are the same bits whether a device fuses the transform's
 /// multiply-add or not (shaders/draw.glsl, `clip_position`).
@@ -200,8 +202,8 @@ fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
 /// mode, into the bound pipeline.
 fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
     let d = &ctx.device;
+    let half_side = ctx.viewport_half_side();
     for &(index, draw) in draws {
-        let half_side = ctx.viewport_half_side();
         let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
         // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
         // bound, its cull mode dynamic; the meshes outlive the submission.

@@ -574,6 +574,7 @@ pub(crate) fn draw_table<'a>(
         ViewKind::Range => DMat4::IDENTITY,
         ViewKind::Shadow => sensor.to_shadow_frame(),
     };
+    let half_side = ctx.viewport_half_side();
     let mut entries = Vec::new();
     for (views, draws) in groups {
         let grid = match kind {
@@ -585,7 +586,6 @@ pub(crate) fn draw_table<'a>(
         };
         for draw in draws {
             let index = entries.len() as u32;
-            let half_side = ctx.viewport_half_side();
             entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index, half_side));
         }
     }

@@ -8,7 +8,7 @@
 //! resolve pass would and testing what it wrote. On lavapipe the shadow view's resolve cost
 //! about 0.9 ms of the box's 3.7 ms a hypothesis in label mode; the range view's pass cost
 //! 0.65–0.75 ms of the box's 1.2 ms of compute raster at 256², of which the mask now spends
-//! about 0.5 ms more, so a render saves 0.1–0.3 ms (README, "Rasterizers"). Where no pass
+//! about 0.5 ms more, so a render saves 0.1–0.3 ms (docs/compute-rasterizer.md). Where no pass
 //! after it reads the range view's label or gradient, a variant writes only its z
 //! ([`MaskVariant::WordsForScoring`]): 3% of the dense sphere's verification at 256², 9% of
 //! the box's.
