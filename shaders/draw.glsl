@@ -13,10 +13,10 @@ struct DrawData {
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
     uvec2 triangles;         // device addresses of the mesh's triangles (TriangleRecord:
                              // corners, then the unit normal, model frame, f64-derived),
-    float viewport_half_side; // half the side of the graphics pipeline's viewport (draw.rs)
-    uint pad;                // (unused)
+    float viewport_half_side; // the graphics pipeline's viewport (draw.rs, ViewportFrame):
+    float viewport_inverse_half_side; // half its side (a power of two) and its inverse,
     uvec2 surface_ids;       // and of its per-triangle surface ids
-    uvec2 pad2;              // (unused)
+    vec2 viewport_centre;    // its centre in window coordinates (whole pixels)
     uint label_base;         // label = label_base + surface id
     uint draw_index;         // this draw's entry in the draw table (shadow view)
     uvec2 links;             // device address of what lies across each triangle's edges
@@ -45,22 +45,16 @@ vec3 to_view(DrawData d, vec3 model) {
     return v;
 }
 
-// The centre of the graphics pipeline's viewport, in window coordinates: the view's centre,
-// rounded down to a whole pixel, as a device may hold the viewport's corner to whole pixels
-// (viewportSubPixelBits is 0 on lavapipe; src/render/draw.rs, `viewport`).
-vec2 viewport_centre(DrawData d) {
-    return floor(0.5 * d.size);
-}
-
 // Clip coordinates (w = 1) of a view-frame point: what raster.vert hands the graphics
 // pipeline, and what the compute rasterizer's coverage passes turn into window coordinates as
 // the viewport transform does (raster.comp, `window`). The viewport is 2 ×
-// viewport_half_side pixels a side, a power of two, so dividing by it here and the viewport
-// transform's multiplying by it again are exact: the window coordinates are the same bits
-// whether a device fuses the transform's multiply-add or not.
+// viewport_half_side pixels a side, a power of two, so multiplying by its inverse here and
+// the viewport transform's multiplying by it again are exact (a product is correctly rounded
+// in Vulkan, a quotient need not be): the window coordinates are the same bits whether a
+// device fuses the transform's multiply-add or not.
 vec3 clip_position(DrawData d, vec3 v) {
     precise vec2 pixel = vec2((v.x - d.grid.x) / d.grid.z, (d.grid.y - v.y) / d.grid.w) + 0.5;
-    precise vec2 xy = (pixel - viewport_centre(d)) / d.viewport_half_side;
+    precise vec2 xy = (pixel - d.viewport_centre) * d.viewport_inverse_half_side;
     precise float depth = (d.z_range.y - v.z) / (d.z_range.y - d.z_range.x);
     return vec3(xy, depth);
 }

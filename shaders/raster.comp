@@ -111,7 +111,7 @@ layout(constant_id = 4) const uint MEMBERS = 1u;
 // viewport's centre: src/render/draw.rs, `viewport`).
 vec3 window(DrawData d, vec3 v) {
     precise vec3 clip = clip_position(d, v);
-    precise vec2 w = clip.xy * d.viewport_half_side + viewport_centre(d);
+    precise vec2 w = clip.xy * d.viewport_half_side + d.viewport_centre;
     return vec3(w, clip.z);
 }
 

@@ -18,7 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kit=target/device-kit
-suites=(conformance stability analytic compute_raster verify effects portability)
+suites=(conformance stability analytic compute_raster exact verify effects portability)
 
 pack() {
     tools/setup.sh
@@ -43,8 +43,13 @@ pack() {
 }
 
 run() {
+    if [ ! -d "$kit/bin" ]; then
+        echo "no $kit here: run tools/device_kit.sh pack where rangesynth builds, and carry $kit" >&2
+        exit 2
+    fi
     local out=${OUT:-$kit/out}
     mkdir -p "$out"
+    rm -f "$out"/suites-*.log
     # The loader and the layers from the kit, only where the machine lacks them.
     if ! ldconfig -p | grep 'libvulkan\.so\.1 ' > /dev/null; then
         dpkg -x "$kit"/debs/libvulkan1_*.deb /
@@ -55,10 +60,15 @@ run() {
     ldconfig
     local nvidia=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
     if [ -z "${VK_DRIVER_FILES:-}" ] && [ -e "$nvidia" ]; then
-        export VK_DRIVER_FILES=$nvidia
+        export VK_DRIVER_FILES=$nvidia VK_ICD_FILENAMES=$nvidia # the second for older loaders
     fi
     export RANGESYNTH_EXPECT_DEVICE=${RANGESYNTH_EXPECT_DEVICE:-NVIDIA}
-    (nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true) > "$out/device.txt" 2>&1
+    # What the kit's binaries, built elsewhere, meet here.
+    {
+        nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
+        grep -h PRETTY_NAME /etc/os-release || true
+        ldd --version | head -n 1 || true
+    } > "$out/device.txt" 2>&1
     timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/bench_verify" --rasters > "$out/bench.log" 2>&1 ||
         echo "bench_verify: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$out/bench.log"
     # As tools/test.sh runs them: every suite with the graphics pipeline, then all but

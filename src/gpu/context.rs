@@ -254,8 +254,8 @@ impl GpuContext {
     }
 
     /// Half the side of the square viewport through which the graphics pipeline draws every
-    /// view (src/render/draw.rs, `viewport`): half the largest power of two within the device's
-    /// viewport dimensions (maxViewportDimensions; 8,192 on lavapipe).
+    /// view (src/render/draw.rs, `ViewportFrame`): half the largest power of two within the
+    /// device's viewport dimensions (maxViewportDimensions: 16,384 on lavapipe, so 8,192).
     pub fn viewport_half_side(&self) -> f32 {
         let [width, height] = self.limits.max_viewport_dimensions;
         (1u32 << width.min(height).max(1).ilog2()) as f32 / 2.0

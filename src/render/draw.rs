@@ -23,9 +23,9 @@ pub struct DrawConstants {
     z_range: [f32; 2],
     triangles: [u32; 2],
     viewport_half_side: f32,
-    _pad: u32,
+    viewport_inverse_half_side: f32,
     surface_ids: [u32; 2],
-    _pad2: [u32; 2],
+    viewport_centre: [f32; 2],
     label_base: u32,
     draw_index: u32,
     links: [u32; 2],
@@ -40,6 +40,8 @@ const _: () = {
     assert!(offset_of!(DrawConstants, grid) == 48 && offset_of!(DrawConstants, size) == 64);
     assert!(offset_of!(DrawConstants, z_range) == 72 && offset_of!(DrawConstants, triangles) == 80);
     assert!(offset_of!(DrawConstants, viewport_half_side) == 88);
+    assert!(offset_of!(DrawConstants, viewport_inverse_half_side) == 92);
+    assert!(offset_of!(DrawConstants, viewport_centre) == 104);
     assert!(offset_of!(DrawConstants, surface_ids) == 96 && offset_of!(DrawConstants, label_base) == 112);
     assert!(offset_of!(DrawConstants, draw_index) == 116 && offset_of!(DrawConstants, links) == 120);
 };
@@ -69,16 +71,17 @@ impl DrawConstants {
         let view_from_model = DMat4::from_translation(-local) * view_from_range * draw.pose;
         let row = |i| view_from_model.row(i).as_vec4().to_array();
         let [x0, y0] = grid.origin;
+        let viewport = ViewportFrame::new(grid, viewport_half_side);
         Self {
             view_from_model: [row(0), row(1), row(2)],
             grid: [x0 - local.x, y0 - local.y, grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
             size: [grid.width as f32, grid.height as f32],
             z_range: [grid.z_range.0 - local.z, grid.z_range.1 - local.z].map(|v| v as f32),
             triangles: draw.mesh.triangles.address_words(),
-            viewport_half_side,
-            _pad: 0,
+            viewport_half_side: viewport.half_side,
+            viewport_inverse_half_side: 1.0 / viewport.half_side,
             surface_ids: draw.mesh.surface_ids.address_words(),
-            _pad2: [0; 2],
+            viewport_centre: viewport.centre,
             label_base: draw.label_base,
             draw_index,
             links: draw.mesh.links.address_words(),
@@ -138,7 +141,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
         .layer_count(1)
         .color_attachments(&attachments)
         .depth_attachment(&depth);
-    let viewport = viewport(pass.grid, ctx.viewport_half_side());
+    let viewport = ViewportFrame::new(pass.grid, ctx.viewport_half_side()).viewport();
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
         ctx.cmd_begin_rendering(cmd, &info);
@@ -164,26 +167,42 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 /// The viewport a view is drawn through: a square of 2 × `half_side` pixels (a power of two)
 /// centred on the view's centre rounded down to a whole pixel (a device may hold a viewport's
 /// corner to whole pixels: viewportSubPixelBits), far larger than the view; the render area
-/// keeps the fragments to the view (shaders/draw.glsl, `viewport_centre`).
+/// keeps the fragments to the view. The raster shaders and the compute rasterizer read its
+/// centre and half side from the draw's constants (shaders/draw.glsl, `clip_position`).
 ///
 /// Why so large: the graphics pipeline clips a triangle that crosses the viewport's edge
 /// (lavapipe has no guard band where a depth attachment is bound), and the corners the
 /// clipper makes are snapped anew, so the kept part's edges move by up to a snapping step and
 /// pixel centres that close to them are covered otherwise than the whole triangle covers
 /// them, as the compute rasterizer, which never clips, covers them. Only a triangle reaching
-/// `half_side` pixels from the view's centre is clipped now. raster.vert divides by
-/// `half_side` and the viewport transform multiplies by it again, both exactly (a power of
+/// `half_side` pixels from the view's centre is clipped now. raster.vert multiplies by the
+/// inverse of `half_side` and the viewport transform by `half_side`, both exactly (powers of
 /// two), so the window coordinates are the same bits whether a device fuses the transform's
-/// multiply-add or not (shaders/draw.glsl, `clip_position`).
-fn viewport(grid: &ViewGrid, half_side: f32) -> vk::Viewport {
-    let centre = [(grid.width / 2) as f32, (grid.height / 2) as f32];
-    vk::Viewport {
-        x: centre[0] - half_side,
-        y: centre[1] - half_side,
-        width: 2.0 * half_side,
-        height: 2.0 * half_side,
-        min_depth: 0.0,
-        max_depth: 1.0,
+/// multiply-add or not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewportFrame {
+    /// In window coordinates, whole pixels.
+    pub centre: [f32; 2],
+    pub half_side: f32,
+}
+
+impl ViewportFrame {
+    /// The frame of a view's viewport, `half_side` the device's
+    /// (`GpuContext::viewport_half_side`), at least half the view's larger side
+    /// (`GpuContext::max_view_side`).
+    pub fn new(grid: &ViewGrid, half_side: f32) -> Self {
+        Self { centre: [(grid.width / 2) as f32, (grid.height / 2) as f32], half_side }
+    }
+
+    fn viewport(&self) -> vk::Viewport {
+        vk::Viewport {
+            x: self.centre[0] - self.half_side,
+            y: self.centre[1] - self.half_side,
+            width: 2.0 * self.half_side,
+            height: 2.0 * self.half_side,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }
     }
 }
 
@@ -219,6 +238,37 @@ fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws
             d.cmd_bind_vertex_buffers(cmd, 0, &[draw.mesh.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, draw.mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, draw.mesh.index_count, 1, 0, 0, 0);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The viewport holds every pixel of a view of any size up to twice its half side, at
+    /// whole-pixel corners, and its transform maps the view's pixels onto the framebuffer's:
+    /// window x = ndc × half side + centre, as Vulkan's viewport transform (x + width / 2 as
+    /// the offset) computes it.
+    #[test]
+    fn a_views_viewport_holds_its_pixels_at_whole_pixel_corners() {
+        let half_side = 8192.0;
+        for side in [1, 2, 95, 96, 4097, 16383, 16384] {
+            let grid = ViewGrid {
+                origin: [0.0; 2],
+                pitch: [1.0; 2],
+                width: side,
+                height: side - side / 2,
+                z_range: (0.0, 1.0),
+            };
+            let viewport = ViewportFrame::new(&grid, half_side).viewport();
+            let (right, bottom) = (viewport.x + viewport.width, viewport.y + viewport.height);
+            assert!(viewport.x <= 0.0 && right >= side as f32, "{side}: columns {} to {right}", viewport.x);
+            assert!(viewport.y <= 0.0 && bottom >= grid.height as f32, "{side}: rows {} to {bottom}", viewport.y);
+            assert_eq!((viewport.x.fract(), viewport.y.fract()), (0.0, 0.0), "{side}: whole-pixel corner");
+            assert_eq!((viewport.width, viewport.height), (16384.0, 16384.0));
+            let offset = viewport.x + viewport.width / 2.0;
+            assert_eq!(offset, ViewportFrame::new(&grid, half_side).centre[0], "{side}: the offset is the centre");
         }
     }
 }
