@@ -6,7 +6,7 @@
 //! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on. And
 //! the graphics pipeline clips a triangle reaching past its viewport, 8,192 pixels from the
 //! view's centre on lavapipe, and snaps the clipper's corners anew, which the compute
-//! rasterizer does not: see `triangles_crossing_the_views_edge_render_as_the_graphics_pipeline_renders_them`.)
+//! rasterizer does not: see `triangles_crossing_the_views_edge_…`.)
 
 mod common;
 
@@ -405,12 +405,13 @@ fn a_queue_longer_than_a_dispatch_is_covered_whole() {
 /// these differed: the step's shadow view, where the centre of pixel (96, 94) lies 0.0012
 /// pixel inside the edge of a triangle that crosses the view's right edge (one shadowed label);
 /// 5,000 spikes from 57,000 pixels left of the view (edge functions past 32 bits in their
-/// boxes), their depths 0.001 apart (3 of 2,477 pixels kept another spike: z differs); and 5,000 from about 250 pixels (1 pixel). The viewport
-/// is now 16,384 pixels a side on lavapipe (src/render/draw.rs, `viewport`): a spike from
-/// 57,000 pixels away is still clipped, 8,192 pixels from the view's centre, where moving its
-/// corner by a snapping step moves its edge in the view by a hundredth of that or less. The
-/// viewport's centre is the view's rounded down to a whole pixel, so a view of an odd number
-/// of pixels a side is rendered too.
+/// boxes), their depths 0.001 apart (3 of 2,477 pixels kept another spike: z differs); and
+/// 5,000 from about 250 pixels (1 pixel). The viewport is now 16,384 pixels a side on
+/// lavapipe (src/render/draw.rs, `ViewportFrame`): a spike from 57,000 pixels away is still
+/// clipped, 8,192 pixels from the view's centre, where moving its corner by a snapping step
+/// moves its edge in the view by a hundredth of that or less. The viewport's centre is the
+/// view's rounded down to a whole pixel, so a view of an odd number of pixels a side is
+/// rendered too.
 #[test]
 fn triangles_crossing_the_views_edge_render_as_the_graphics_pipeline_renders_them() {
     let lean = DMat4::from_rotation_x(0.5) * DMat4::from_rotation_y(-0.35);

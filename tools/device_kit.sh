@@ -71,7 +71,7 @@ run() {
     } > "$out/device.txt" 2>&1
     timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/bench_verify" --rasters > "$out/bench.log" 2>&1 ||
         echo "bench_verify: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$out/bench.log"
-    # As tools/test.sh runs them: every suite with the graphics pipeline, then all but
+    # Much as tools/test.sh runs them: every suite with the graphics pipeline, then all but
     # compute_raster (which compares the two itself) with the compute rasterizer, which on a
     # GPU covers four hypotheses a dispatch, in runs of 16 slots, two chunks in flight. One log
     # a rasterizer: the device tool brings back at most 8 files.
