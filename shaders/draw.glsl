@@ -11,12 +11,12 @@ struct DrawData {
     vec4 grid;               // x0, y0, dx, dy: the view's pixel (0, 0) centre and pitch
     vec2 size;               // width, height in pixels
     vec2 z_range;            // z_min, z_max mapped onto depth 1..0 (larger z is closer)
-    uvec2 triangles;         // device addresses of the mesh's triangles (TriangleRecord:
-                             // corners, then the unit normal, model frame, f64-derived),
+    uvec2 triangles;         // device address of the mesh's triangles (TriangleRecord:
+                             // corners, then the unit normal, model frame, f64-derived)
     float viewport_half_side; // the graphics pipeline's viewport (draw.rs, ViewportFrame):
-    float viewport_inverse_half_side; // half its side (a power of two) and its inverse,
-    uvec2 surface_ids;       // and of its per-triangle surface ids
-    vec2 viewport_centre;    // its centre in window coordinates (whole pixels)
+    float viewport_inverse_half_side; // half its side (a power of two), its inverse,
+    uvec2 surface_ids;       // device address of the mesh's per-triangle surface ids
+    vec2 viewport_centre;    // the viewport's centre in window coordinates (whole pixels)
     uint label_base;         // label = label_base + surface id
     uint draw_index;         // this draw's entry in the draw table (shadow view)
     uvec2 links;             // device address of what lies across each triangle's edges

@@ -108,7 +108,7 @@ layout(constant_id = 4) const uint MEMBERS = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them (its scale the viewport's half side, its offset the
-// viewport's centre: src/render/draw.rs, `viewport`).
+// viewport's centre: src/render/draw.rs, `ViewportFrame`).
 vec3 window(DrawData d, vec3 v) {
     precise vec3 clip = clip_position(d, v);
     precise vec2 w = clip.xy * d.viewport_half_side + d.viewport_centre;
