@@ -65,15 +65,32 @@ vec3 rotate_to_view(DrawData d, vec3 direction) {
                 rotate_row(d.view_from_model[2], direction));
 }
 
-// Depths (0..1) closer than this to the nearest at a pixel are a tie, decided for the lower
-// label (src/render/draw.rs): coincident faces of two objects differ by the rounding of their
-// poses, a few f32 ulps of the view's largest coordinate, and that must not pick the winner.
-float tie_depth(DrawData d) {
+// A plane's depth (0..1) change a column right and a row down, `n` its unit normal in the
+// view's frame (n.z ≠ 0): the compute rasterizer steps its depths by it (raster.comp), and
+// the tie tolerance grows with it (tie_depth).
+vec2 depth_step(DrawData d, vec3 n) {
+    precise vec2 step = vec2(n.x * d.grid.z, -n.y * d.grid.w) / (n.z * (d.z_range.y - d.z_range.x));
+    return step;
+}
+
+// Depths (0..1) within this of the nearest at a pixel are a tie, decided for the lower label
+// (src/render/draw.rs), for a fragment of a triangle whose depth steps by `step` (depth_step).
+// Coincident faces of two objects part by two roundings, which must not pick the winner:
+// - their poses': a few f32 ulps of the view's largest coordinate (TIE_RELATIVE of it);
+// - their depths': a GPU may work a triangle's depth out from its corners snapped to the
+//   sub-pixel grid (NVIDIA's does; lavapipe and the compute rasterizer from the unsnapped
+//   corners), which moves it by up to the depth change over half a snapping step (1/512
+//   pixel) each way, so two faces part by up to that over 1/256 pixel: TIE_SLOPE allows
+//   twice that. (With TIE_RELATIVE alone, 366 pixels of two leaning boxes' coincident tops
+//   went to the higher label on an NVIDIA H200.)
+float tie_depth(DrawData d, vec2 step) {
     const float TIE_RELATIVE = 1.0 / 131072.0; // 2^-17, about 64 ulps
+    const float TIE_SLOPE = 1.0 / 128.0;
     vec2 far_corner = d.grid.xy + vec2(1.0, -1.0) * (d.size - 1.0) * d.grid.zw;
     vec2 xy = max(abs(d.grid.xy), abs(far_corner));
     float scale = max(max(xy.x, xy.y), max(abs(d.z_range.x), abs(d.z_range.y)));
-    return TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x);
+    precise float tie = TIE_RELATIVE * scale / (d.z_range.y - d.z_range.x) + TIE_SLOPE * (abs(step.x) + abs(step.y));
+    return tie;
 }
 
 // A triangle as the mesh stores it (model frame); matches TriangleRecord in

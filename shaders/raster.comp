@@ -160,7 +160,7 @@ bool culled(int cull, DrawData d, vec3 model_normal) {
 struct Setup {
     uint member, view;      // whose words it keeps (keep_word)
     uint tag;               // its member's place, above bit MEMBER_SHIFT (Member)
-    float tie;              // TIES: its draw's tie depth
+    float tie;              // TIES: its tie depth (tie_depth)
     uint stride;            // the view's pixels a row
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
@@ -174,9 +174,6 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) 
     s.member = member;
     s.view = v;
     s.tag = constants.place << MEMBER_SHIFT;
-#ifdef TIES
-    s.tie = tie_depth(d);
-#endif
     s.stride = view.stride;
     vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
     precise vec3 v0 = window(d, corner);
@@ -190,9 +187,11 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) 
     s.first = max(ivec2(floor(lo - 0.5)), ivec2(view.area.xy));
     s.last = min(ivec2(ceil(hi - 0.5)), ivec2(view.area.xy + view.area.zw) - 1);
     // In an orthographic view the plane's depth is affine in the pixel's column and row.
-    float span = d.z_range.y - d.z_range.x;
-    s.depth_first = (d.z_range.y - plane_z(d, corner, normal, vec2(s.first))) / span;
-    s.depth_step = vec2(normal.x * d.grid.z, -normal.y * d.grid.w) / (normal.z * span);
+    s.depth_first = (d.z_range.y - plane_z(d, corner, normal, vec2(s.first))) / (d.z_range.y - d.z_range.x);
+    s.depth_step = depth_step(d, normal);
+#ifdef TIES
+    s.tie = tie_depth(d, s.depth_step);
+#endif
     return s;
 }
 

@@ -39,6 +39,6 @@ void main() {
     dz_dy = range.gradient.y;
 #endif
 #ifdef TIES
-    gl_FragDepth = max(gl_FragCoord.z - tie_depth(draw), 0.0);
+    gl_FragDepth = max(gl_FragCoord.z - tie_depth(draw, depth_step(draw, triangle_normal(draw, t))), 0.0);
 #endif
 }

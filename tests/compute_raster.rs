@@ -1,21 +1,24 @@
 //! The compute rasterizer (src/render/compute_raster.rs) against the graphics pipeline: the
 //! same coverage rule (top-left), the same sub-pixel precision (1/256) and the same plane z
-//! should give the same images. The allowance is stated here: none. Measured on lavapipe:
-//! every label, shadowed label and z bit identical on every case below. (Both skip a solid's
-//! triangles facing away, the graphics pipeline judging by the snapped corners, the compute
-//! rasterizer by the normal: they could disagree only on a triangle seen almost edge-on. And
-//! the graphics pipeline clips a triangle reaching past its viewport, 8,192 pixels from the
-//! view's centre on lavapipe, and snaps the clipper's corners anew, which the compute
-//! rasterizer does not: see `triangles_crossing_the_views_edge_…`.)
+//! should give the same images. The allowance is stated here: none on lavapipe, where every
+//! label, shadowed label and z bit is identical on every case below; on a GPU, a boundary
+//! between two surfaces may move by a fraction of a pixel (`assert_same_images`). (Both skip a
+//! solid's triangles facing away, the graphics pipeline judging by the snapped corners, the
+//! compute rasterizer by the normal: they could disagree only on a triangle seen almost
+//! edge-on. And the graphics pipeline clips a triangle reaching past its viewport, 8,192
+//! pixels from the view's centre on lavapipe, and snaps the clipper's corners anew, which the
+//! compute rasterizer does not: see `triangles_crossing_the_views_edge_…`.)
 
 mod common;
 
+use common::compare::near_label_change;
 use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::effects::{Effects, Reason};
 use rangesynth::mesh::{builtin_mesh, Mesh, Solidity};
 use rangesynth::render::Raster;
 use rangesynth::scene::{Scene, SceneObject};
+use rangesynth::sensor::MAX_IMAGE_SIDE;
 use rangesynth::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, SensedImage, Verifier, VerifySettings};
 use rangesynth::RenderOutput;
@@ -91,11 +94,7 @@ fn both_rasterizers_render_identical_images_of_one_object() {
                 assert_eq!(graphics.raster, Raster::Graphics);
                 assert_eq!(compute.raster, Raster::Compute, "{name}");
                 assert!(graphics.label_unshadowed.iter().any(|&l| l != 0), "{name}: in view");
-                let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
-                assert_eq!(differ(&compute.label_unshadowed, &graphics.label_unshadowed), 0, "{name}: labels");
-                assert_eq!(differ(&compute.label, &graphics.label), 0, "{name}: shadowed labels");
-                let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-                assert_eq!(differ(&bits(&compute.z), &bits(&graphics.z)), 0, "{name}: z");
+                assert_same_images(&name, &graphics, &compute);
             }
         }
     }
@@ -141,7 +140,15 @@ fn views_too_large_for_their_visibility_words_stay_on_the_graphics_path() {
     // buffer: 4,097² on lavapipe (128 MiB).
     let side = ((range / 8) as f64).sqrt().floor() as u32 + 1;
     let s = centred_sensor(side, side, 1.2 / f64::from(side), [0.0, 0.0], 45.0);
-    let out = render_compute(&scene(s, ShadowMode::Label, &[("builtin:sphere:64", DMat4::IDENTITY)]));
+    let sc = scene(s, ShadowMode::Label, &[("builtin:sphere:64", DMat4::IDENTITY)]);
+    if side > MAX_IMAGE_SIDE {
+        // A device binding 4 GiB (NVIDIA's: 23,171²): no image the renderer accepts is so
+        // large, and the refusal says so before any rasterizer is chosen.
+        let e = COMPUTE.renderer().render(&sc).expect_err("beyond the largest image").to_string();
+        assert!(e.contains(&format!("sides are limited to {MAX_IMAGE_SIDE}")), "{e}");
+        return;
+    }
+    let out = render_compute(&sc);
     assert_eq!(out.raster, Raster::Graphics);
     assert!(out.label.iter().any(|&l| l != 0), "in view");
 }
@@ -181,11 +188,7 @@ fn both_rasterizers_render_identical_images_of_several_objects() {
                 let seen = graphics.label_unshadowed.iter().any(|label| own.contains(label));
                 assert!(seen, "{name}: {} in view", object.model_ref);
             }
-            let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
-            assert_eq!(differ(&compute.label_unshadowed, &graphics.label_unshadowed), 0, "{name}: labels");
-            assert_eq!(differ(&compute.label, &graphics.label), 0, "{name}: shadowed labels");
-            let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-            assert_eq!(differ(&bits(&compute.z), &bits(&graphics.z)), 0, "{name}: z");
+            assert_same_images(&name, &graphics, &compute);
         }
     }
     let five = [("builtin:box", DMat4::IDENTITY); 5];
@@ -451,4 +454,58 @@ fn a_solid_wound_inward_renders_as_the_graphics_pipeline_renders_it() {
     assert!(compute.label == graphics.label, "shadowed labels");
     let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert!(bits(&compute.z) == bits(&graphics.z), "z");
+}
+
+/// Asserts that the graphics pipeline's and the compute rasterizer's renders of one scene are
+/// the same images. On lavapipe, every label, shadowed label and z bit. A GPU's rasterizer
+/// may work a triangle's depth out from its snapped corners (NVIDIA's does), where the
+/// compute rasterizer takes the unsnapped plane: where two surfaces lie within that rounding
+/// of each other in depth (the depth change over 1/512 pixel), each may keep another. So on a GPU a label or shadowed label may
+/// differ within one pixel of a change of label in either render (a boundary moved by a
+/// fraction of a pixel), at most one pixel in 1,000 of the view, and z only where the label
+/// differs. (On an NVIDIA H200, 2026-11-26: one pixel, in all this suite's renders.)
+fn assert_same_images(name: &str, graphics: &RenderOutput, compute: &RenderOutput) {
+    describe_differences(name, graphics, compute);
+    let (w, h) = (graphics.width() as usize, graphics.height() as usize);
+    let exact = COMPUTE.renderer().context().is_cpu();
+    let differ = |a: &[u32], b: &[u32]| (0..w * h).filter(|&i| a[i] != b[i]).collect::<Vec<_>>();
+    for (what, g, c) in [
+        ("labels", &graphics.label_unshadowed, &compute.label_unshadowed),
+        ("shadowed labels", &graphics.label, &compute.label),
+    ] {
+        let at = differ(g, c);
+        if exact {
+            assert_eq!(at.len(), 0, "{name}: {what}");
+            continue;
+        }
+        let (near_g, near_c) = (near_label_change(g, w, h), near_label_change(c, w, h));
+        assert!(at.iter().all(|&i| near_g[i] || near_c[i]), "{name}: {what} differ away from a change of label");
+        assert!(at.len() * 1000 <= w * h, "{name}: {what}: {} pixels differ", at.len());
+    }
+    let z_bits = |out: &RenderOutput| out.z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let labels_differ = differ(&graphics.label_unshadowed, &compute.label_unshadowed);
+    let z_differ = differ(&z_bits(graphics), &z_bits(compute));
+    assert!(z_differ.iter().all(|i| labels_differ.contains(i)), "{name}: z differs where the labels do not");
+    assert!(exact || z_differ.len() * 1000 <= w * h, "{name}: z: {} pixels differ", z_differ.len());
+}
+
+/// Prints where two renders of one scene differ (at most 12 pixels): the graphics pipeline's
+/// label, shadowed label and z, then the compute rasterizer's, so that a failure on another
+/// device says where to look.
+fn describe_differences(name: &str, graphics: &RenderOutput, compute: &RenderOutput) {
+    let width = graphics.width() as usize;
+    let differs = |i: &usize| {
+        graphics.label_unshadowed[*i] != compute.label_unshadowed[*i]
+            || graphics.label[*i] != compute.label[*i]
+            || graphics.z[*i].to_bits() != compute.z[*i].to_bits()
+    };
+    let at: Vec<usize> = (0..graphics.label.len()).filter(differs).collect();
+    if at.is_empty() {
+        return;
+    }
+    eprintln!("{name}: {} pixels differ (col, row: label, shadowed, z graphics | compute):", at.len());
+    for &i in at.iter().take(12) {
+        let one = |out: &RenderOutput| format!("{} {} {:e}", out.label_unshadowed[i], out.label[i], out.z[i]);
+        eprintln!("  {}, {}: {} | {}", i % width, i / width, one(graphics), one(compute));
+    }
 }

@@ -3,14 +3,17 @@
 # registry (such as the device machine some sessions are lent: README, "Tests").
 #
 #   tools/device_kit.sh pack   here: builds the benchmark and the GPU test suites (release
-#                              profile) and downloads the Vulkan loader and the validation
-#                              layers as Debian packages, into target/device-kit
+#                              profile) and downloads the Vulkan loader, the validation
+#                              layers and libglvnd as Debian packages, into target/device-kit
 #   tools/device_kit.sh run    there, with target/device-kit carried: unpacks the packages the
 #                              machine lacks, runs the rasterizers' benchmark, then every suite
 #                              with the graphics pipeline and again with the compute
 #                              rasterizer, validation on, on the GPU; five files (the device,
 #                              the benchmark, a log a rasterizer, a summary) under $OUT (or
 #                              target/device-kit/out). Exits 0 when every suite passed.
+#   tools/device_kit.sh suite NAME [ARGS]
+#                              there: one suite (NAME as in `suites` below), with libtest's
+#                              filters and options, on the machine run readies.
 #
 # RANGESYNTH_EXPECT_DEVICE (default NVIDIA) is what the device's name must contain, and
 # DEVICE_KIT_BENCH_SECONDS (default 300) bounds the benchmark, so that the whole fits in one
@@ -19,6 +22,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 kit=target/device-kit
 suites=(conformance stability analytic compute_raster exact verify effects portability)
+# The Vulkan loader, the validation layers, and libglvnd: NVIDIA's Vulkan driver is
+# libGLX_nvidia.so.0, which needs libglvnd's dispatch library.
+debs=(libvulkan1 vulkan-validationlayers libglvnd0 libglx0 libgl1 libegl1 libopengl0 libgles2)
+# The library each package brings, by which run tells whether the machine has it.
+declare -A deb_library=(
+    [libvulkan1]=libvulkan.so.1 [libglvnd0]=libGLdispatch.so.0 [libglx0]=libGLX.so.0
+    [libgl1]=libGL.so.1 [libegl1]=libEGL.so.1 [libopengl0]=libOpenGL.so.0 [libgles2]=libGLESv2.so.2
+)
 
 pack() {
     tools/setup.sh
@@ -37,23 +48,25 @@ pack() {
         cp "$binary" "$kit/bin/$suite"
     done
     strip "$kit"/bin/*
-    (cd "$kit/debs" && { apt-get download libvulkan1 vulkan-validationlayers 2>/dev/null ||
-        { apt-get update -qq && apt-get download libvulkan1 vulkan-validationlayers; }; })
+    (cd "$kit/debs" && { apt-get download "${debs[@]}" 2>/dev/null ||
+        { apt-get update -qq && apt-get download "${debs[@]}"; }; })
     du -sh "$kit" >&2
 }
 
-run() {
+# Readies this machine for the kit's binaries: the packages it lacks, the NVIDIA driver's
+# manifest, the device expected.
+prepare() {
     if [ ! -d "$kit/bin" ]; then
         echo "no $kit here: run tools/device_kit.sh pack where rangesynth builds, and carry $kit" >&2
         exit 2
     fi
-    local out=${OUT:-$kit/out}
-    mkdir -p "$out"
-    rm -f "$out"/suites-*.log
-    # The loader and the layers from the kit, only where the machine lacks them.
-    if ! ldconfig -p | grep 'libvulkan\.so\.1 ' > /dev/null; then
-        dpkg -x "$kit"/debs/libvulkan1_*.deb /
-    fi
+    # The loader, libglvnd and the layers from the kit, only where the machine lacks them.
+    local deb
+    for deb in "${!deb_library[@]}"; do
+        if ! ldconfig -p | grep -F "${deb_library[$deb]} " > /dev/null; then
+            dpkg -x "$kit"/debs/"$deb"_*.deb /
+        fi
+    done
     if [ ! -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ]; then
         dpkg -x "$kit"/debs/vulkan-validationlayers_*.deb /
     fi
@@ -63,11 +76,22 @@ run() {
         export VK_DRIVER_FILES=$nvidia VK_ICD_FILENAMES=$nvidia # the second for older loaders
     fi
     export RANGESYNTH_EXPECT_DEVICE=${RANGESYNTH_EXPECT_DEVICE:-NVIDIA}
+}
+
+run() {
+    prepare
+    local out=${OUT:-$kit/out}
+    mkdir -p "$out"
+    rm -f "$out"/suites-*.log
     # What the kit's binaries, built elsewhere, meet here.
     {
         nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
         grep -h PRETTY_NAME /etc/os-release || true
         ldd --version | head -n 1 || true
+        ls /usr/local/nvidia/share/vulkan/icd.d /usr/share/vulkan/icd.d /etc/vulkan/icd.d || true
+        # The loader's account of the drivers it found and loaded, for one short test.
+        VK_LOADER_DEBUG=error,driver timeout 60 "$kit/bin/conformance" box_matches_the_reference 2>&1 |
+            grep -v '^$' | head -n 60 || true
     } > "$out/device.txt" 2>&1
     timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/bench_verify" --rasters > "$out/bench.log" 2>&1 ||
         echo "bench_verify: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$out/bench.log"
@@ -90,8 +114,14 @@ run() {
 case "${1:-}" in
     pack) pack ;;
     run) run ;;
+    suite)
+        # One suite, with the test filters and options given (RANGESYNTH_TEST_RASTER as set).
+        [ $# -ge 2 ] && [ -x "$kit/bin/$2" ] || { echo "usage: tools/device_kit.sh suite NAME [ARGS]" >&2; exit 2; }
+        prepare
+        exec "$kit/bin/$2" "${@:3}"
+        ;;
     *)
-        echo "usage: tools/device_kit.sh pack|run" >&2
+        echo "usage: tools/device_kit.sh pack|run|suite NAME [ARGS]" >&2
         exit 2
         ;;
 esac
