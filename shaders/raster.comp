@@ -50,12 +50,18 @@ layout(local_size_x = 64) in;
 #define MAX_MEMBERS 4
 
 // Each member's draw in each view, copied from the draw tables before the pass
-// (compute_raster.rs): draws[2m] the range view's of member m, draws[2m + 1] its shadow
-// view's (where it has none, whatever was there, read only to cull: it covers no pixels). A
+// (compute_raster.rs): draws[m] the range view's of member m, draws[MAX_MEMBERS + m] its
+// shadow view's (where it has none, whatever was there, read only to cull: it covers no
+// pixels; member_draw). A
 // uniform block, not a storage buffer: a software rasterizer loads a uniform block's value
 // once for all the invocations it runs together, a storage buffer's invocation by invocation
 // (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
 layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMBERS]; };
+
+// Member m's draw in view v (0: range, 1: shadow).
+DrawData member_draw(uint m, uint v) {
+    return draws[v * MAX_MEMBERS + m];
+}
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
 // src/render/compute_raster.rs.
@@ -278,7 +284,7 @@ void main() {
         uint entry = large[queued];
         uint v = entry >> VIEW_BIT, t = untagged(entry);
         uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & 3u;
-        DrawData d = draws[2u * member + v];
+        DrawData d = member_draw(member, v);
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
         Setup s = set_up(member, v, d, members[member], read_triangle(d, t, normal, third_z));
@@ -393,8 +399,8 @@ void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriang
 void main() {
     // A member a z slice of the workgroups.
     uint member = MEMBERS == 1u ? 0u : gl_WorkGroupID.z;
-    DrawData range_draw = draws[2u * member];
-    DrawData shadow_draw = draws[2u * member + 1u];
+    DrawData range_draw = member_draw(member, 0u);
+    DrawData shadow_draw = member_draw(member, 1u);
     Member constants = members[member];
     // Dispatched as up to 65,535 workgroups per row (src/render/compute_raster.rs). A software
     // rasterizer hands each of its threads a contiguous range of a dispatch's workgroups

@@ -11,7 +11,8 @@
 //! the rasterizers in turn (`fastest_in_turn`). Between them, the compute rasterizer covering
 //! one hypothesis a coverage dispatch against four (`Renderer::with_hypotheses_per_dispatch`),
 //! in runs of 4 slots and of 16 (`Verifier::with_slots`), one chunk in flight and two
-//! (`Verifier::with_chunks_in_flight`).
+//! (`Verifier::with_chunks_in_flight`), and under each model where a chunk's time goes: its
+//! wall time in runs of 16 with one chunk in flight, and the device's by stage.
 //! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
 //! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these four.
 //!
@@ -309,6 +310,12 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             Ok(verifier.with_slots(slots).with_chunks_in_flight(chunks))
         })
         .collect::<rangesynth::Result<_>>()?;
+    // The third configuration again, timing its stages on the device (which costs a little).
+    let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
+    let timed = Verifier::new(renderer.with_hypotheses_per_dispatch(COVERAGE_MEMBERS))?
+        .with_slots(16)
+        .with_chunks_in_flight(1)
+        .with_stage_times();
     // Chunks of 1,024 on a GPU; on a CPU device, fewer keep the run short.
     let chunk = match (quick, verifiers[0].renderer().context().is_cpu()) {
         (true, _) => 16,
@@ -348,11 +355,34 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             recording.push(format!("{:.1}", (context.recording_time() - before.1).as_secs_f64() * 1e6 / n));
         }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
+        let stages = chunk_stages(&timed, model_name, sensed, &settings, batch)?;
         let (barriers, recording) = (barriers[..3].join(" / "), recording.join(" / "));
         let [a, b, c, d] = [rates[0], rates[1], rates[2], rates[3]];
         println!("{name:<26} {a:>14.1} {b:>14.1} {c:>14.1} {d:>14.1} {barriers:>24} {recording:>26}");
+        let wall = chunk as f64 / c * 1e3;
+        println!("    {}×16×1, ms a chunk: {wall:.2} in all; the device's {stages}", COVERAGE_MEMBERS);
     }
     Ok(())
+}
+
+/// The device's time a chunk by stage (ms), for a verifier timing its stages, over one batch
+/// after one hypothesis to warm up: where a chunk's time goes, beside its wall time.
+fn chunk_stages(
+    verifier: &Verifier,
+    model_name: &str,
+    sensed: &SensedImage,
+    settings: &VerifySettings,
+    batch: usize,
+) -> anyhow::Result<String> {
+    let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
+    verifier.verify(sensed, settings, &hypotheses[..1], &mut |_| {})?;
+    verifier.take_stage_times();
+    verifier.verify(sensed, settings, &hypotheses, &mut |_| {})?;
+    let chunks = batch.div_ceil(settings.chunk_size) as f64;
+    let stages = verifier.take_stage_times();
+    let total: f64 = stages.iter().map(|(_, ms)| ms).sum::<f64>() / chunks;
+    let each: Vec<String> = stages.iter().map(|(name, ms)| format!("{name} {:.2}", ms / chunks)).collect();
+    Ok(format!("{total:.2} ({})", each.join(", ")))
 }
 
 /// Hypotheses per second of each verifier verifying its batch: the fastest of ROUNDS, the

@@ -89,8 +89,12 @@ pub enum Raster {
 /// filling a 256² image, 0.00018, 0.87–1.19× in label mode and 0.95–1.00× in depth mode
 /// (1.05–1.22× and 1.05–1.23× on 2026-11-24). Filling 512², 0.000046, it ran 0.70–0.80×
 /// (label) and 0.90–0.95× (depth) as fast (two runs of batches of 16, 2026-11-23). The two
-/// are even, within this machine's noise, between 0.00018 and 0.001. No other device has
-/// been measured yet; they use the same rule.
+/// are even, within this machine's noise, between 0.00018 and 0.001. On NVIDIA H100s and an
+/// H200 (four runs, 2026-11-26) the box ran 1.05–1.12× as fast, spheres of 0.015–0.3
+/// 0.65–1.06×, 0.70 1.01–1.15×, 1.3 1.16–1.35×, 3.1 2.04–2.22×, 32 9.97–10.73×, and the box
+/// filling 256² 1.72–2.09×. Graphics wins there only between 0.015 and 0.3, by up to a third
+/// at 0.015, and a rule in triangles per pixel alone cannot pick it there (the box, sparser,
+/// is faster with compute): every device keeps this rule for now.
 pub const COMPUTE_CROSSOVER: f64 = 0.0001;
 
 impl Raster {
@@ -605,8 +609,10 @@ impl CoverageGroup {
         cleared.extend([&buffers.large_args, &buffers.draws, &buffers.constants].map(|b| (b, Access::TransferWrite)));
         let entry = size_of::<DrawConstants>() as u64;
         let mut constants = [<MemberConstants as bytemuck::Zeroable>::zeroed(); COVERAGE_MEMBERS];
-        // Each view's draw the member has: draws[2m] its range view's, draws[2m + 1] its
-        // shadow view's.
+        // Each view's draw the member has: draws[m] its range view's, draws[COVERAGE_MEMBERS +
+        // m] its shadow view's, so that consecutive members' draws, consecutive in their
+        // tables too, come in one copy a view (merged below): each transfer command costs a
+        // GPU about a microsecond (NVIDIA H100: a run's set-up was 70 µs of its 16 hypotheses).
         let mut draw_copies: Vec<(&'s Buffer, vk::BufferCopy)> = Vec::new();
         for &(m, member) in &covered {
             let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);
@@ -625,15 +631,17 @@ impl CoverageGroup {
                 dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
                 place: if self.shared_words { m as u32 } else { 0 },
             };
-            for (slot, view) in (2 * m as u64..).zip(member.views.views()) {
+            for (slot, view) in [m, COVERAGE_MEMBERS + m].into_iter().zip(member.views.views()) {
                 let copy = vk::BufferCopy {
                     src_offset: u64::from(member.index) * entry,
-                    dst_offset: slot * entry,
+                    dst_offset: slot as u64 * entry,
                     size: entry,
                 };
                 draw_copies.push((view.draw_table, copy));
             }
         }
+        draw_copies.sort_by_key(|(_, copy)| copy.dst_offset);
+        let draw_copies = merged_copies(draw_copies, |a: &Buffer, b: &Buffer| std::ptr::eq(a, b));
         cleared.extend(draw_copies.iter().map(|&(table, _)| (table, Access::TransferRead)));
         let prepare = move |ctx: &GpuContext, cmd| {
             let d = &ctx.device;
@@ -695,6 +703,28 @@ impl CoverageGroup {
     }
 }
 
+/// `copies` (by destination) with each run of copies from one source (as `same_source` tells)
+/// that are contiguous at both ends made one.
+fn merged_copies<T: Copy>(
+    copies: Vec<(T, vk::BufferCopy)>,
+    same_source: impl Fn(T, T) -> bool,
+) -> Vec<(T, vk::BufferCopy)> {
+    let mut merged: Vec<(T, vk::BufferCopy)> = Vec::with_capacity(copies.len());
+    for (source, copy) in copies {
+        match merged.last_mut() {
+            Some((last_source, last))
+                if same_source(*last_source, source)
+                    && last.src_offset + last.size == copy.src_offset
+                    && last.dst_offset + last.size == copy.dst_offset =>
+            {
+                last.size += copy.size
+            }
+            _ => merged.push((source, copy)),
+        }
+    }
+    merged
+}
+
 impl CoverageRun {
     /// The buffers and bindings of run number `run`, of `slots` (one a member), with a queue
     /// of `large_bytes`.
@@ -743,5 +773,32 @@ impl CoverageRun {
         buffers.extend([&large, &large_args]);
         let set = StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))?;
         Ok(Self { large, large_args, draws, constants, set })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn copies_contiguous_at_both_ends_from_one_source_are_merged() {
+        let copy = |source: u32, src_offset: u64, dst_offset: u64| {
+            (source, vk::BufferCopy { src_offset, dst_offset, size: 128 })
+        };
+        // Members 0–2 of consecutive hypotheses (7, 8, 9) from one table, then one whose
+        // hypothesis is not the next (11), then the other table's entries for 0 and 1.
+        let copies = vec![copy(0, 896, 0), copy(0, 1024, 128), copy(0, 1152, 256), copy(0, 1408, 384)];
+        let mut all = copies.clone();
+        all.extend([copy(1, 896, 512), copy(1, 1024, 640)]);
+        let ends = |merged: Vec<(u32, vk::BufferCopy)>| {
+            merged.iter().map(|(s, c)| (*s, c.src_offset, c.dst_offset, c.size)).collect::<Vec<_>>()
+        };
+        assert_eq!(
+            ends(merged_copies(all, |a, b| a == b)),
+            [(0, 896, 0, 384), (0, 1408, 384, 128), (1, 896, 512, 256)]
+        );
+        // Contiguous at the source but not the destination, or from two sources: kept apart.
+        let apart = vec![copy(0, 0, 0), copy(0, 128, 256), copy(1, 256, 384)];
+        assert_eq!(ends(merged_copies(apart, |a, b| a == b)), [(0, 0, 0, 128), (0, 128, 256, 128), (1, 256, 384, 128)]);
     }
 }
