@@ -25,8 +25,8 @@
 // path keeps, among the fragments within the tie depth of the nearest (tie_depth, draw.glsl),
 // the last drawn. Here the first passes keep the nearest (depth, tagged triangle) as for one
 // draw; then the TIES variants cover every triangle again, the large ones from the queue the
-// first filled, and where a triangle's depth less its draw's tie depth is no more than the
-// nearest's, keep the larger tagged triangle with an atomicMax: the last drawn.
+// first filled, and where a triangle's depth less its tie depth (tie_depth, of its own
+// plane) is no more than the nearest's, keep the larger tagged triangle with an atomicMax: the last drawn.
 //
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
@@ -52,10 +52,9 @@ layout(local_size_x = 64) in;
 // Each member's draw in each view, copied from the draw tables before the pass
 // (compute_raster.rs): draws[m] the range view's of member m, draws[MAX_MEMBERS + m] its
 // shadow view's (where it has none, whatever was there, read only to cull: it covers no
-// pixels; member_draw). A
-// uniform block, not a storage buffer: a software rasterizer loads a uniform block's value
-// once for all the invocations it runs together, a storage buffer's invocation by invocation
-// (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
+// pixels; member_draw). A uniform block, not a storage buffer: a software rasterizer loads a
+// uniform block's value once for all the invocations it runs together, a storage buffer's
+// invocation by invocation (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
 layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMBERS]; };
 
 // Member m's draw in view v (0: range, 1: shadow).

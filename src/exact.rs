@@ -13,7 +13,8 @@
 //! however thin the surface, as in depth mode) or when any surface lies above p on the camera
 //! ray. Coincident faces follow the product's tie rule (README "the tie rule"): surfaces within
 //! [`TIE_RELATIVE`] of the scene's largest coordinate of the nearest are a tie, won by the
-//! lowest label, and they do not shadow each other. Rows are cast in parallel (rayon).
+//! lowest label, and they do not shadow each other (the GPU paths' allowance for depths
+//! worked out from snapped corners has no cause here). Rows are cast in parallel (rayon).
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;

@@ -7,7 +7,9 @@
 //! compute rasterizer by the normal: they could disagree only on a triangle seen almost
 //! edge-on. And the graphics pipeline clips a triangle reaching past its viewport, 8,192
 //! pixels from the view's centre on lavapipe, and snaps the clipper's corners anew, which the
-//! compute rasterizer does not: see `triangles_crossing_the_views_edge_…`.)
+//! compute rasterizer does not: see `triangles_crossing_the_views_edge_…`.) The other
+//! comparisons (effects, spikes, a solid wound inward) stay exact on every device: they passed
+//! so on NVIDIA's H100 and H200.
 
 mod common;
 
@@ -143,7 +145,8 @@ fn views_too_large_for_their_visibility_words_stay_on_the_graphics_path() {
     let sc = scene(s, ShadowMode::Label, &[("builtin:sphere:64", DMat4::IDENTITY)]);
     if side > MAX_IMAGE_SIDE {
         // A device binding 4 GiB (NVIDIA's: 23,171²): no image the renderer accepts is so
-        // large, and the refusal says so before any rasterizer is chosen.
+        // large, and the refusal says so before any rasterizer is chosen. The graphics path
+        // this test names is then never needed there.
         let e = COMPUTE.renderer().render(&sc).expect_err("beyond the largest image").to_string();
         assert!(e.contains(&format!("sides are limited to {MAX_IMAGE_SIDE}")), "{e}");
         return;
@@ -457,13 +460,14 @@ fn a_solid_wound_inward_renders_as_the_graphics_pipeline_renders_it() {
 }
 
 /// Asserts that the graphics pipeline's and the compute rasterizer's renders of one scene are
-/// the same images. On lavapipe, every label, shadowed label and z bit. A GPU's rasterizer
-/// may work a triangle's depth out from its snapped corners (NVIDIA's does), where the
-/// compute rasterizer takes the unsnapped plane: where two surfaces lie within that rounding
-/// of each other in depth (the depth change over 1/512 pixel), each may keep another. So on a GPU a label or shadowed label may
-/// differ within one pixel of a change of label in either render (a boundary moved by a
-/// fraction of a pixel), at most one pixel in 1,000 of the view, and z only where the label
-/// differs. (On an NVIDIA H200, 2026-11-26: one pixel, in all this suite's renders.)
+/// the same images. On lavapipe, every label, shadowed label and z bit. A GPU's rasterizer may
+/// work a triangle's depth out from its snapped corners (NVIDIA's does), where the compute
+/// rasterizer takes the unsnapped plane: where two surfaces lie within those roundings of each
+/// other in depth (up to the depth change over 1/256 pixel), each may keep another. So on a GPU
+/// a label or shadowed label may differ within one pixel of a change of label in either render
+/// (a boundary moved by a fraction of a pixel), at most one pixel in 1,000 of the view, and z
+/// only where the label differs. (On an NVIDIA H200, 2026-11-26: one pixel, in all this suite's
+/// renders.)
 fn assert_same_images(name: &str, graphics: &RenderOutput, compute: &RenderOutput) {
     describe_differences(name, graphics, compute);
     let (w, h) = (graphics.width() as usize, graphics.height() as usize);
@@ -482,11 +486,10 @@ fn assert_same_images(name: &str, graphics: &RenderOutput, compute: &RenderOutpu
         assert!(at.iter().all(|&i| near_g[i] || near_c[i]), "{name}: {what} differ away from a change of label");
         assert!(at.len() * 1000 <= w * h, "{name}: {what}: {} pixels differ", at.len());
     }
-    let z_bits = |out: &RenderOutput| out.z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-    let labels_differ = differ(&graphics.label_unshadowed, &compute.label_unshadowed);
-    let z_differ = differ(&z_bits(graphics), &z_bits(compute));
-    assert!(z_differ.iter().all(|i| labels_differ.contains(i)), "{name}: z differs where the labels do not");
-    assert!(exact || z_differ.len() * 1000 <= w * h, "{name}: z: {} pixels differ", z_differ.len());
+    let z_differs_alone = (0..w * h).any(|i| {
+        graphics.z[i].to_bits() != compute.z[i].to_bits() && graphics.label_unshadowed[i] == compute.label_unshadowed[i]
+    });
+    assert!(!z_differs_alone, "{name}: z differs where the labels do not");
 }
 
 /// Prints where two renders of one scene differ (at most 12 pixels): the graphics pipeline's

@@ -231,11 +231,11 @@ fn coincident_faces_go_to_the_lower_label_in_any_order_and_cast_no_shadow() {
 }
 
 /// Two steep plates (75° from the view) in one plane but for the first's lying behind the
-/// second by the depth change over half a snapping step (1/512 pixel): what a GPU that works
-/// a triangle's depth out from its snapped corners (NVIDIA's) may part coincident faces by.
-/// That is a tie, which the lower label (the plate listed first) must win wherever both
-/// cover a pixel, as it wins for faces coincident up to their poses' rounding. With the tie
-/// tolerance of the view's scale alone (2^-17 of it; here 60 times less than the parting) the
+/// second by the depth change over half a snapping step (1/512 pixel): what a GPU that works a
+/// triangle's depth out from its snapped corners (NVIDIA's) may part coincident faces by. That
+/// is a tie, which the lower label (the plate listed first) must win wherever both cover a
+/// pixel, as it wins for faces coincident up to their poses' rounding. With the tie tolerance
+/// of the view's scale alone (2^-17 of it; here about 20 times less than the parting) the
 /// nearer plate won the whole overlap, and on an NVIDIA H200 366 pixels of two leaning boxes'
 /// coincident tops went to the higher label.
 #[test]
@@ -264,6 +264,31 @@ fn faces_parted_by_less_than_a_snapping_steps_depth_are_a_tie() {
         }
     }
     assert!(overlap > 500 && second_alone > 500, "both plates in view: {overlap} shared, {second_alone} the second's");
+}
+
+/// A plate seen almost edge-on (89.95° from the view: a sliver 0.07 pixel wide that covers
+/// one column of pixel centres) wholly behind a flat plate, and listed first (the lower
+/// label). Where the sliver covers a centre it lies 0.038 behind the flat plate, within the
+/// depth change over 1/128 pixel of its own plane (0.045), which the tie tolerance allowed
+/// before it counted a slope no steeper than 89°'s (0.0022): the sliver then won its column
+/// through the plate in front of it.
+#[test]
+fn a_face_seen_almost_edge_on_does_not_tie_through_a_surface_in_front() {
+    let pitch = 0.005;
+    let steep = 89.95f64.to_radians();
+    let half_width = 0.2 * steep.cos(); // of the sliver, in x
+    let (x_centre, gap) = (0.0025, 0.005); // a pixel centre's x (column 48); the plates' gap
+                                           // The sliver covers x_centre 1.5 snapping steps inside its edge of greatest z, where its
+                                           // z is 1146 × 2.9e-5 below that edge's, −gap.
+    let inside = 2.9e-5;
+    let sliver = DMat4::from_translation(DVec3::new(x_centre + half_width - inside, 0.0, -0.2 - gap))
+        * DMat4::from_rotation_y(steep);
+    let s = centred_sensor(96, 96, pitch, [0.0, 0.0], 30.0);
+    let sc = scene(s, ShadowMode::None, &[("builtin:plane:0.4", sliver), ("builtin:plane:0.4", DMat4::IDENTITY)]);
+    let out = render(&sc);
+    let labels = |label: u32| out.label_unshadowed.iter().filter(|&&l| l == label).count();
+    assert_eq!(labels(1), 0, "the sliver behind the plate shows through it");
+    assert!(labels(2) > 5000, "the plate in view: {} pixels", labels(2));
 }
 
 /// A plate seen exactly edge-on by the camera (its plane holds d_cam) above a table: its own

@@ -25,7 +25,7 @@ suites=(conformance stability analytic compute_raster exact verify effects porta
 # The Vulkan loader, the validation layers, and libglvnd: NVIDIA's Vulkan driver is
 # libGLX_nvidia.so.0, which needs libglvnd's dispatch library.
 debs=(libvulkan1 vulkan-validationlayers libglvnd0 libglx0 libgl1 libegl1 libopengl0 libgles2)
-# The library each package brings, by which run tells whether the machine has it.
+# The library each package brings, by which prepare tells whether the machine has it.
 declare -A deb_library=(
     [libvulkan1]=libvulkan.so.1 [libglvnd0]=libGLdispatch.so.0 [libglx0]=libGLX.so.0
     [libgl1]=libGL.so.1 [libegl1]=libEGL.so.1 [libopengl0]=libOpenGL.so.0 [libgles2]=libGLESv2.so.2
@@ -63,7 +63,7 @@ prepare() {
     # The loader, libglvnd and the layers from the kit, only where the machine lacks them.
     local deb
     for deb in "${!deb_library[@]}"; do
-        if ! ldconfig -p | grep -F "${deb_library[$deb]} " > /dev/null; then
+        if ! ldconfig -p | grep -F "${deb_library[$deb]} (libc6,x86-64)" > /dev/null; then
             dpkg -x "$kit"/debs/"$deb"_*.deb /
         fi
     done
@@ -116,8 +116,8 @@ case "${1:-}" in
     run) run ;;
     suite)
         # One suite, with the test filters and options given (RANGESYNTH_TEST_RASTER as set).
-        [ $# -ge 2 ] && [ -x "$kit/bin/$2" ] || { echo "usage: tools/device_kit.sh suite NAME [ARGS]" >&2; exit 2; }
         prepare
+        [ $# -ge 2 ] && [ -x "$kit/bin/$2" ] || { echo "usage: tools/device_kit.sh suite NAME [ARGS]" >&2; exit 2; }
         exec "$kit/bin/$2" "${@:3}"
         ;;
     *)
