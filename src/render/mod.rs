@@ -293,12 +293,12 @@ impl Renderer {
 
     /// The compute rasterizer's coverage of `slots`, `members` a dispatch, for draws of up to
     /// `max_triangles` (compute_raster.rs).
-    pub(crate) fn coverage_group(
+    pub(crate) fn coverage_group<'a>(
         &self,
-        slots: &[&ComputeViews],
+        slots: &[&'a ComputeViews<'_>],
         members: usize,
         max_triangles: u32,
-    ) -> Result<CoverageGroup> {
+    ) -> Result<CoverageGroup<'a>> {
         CoverageGroup::new(&self.ctx, self.pipelines.compute_raster()?, slots, members, max_triangles)
     }
 
