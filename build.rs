@@ -14,7 +14,6 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("shadow_mask.comp", "shadow_mask_words.comp.spv", &["FROM_WORDS"]),
     ("raster.comp", "raster.comp.spv", &[]),
     ("raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
-    ("raster.comp", "raster_clear.comp.spv", &["CLEAR"]),
     ("raster.comp", "raster_ties.comp.spv", &["TIES"]),
     ("raster.comp", "raster_large_ties.comp.spv", &["LARGE_TRIANGLES", "TIES"]),
     ("raster_resolve.comp", "raster_resolve.comp.spv", &[]),

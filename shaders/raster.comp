@@ -266,47 +266,7 @@ void keep(uint t, Setup s, ivec2 pixel) {
 #endif
 }
 
-#ifdef CLEAR
-// Writes a word at `at` of member m's words in view v (not atomically: the set-up's own).
-void store_word(uint m, uint v, uint at, uint64_t word) {
-    if (v == 0u) {
-        switch (m) {
-            case 0u: range_words0.words[at] = word; break;
-            case 1u: range_words1.words[at] = word; break;
-            case 2u: range_words2.words[at] = word; break;
-            default: range_words3.words[at] = word; break;
-        }
-    } else {
-        switch (m) {
-            case 0u: shadow_words0.words[at] = word; break;
-            case 1u: shadow_words1.words[at] = word; break;
-            case 2u: shadow_words2.words[at] = word; break;
-            default: shadow_words3.words[at] = word; break;
-        }
-    }
-}
-
-// The words of each member's views that its coverage uses, (first word, words), view v of
-// member m at 2m + v (`CoverageGroup::steps` in compute_raster.rs): none where it covers none.
-layout(push_constant, std430) uniform Emptied {
-    uvec2 emptied[2 * MAX_MEMBERS];
-};
-
-// The coverage set-up (CLEAR): the words each member's coverage uses emptied (all ones), and
-// the large triangles' queue with them, in one dispatch, a z slice a member's view: on a GPU
-// each transfer command costs about a microsecond (NVIDIA H100), and this one replaces a fill
-// a member's view and an update. The workgroups of a slice share its words.
-void main() {
-    uint slice = gl_WorkGroupID.z, m = slice / 2u, v = slice % 2u;
-    if (slice == 0u && gl_GlobalInvocationID.x == 0u) {
-        large_args = uvec4(0u, 1u, 1u, 0u); // no workgroups, an empty queue: (x, y, z, length)
-    }
-    uvec2 words = emptied[slice];
-    for (uint i = gl_GlobalInvocationID.x; i < words.y; i += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
-        store_word(m, v, words.x + i, ~uint64_t(0));
-    }
-}
-#elif defined(LARGE_TRIANGLES)
+#ifdef LARGE_TRIANGLES
 // Tests the pixels of one row of the box, `e` the edge functions at its first, in 64 bits.
 void cover_row(uint t, Setup s, int row, i64vec3 e, i64vec3 right) {
     for (int col = s.first.x; col <= s.last.x; col++) {

@@ -12,7 +12,6 @@ pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/
 pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
 pub const RASTER_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.comp.spv"));
 pub const RASTER_LARGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large.comp.spv"));
-pub const RASTER_CLEAR_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_clear.comp.spv"));
 pub const RASTER_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_ties.comp.spv"));
 pub const RASTER_LARGE_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large_ties.comp.spv"));
 pub const RASTER_RESOLVE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve.comp.spv"));

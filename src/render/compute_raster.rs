@@ -225,19 +225,6 @@ const _: () = assert!(crate::mesh::MAX_LINKED_TRIANGLES <= 1 << 29 && COVERAGE_M
 /// compute rasterizer; Vulkan guarantees 4, the GPUs it targets bind thousands).
 pub const COVERAGE_STORAGE_BUFFERS: usize = 2 * COVERAGE_MEMBERS + 2;
 
-/// What every coverage pass binds: both uniform blocks (the members' draws, then their
-/// constants), each member's words in each view, the large-triangle queue and its dispatch
-/// arguments.
-const COVERAGE_SET: SetShape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
-
-/// The set-up's push constants (raster.comp, CLEAR): the words emptied in view v of member m,
-/// (first word, words), at 2m + v.
-type EmptiedWords = [[u32; 2]; 2 * COVERAGE_MEMBERS];
-
-/// Words an invocation of the set-up empties, about: a member's view gets as many workgroups
-/// as that makes, so that a software rasterizer runs few and a GPU enough.
-const EMPTIED_AN_INVOCATION: u64 = 64;
-
 /// The coverage passes' pipelines for dispatches of `members` jobs, or (`Ties`) the passes
 /// after them that decide the ties between draws sharing words.
 struct CoveragePipelines {
@@ -258,7 +245,9 @@ enum Coverage {
 
 impl CoveragePipelines {
     fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage) -> Result<Self> {
-        let shape = COVERAGE_SET;
+        // Both uniform blocks (the members' draws, then their constants), each member's words
+        // in each view, the large-triangle queue and its dispatch arguments.
+        let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
         // The coverage shader's specialization constants: MAX_GROUPS, the views it covers (the
         // large triangles' pass reads each queued triangle's view), how it deals its
         // workgroups, and whether a dispatch covers one job or up to COVERAGE_MEMBERS.
@@ -299,9 +288,6 @@ pub struct ComputeRasterPipelines {
     /// view's attachments whole, or only its z for a score pass.
     pub mask: MaskPipelines,
     pub mask_for_scoring: MaskPipelines,
-    /// The coverage set-up: the words a run's coverage uses emptied, and its queue
-    /// (shaders/raster.comp, CLEAR).
-    set_up: ComputePipeline,
 }
 
 impl ComputeRasterPipelines {
@@ -331,14 +317,6 @@ impl ComputeRasterPipelines {
             )?,
             mask: MaskPipelines::new(ctx, MaskVariant::Words)?,
             mask_for_scoring: MaskPipelines::new(ctx, MaskVariant::WordsForScoring)?,
-            set_up: ComputePipeline::new(
-                ctx,
-                COVERAGE_SET,
-                size_of::<EmptiedWords>(),
-                shaders::RASTER_CLEAR_COMP,
-                &[],
-                "compute raster coverage set-up",
-            )?,
         })
     }
 
@@ -509,14 +487,14 @@ pub(crate) struct CoverageMember<'v, 'a> {
 /// Or the coverage of one job's several draws (a view of several objects), its members,
 /// which share its words: the passes that keep the nearest, then the ties passes, which keep
 /// the one the graphics path's ties rule keeps ([`CoverageGroup::of_draws`]).
-pub(crate) struct CoverageGroup<'a> {
+pub(crate) struct CoverageGroup {
     members: usize,
-    runs: Vec<CoverageRun<'a>>,
+    runs: Vec<CoverageRun>,
     shared_words: bool,
 }
 
 /// What one run of slots' coverage dispatches use.
-struct CoverageRun<'a> {
+struct CoverageRun {
     /// The queue of large (triangle, member, view) entries, room for every triangle of every
     /// member in every view, and its indirect dispatch's (x, y, z), then its length.
     large: Buffer,
@@ -526,13 +504,9 @@ struct CoverageRun<'a> {
     draws: Buffer,
     constants: Buffer,
     set: StorageSet,
-    /// Every words buffer the set binds. As far as synchronization validation can tell, a
-    /// coverage pass may use any of them (its shaders pick a member's words by a branch), so
-    /// each pass declares them all, the words of slots it does not cover included.
-    bound_words: Vec<&'a Buffer>,
 }
 
-impl<'a> CoverageGroup<'a> {
+impl CoverageGroup {
     /// The coverage of `slots` (their words, in slot order), up to `members` slots a dispatch
     /// (1 to [`COVERAGE_MEMBERS`]; fewer where a queue of large triangles with room for every
     /// triangle of every member would be more than the device binds), rendering draws of no
@@ -540,7 +514,7 @@ impl<'a> CoverageGroup<'a> {
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
-        slots: &[&'a ComputeViews<'_>],
+        slots: &[&ComputeViews],
         members: usize,
         max_triangles: u32,
     ) -> Result<Self> {
@@ -567,7 +541,7 @@ impl<'a> CoverageGroup<'a> {
     pub fn of_draws(
         ctx: &Arc<GpuContext>,
         pipelines: &ComputeRasterPipelines,
-        views: &'a ComputeViews<'_>,
+        views: &ComputeViews,
         draws: usize,
         max_triangles: u32,
     ) -> Result<Self> {
@@ -617,44 +591,22 @@ impl<'a> CoverageGroup<'a> {
         // the whole view: a hypothesis costs its footprint, not the image. Nothing reads a
         // word beyond the area's rows, as nothing reads the attachments beyond the area that
         // the graphics pass clears (draw.rs).
-        let mut emptied: EmptiedWords = [[0; 2]; 2 * COVERAGE_MEMBERS];
-        let mut fills: Vec<(&'s Buffer, u64, u64)> = Vec::new();
+        let mut emptied: Vec<(&'s Buffer, u64, u64)> = Vec::new();
         // One job's draws share its words and areas: the first's are all of them.
         let emptying = if self.shared_words { &covered[..1] } else { &covered[..] };
-        for &(m, member) in emptying {
+        for (_, member) in emptying {
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
-            let views = std::iter::once((&member.views.range, member.range_area)).chain(shadow);
-            for (v, (view, area)) in views.enumerate() {
-                // Fewer than 2^32 words: the device binds a view's as one buffer.
-                emptied[2 * m + v] = [area.row * view.stride, area.height * view.stride];
-                let [first, words] = emptied[2 * m + v].map(|w| u64::from(w) * VISIBILITY_WORD_BYTES);
-                fills.push((&view.nearest, first, words));
+            for (view, area) in std::iter::once((&member.views.range, member.range_area)).chain(shadow) {
+                let row_bytes = u64::from(view.stride) * VISIBILITY_WORD_BYTES;
+                emptied.push((&view.nearest, u64::from(area.row) * row_bytes, u64::from(area.height) * row_bytes));
             }
         }
-        // The words are emptied in one dispatch (raster.comp, CLEAR) where it replaces more
-        // than one member's fills: on a GPU each transfer command costs about a microsecond
-        // (NVIDIA H100: 4.47 ms of a chunk of 1,024 hypotheses went to the set-ups' 18
-        // commands a dispatch). Else a fill a view: on lavapipe a fill is a memset, where the
-        // dispatch's invocations are far slower (box filling 256², label mode, 4 a dispatch:
-        // its set-up took 12.2 ms of a chunk of 16 against the fills' 1.8), and its default is
-        // one job a dispatch.
-        let one_dispatch = emptying.len() > 1;
-        let most_words = emptied.iter().map(|&[_, words]| u64::from(words)).max().unwrap_or(0);
-        let set_up_groups =
-            most_words.div_ceil(EMPTIED_AN_INVOCATION * u64::from(COVERAGE_GROUP)).clamp(1, u64::from(MAX_GROUPS));
-        // Slices up to the last member covered; the others' triangle counts are 0.
-        let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
-        let words_used = |access| buffers.bound_words.iter().map(move |&words| (words, access));
-        let mut cleared: Vec<_> = match one_dispatch {
-            true => words_used(Access::ComputeWrite).chain([(&buffers.large_args, Access::ComputeWrite)]).collect(),
-            false => fills
-                .iter()
-                .map(|&(words, ..)| words)
-                .chain([&buffers.large_args])
-                .map(|b| (b, Access::TransferWrite))
-                .collect(),
-        };
-        cleared.extend([&buffers.draws, &buffers.constants].map(|b| (b, Access::TransferWrite)));
+        let covered_words: Vec<&'s Buffer> = emptied.iter().map(|&(words, ..)| words).collect();
+        // Only the covered members' words are declared: the others bound beside them (a
+        // graphics job's slot, slots past a short run's end) are never touched, their members
+        // covering no triangles.
+        let mut cleared: Vec<_> = emptied.iter().map(|&(words, ..)| (words, Access::TransferWrite)).collect();
+        cleared.extend([&buffers.large_args, &buffers.draws, &buffers.constants].map(|b| (b, Access::TransferWrite)));
         let entry = size_of::<DrawConstants>() as u64;
         let mut constants = [<MemberConstants as bytemuck::Zeroable>::zeroed(); COVERAGE_MEMBERS];
         // Each view's draw the member has: draws[m] its range view's, draws[COVERAGE_MEMBERS +
@@ -692,24 +644,17 @@ impl<'a> CoverageGroup<'a> {
         draw_copies.sort_by_key(|(_, copy)| copy.dst_offset);
         let draw_copies = merged_copies(draw_copies, |a: &Buffer, b: &Buffer| std::ptr::eq(a, b));
         cleared.extend(draw_copies.iter().map(|&(table, _)| (table, Access::TransferRead)));
-        let set_up = &pipelines.set_up;
         let prepare = move |ctx: &GpuContext, cmd| {
             let d = &ctx.device;
-            if one_dispatch {
-                let groups = [set_up_groups as u32, 1];
-                buffers.set.dispatch_slices(cmd, set_up, bytemuck::cast_slice(&emptied), groups, 2 * slices);
-            }
             // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffers;
             // the rows lie within the views' words, and their bytes are a multiple of 4; the
             // copies and updates lie within the uniform blocks.
             unsafe {
-                if !one_dispatch {
-                    for (words, offset, size) in fills {
-                        d.cmd_fill_buffer(cmd, words.raw, offset, size, u32::MAX);
-                    }
-                    // No workgroups, an empty queue: (x, y, z, length).
-                    d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                for (words, offset, size) in emptied {
+                    d.cmd_fill_buffer(cmd, words.raw, offset, size, u32::MAX);
                 }
+                // No workgroups, an empty queue: (x, y, z, length).
+                d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
                 d.cmd_update_buffer(cmd, buffers.constants.raw, 0, bytemuck::cast_slice(&constants));
                 for (table, copy) in draw_copies {
                     d.cmd_copy_buffer(cmd, table.raw, buffers.draws.raw, &[copy]);
@@ -717,7 +662,7 @@ impl<'a> CoverageGroup<'a> {
             }
         };
         let uses = |queue: Access, args: Access| {
-            let mut uses: Vec<_> = words_used(Access::ComputeWrite).collect();
+            let mut uses: Vec<_> = covered_words.iter().map(|&words| (words, Access::ComputeWrite)).collect();
             uses.extend([(&buffers.large, queue), (&buffers.large_args, args)]);
             uses.extend([&buffers.draws, &buffers.constants].map(|b| (b, Access::UniformRead)));
             uses
@@ -726,6 +671,8 @@ impl<'a> CoverageGroup<'a> {
         let groups = triangles.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         let both = covered.iter().any(|(_, member)| member.shadow_area.is_some() && member.views.shadow.is_some());
+        // Slices up to the last member covered; the others' triangle counts are 0.
+        let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
         let passes = |pipelines: &'s CoveragePipelines| {
             let small = if both { &pipelines.both } else { &pipelines.range };
             let cover =
@@ -779,13 +726,13 @@ fn merged_copies<T: Copy>(
     merged
 }
 
-impl<'a> CoverageRun<'a> {
+impl CoverageRun {
     /// The buffers and bindings of run number `run`, of `slots` (one a member), with a queue
     /// of `large_bytes`.
     fn new(
         ctx: &Arc<GpuContext>,
         layout: vk::DescriptorSetLayout,
-        slots: &[&'a ComputeViews<'_>],
+        slots: &[&ComputeViews],
         large_bytes: u64,
         run: usize,
     ) -> Result<Self> {
@@ -815,25 +762,18 @@ impl<'a> CoverageRun<'a> {
         )?;
         // Each member's words in each view; where a member or a view is missing, the run's
         // first range view's, never written.
-        let member_words = |m: usize, shadow: bool| -> &'a Buffer {
-            let views: &'a ComputeViews = slots.get(m).unwrap_or(&slots[0]);
+        let member_words = |m: usize, shadow: bool| {
+            let views = slots.get(m).unwrap_or(&slots[0]);
             match (shadow, &views.shadow) {
                 (true, Some(words)) => &words.nearest,
                 _ => &views.range.nearest,
             }
         };
-        let mut bound_words: Vec<&'a Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
-        bound_words.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
-        let mut buffers = bound_words.clone();
+        let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
+        buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
         buffers.extend([&large, &large_args]);
         let set = StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))?;
-        let mut distinct: Vec<&'a Buffer> = Vec::new();
-        for words in bound_words {
-            if !distinct.iter().any(|&seen| std::ptr::eq(seen, words)) {
-                distinct.push(words);
-            }
-        }
-        Ok(Self { large, large_args, draws, constants, set, bound_words: distinct })
+        Ok(Self { large, large_args, draws, constants, set })
     }
 }
 

@@ -293,12 +293,12 @@ impl Renderer {
 
     /// The compute rasterizer's coverage of `slots`, `members` a dispatch, for draws of up to
     /// `max_triangles` (compute_raster.rs).
-    pub(crate) fn coverage_group<'a>(
+    pub(crate) fn coverage_group(
         &self,
-        slots: &[&'a ComputeViews<'_>],
+        slots: &[&ComputeViews],
         members: usize,
         max_triangles: u32,
-    ) -> Result<CoverageGroup<'a>> {
+    ) -> Result<CoverageGroup> {
         CoverageGroup::new(&self.ctx, self.pipelines.compute_raster()?, slots, members, max_triangles)
     }
 
