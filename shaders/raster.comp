@@ -26,7 +26,8 @@
 // the last drawn. Here the first passes keep the nearest (depth, tagged triangle) as for one
 // draw; then the TIES variants cover every triangle again, the large ones from the queue the
 // first filled, and where a triangle's depth less its tie depth (tie_depth, of its own
-// plane) is no more than the nearest's, keep the larger tagged triangle with an atomicMax: the last drawn.
+// plane) is no more than the nearest's, keep the larger tagged triangle with an atomicMax:
+// the last drawn.
 //
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half

@@ -12,8 +12,9 @@
 #                              the benchmark, a log a rasterizer, a summary) under $OUT (or
 #                              target/device-kit/out). Exits 0 when every suite passed.
 #   tools/device_kit.sh suite NAME [ARGS]
-#                              there: one suite (NAME as in `suites` below), with libtest's
-#                              filters and options, on the machine run readies.
+#                              there: one of the kit's binaries (a suite as in `suites` below,
+#                              with libtest's filters and options, or bench_verify), on the
+#                              machine run readies.
 #
 # RANGESYNTH_EXPECT_DEVICE (default NVIDIA) is what the device's name must contain, and
 # DEVICE_KIT_BENCH_SECONDS (default 300) bounds the benchmark, so that the whole fits in one
@@ -115,7 +116,7 @@ case "${1:-}" in
     pack) pack ;;
     run) run ;;
     suite)
-        # One suite, with the test filters and options given (RANGESYNTH_TEST_RASTER as set).
+        # One binary, with the test filters and options given (RANGESYNTH_TEST_RASTER as set).
         prepare
         [ $# -ge 2 ] && [ -x "$kit/bin/$2" ] || { echo "usage: tools/device_kit.sh suite NAME [ARGS]" >&2; exit 2; }
         exec "$kit/bin/$2" "${@:3}"
