@@ -83,9 +83,11 @@ vec2 depth_step(DrawData d, vec3 n) {
 //   pixel) each way, so two faces part by up to that over 1/256 pixel: TIE_SLOPE allows
 //   twice that. (With TIE_RELATIVE alone, 366 pixels of two leaning boxes' coincident tops
 //   went to the higher label on an NVIDIA H200.)
-// The slope counted is at most a face's at 89° from the view (TIE_STEEPEST, tan 89°), as θ is
-// (src/sensor.rs): a sliver of a face seen almost edge-on, whose slope has no bound, would
-// otherwise tie with, and so win through, any surface in front of it.
+// The slope counted is at most, in each axis, a face's at 89° from the view (TIE_STEEPEST, tan
+// 89°; θ has that limit too, src/sensor.rs): a sliver of a face seen almost edge-on, whose
+// slope has no bound, would otherwise tie with, and so win through, any surface in front of
+// it (a NaN slope, of a face seen exactly edge-on, counts as the cap). Coincident faces
+// steeper than that may go to the higher label where a GPU's depths come from snapped corners.
 float tie_depth(DrawData d, vec2 step) {
     const float TIE_RELATIVE = 1.0 / 131072.0; // 2^-17, about 64 ulps
     const float TIE_SLOPE = 1.0 / 128.0;
@@ -94,7 +96,8 @@ float tie_depth(DrawData d, vec2 step) {
     vec2 far_corner = d.grid.xy + vec2(1.0, -1.0) * (d.size - 1.0) * d.grid.zw;
     vec2 xy = max(abs(d.grid.xy), abs(far_corner));
     float scale = max(max(xy.x, xy.y), max(abs(d.z_range.x), abs(d.z_range.y)));
-    precise vec2 slope = min(abs(step), TIE_STEEPEST * d.grid.zw / span);
+    precise vec2 steepest = TIE_STEEPEST * d.grid.zw / span;
+    vec2 slope = mix(steepest, abs(step), lessThan(abs(step), steepest));
     precise float tie = TIE_RELATIVE * scale / span + TIE_SLOPE * (slope.x + slope.y);
     return tie;
 }

@@ -277,18 +277,25 @@ fn a_face_seen_almost_edge_on_does_not_tie_through_a_surface_in_front() {
     let pitch = 0.005;
     let steep = 89.95f64.to_radians();
     let half_width = 0.2 * steep.cos(); // of the sliver, in x
-    let (x_centre, gap) = (0.0025, 0.005); // a pixel centre's x (column 48); the plates' gap
-                                           // The sliver covers x_centre 1.5 snapping steps inside its edge of greatest z, where its
-                                           // z is 1146 × 2.9e-5 below that edge's, −gap.
+                                        // A pixel centre's x (column 48), and the plates' gap.
+    let (x_centre, gap) = (0.0025, 0.005);
+    // The sliver covers x_centre 1.5 snapping steps inside its edge of greatest z, where its
+    // z is 1146 × 2.9e-5 below that edge's, −gap.
     let inside = 2.9e-5;
     let sliver = DMat4::from_translation(DVec3::new(x_centre + half_width - inside, 0.0, -0.2 - gap))
         * DMat4::from_rotation_y(steep);
     let s = centred_sensor(96, 96, pitch, [0.0, 0.0], 30.0);
-    let sc = scene(s, ShadowMode::None, &[("builtin:plane:0.4", sliver), ("builtin:plane:0.4", DMat4::IDENTITY)]);
-    let out = render(&sc);
-    let labels = |label: u32| out.label_unshadowed.iter().filter(|&&l| l == label).count();
-    assert_eq!(labels(1), 0, "the sliver behind the plate shows through it");
-    assert!(labels(2) > 5000, "the plate in view: {} pixels", labels(2));
+    let labelled = |objects: &[(&str, DMat4)], label: u32| {
+        let out = render(&scene(s, ShadowMode::None, objects));
+        (0..out.label_unshadowed.len()).filter(|&i| out.label_unshadowed[i] == label).collect::<Vec<_>>()
+    };
+    // Alone, the sliver shows in column 48, a pixel a row of the plate's 80.
+    let alone = labelled(&[("builtin:plane:0.4", sliver)], 1);
+    assert_eq!(alone.len(), 80, "the sliver alone");
+    assert!(alone.iter().all(|i| i % 96 == 48), "the sliver alone, in column 48");
+    let both = [("builtin:plane:0.4", sliver), ("builtin:plane:0.4", DMat4::IDENTITY)];
+    assert_eq!(labelled(&both, 1).len(), 0, "the sliver behind the plate shows through it");
+    assert!(labelled(&both, 2).len() > 5000, "the plate in view");
 }
 
 /// A plate seen exactly edge-on by the camera (its plane holds d_cam) above a table: its own

@@ -64,7 +64,7 @@ prepare() {
     # The loader, libglvnd and the layers from the kit, only where the machine lacks them.
     local deb
     for deb in "${!deb_library[@]}"; do
-        if ! ldconfig -p | grep -F "${deb_library[$deb]} (libc6,x86-64)" > /dev/null; then
+        if ! ldconfig -p | grep -F "${deb_library[$deb]} (libc6,x86-64" > /dev/null; then
             dpkg -x "$kit"/debs/"$deb"_*.deb /
         fi
     done

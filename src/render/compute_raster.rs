@@ -90,10 +90,10 @@ pub enum Raster {
 /// (1.05–1.22× and 1.05–1.23× on 2026-11-24). Filling 512², 0.000046, it ran 0.70–0.80×
 /// (label) and 0.90–0.95× (depth) as fast (two runs of batches of 16, 2026-11-23). The two
 /// are even, within this machine's noise, between 0.00018 and 0.001. On NVIDIA H100s and an
-/// H200 (four runs, 2026-11-26) the box ran 0.94–1.12× as fast, spheres of 0.015–0.3
-/// 0.65–1.06×, 0.70 1.01–1.15×, 1.3 1.16–1.35×, 3.1 2.04–2.22×, 32 9.97–10.73×, and the box
-/// filling 256² 1.72–2.09×. Graphics wins there between 0.015 and 0.3, by up to a third at
-/// 0.015, while the sparser box is no slower with compute in three runs of four: a rule in
+/// H200 (six runs, 2026-11-26) the box ran 0.94–1.16× as fast, spheres of 0.015–0.3
+/// 0.65–1.07×, 0.70 1.01–1.45×, 1.3 1.16–1.44×, 3.1 2.04–2.27×, 32 9.78–11.63×, and the box
+/// filling 256² 1.72–2.14×. Graphics wins there between 0.015 and 0.3, by up to a third at
+/// 0.015, while the sparser box is no slower with compute in four runs of six: a rule in
 /// triangles per pixel alone does not separate them, and every device keeps this one for now.
 pub const COMPUTE_CROSSOVER: f64 = 0.0001;
 
