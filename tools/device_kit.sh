@@ -4,12 +4,15 @@
 #
 #   tools/device_kit.sh pack   here: builds the benchmark and the GPU test suites (release
 #                              profile) and downloads the Vulkan loader, the validation
-#                              layers and libglvnd as Debian packages, into target/device-kit
+#                              layers and libglvnd as Debian packages, into target/device-kit;
+#                              with DEVICE_KIT_BASELINE=REV, the benchmark at REV too
+#                              (bench_verify_baseline), for an A/B on one machine
 #   tools/device_kit.sh run    there, with target/device-kit carried: unpacks the packages the
 #                              machine lacks, runs the rasterizers' benchmark, then every suite
 #                              with the graphics pipeline and again with the compute
 #                              rasterizer, validation on, on the GPU; five files (the device,
-#                              the benchmark, a log a rasterizer, a summary) under $OUT (or
+#                              the benchmark, a log a rasterizer, a summary; with a baseline,
+#                              its benchmark's log too, bench-baseline.log) under $OUT (or
 #                              target/device-kit/out). Exits 0 when every suite passed.
 #   tools/device_kit.sh suite NAME [ARGS]
 #                              there: one of the kit's binaries (a suite as in `suites` below,
@@ -48,10 +51,27 @@ pack() {
         [ -x "$binary" ] || { echo "no test binary for $suite in cargo's output" >&2; exit 1; }
         cp "$binary" "$kit/bin/$suite"
     done
+    if [ -n "${DEVICE_KIT_BASELINE:-}" ]; then
+        pack_baseline "$DEVICE_KIT_BASELINE"
+    fi
     strip "$kit"/bin/*
     (cd "$kit/debs" && { apt-get download "${debs[@]}" 2>/dev/null ||
         { apt-get update -qq && apt-get download "${debs[@]}"; }; })
     du -sh "$kit" >&2
+}
+
+# The benchmark as built at git revision $1, as the kit's bench_verify_baseline: `run` then
+# times the two in turn, on one machine (a device machine is fresh at every start, and one
+# build's figures moved by a seventh from run to run on one H100). Built in a worktree of its
+# own, into target/baseline-build.
+pack_baseline() {
+    local tree
+    tree=$(mktemp -d)
+    git worktree add --detach "$tree" "$1" >&2
+    cargo build --release --locked --example bench_verify --manifest-path "$tree/Cargo.toml" \
+        --target-dir target/baseline-build
+    git worktree remove --force "$tree"
+    cp target/baseline-build/release/examples/bench_verify "$kit/bin/bench_verify_baseline"
 }
 
 # Readies this machine for the kit's binaries: the packages it lacks, the NVIDIA driver's
@@ -83,7 +103,7 @@ run() {
     prepare
     local out=${OUT:-$kit/out}
     mkdir -p "$out"
-    rm -f "$out"/suites-*.log
+    rm -f "$out"/suites-*.log "$out"/bench*.log
     # What the kit's binaries, built elsewhere, meet here.
     {
         nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
@@ -94,8 +114,20 @@ run() {
         VK_LOADER_DEBUG=error,driver timeout 60 "$kit/bin/conformance" box_matches_the_reference 2>&1 |
             grep -v '^$' | head -n 60 || true
     } > "$out/device.txt" 2>&1
-    timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/bench_verify" --rasters > "$out/bench.log" 2>&1 ||
-        echo "bench_verify: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$out/bench.log"
+    # The benchmark, or where the kit has a baseline, the baseline and the benchmark in turn,
+    # twice: each run at most DEVICE_KIT_BENCH_SECONDS.
+    local bench rounds=1
+    [ ! -x "$kit/bin/bench_verify_baseline" ] || rounds=2
+    for round in $(seq "$rounds"); do
+        for bench in bench_verify_baseline bench_verify; do
+            [ -x "$kit/bin/$bench" ] || continue
+            local log=$out/bench.log
+            [ "$bench" = bench_verify ] || log=$out/bench-baseline.log
+            echo "=== $bench, round $round" >> "$log"
+            timeout "${DEVICE_KIT_BENCH_SECONDS:-300}" "$kit/bin/$bench" --rasters >> "$log" 2>&1 ||
+                echo "$bench: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$log"
+        done
+    done
     # Much as tools/test.sh runs them: every suite with the graphics pipeline, then all but
     # compute_raster (which compares the two itself) with the compute rasterizer, which on a
     # GPU covers four hypotheses a dispatch, in runs of 16 slots, two chunks in flight. One log
