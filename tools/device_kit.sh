@@ -20,8 +20,9 @@
 #                              machine run readies.
 #
 # RANGESYNTH_EXPECT_DEVICE (default NVIDIA) is what the device's name must contain, and
-# DEVICE_KIT_BENCH_SECONDS (default 300) bounds the benchmark, so that the whole fits in one
-# command of the device tool (10 minutes).
+# DEVICE_KIT_BENCH_SECONDS (default 300) bounds each run of a benchmark, so that the whole
+# fits in one command of the device tool (10 minutes; with a baseline there are four runs: on
+# an H100 each took about 15 s).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kit=target/device-kit
