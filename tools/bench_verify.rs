@@ -229,7 +229,7 @@ fn centred_hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>) -> (DMa
 }
 
 /// A verifier's GPU time by stage (`Verifier::with_stage_times`), ms a hypothesis, over one
-/// batch of 16 of the model about the image's centre, after one to warm up.
+/// batch of 16 of the model about the image's centre.
 fn stage_breakdown(
     verifier: &Verifier,
     model_name: &str,
@@ -237,12 +237,28 @@ fn stage_breakdown(
     settings: &VerifySettings,
 ) -> anyhow::Result<String> {
     let (_, hypotheses) = centred_hypotheses(&verifier.model(model_name, Path::new("."))?);
+    let stages = stage_times(verifier, sensed, settings, &hypotheses, 16.0)?;
+    Ok(format!("{} stages: {}", verifier.renderer().raster().as_str(), listed(&stages)))
+}
+
+/// Stage times as `name ms, name ms, …`.
+fn listed(stages: &[(&str, f64)]) -> String {
+    stages.iter().map(|(name, ms)| format!("{name} {ms:.2}")).collect::<Vec<_>>().join(", ")
+}
+
+/// A verifier's GPU time by stage (`Verifier::with_stage_times`), ms, over one verification of
+/// `hypotheses` after one hypothesis to warm up, divided by `per` (hypotheses, or chunks).
+fn stage_times(
+    verifier: &Verifier,
+    sensed: &SensedImage,
+    settings: &VerifySettings,
+    hypotheses: &[Hypothesis],
+    per: f64,
+) -> anyhow::Result<Vec<(&'static str, f64)>> {
     verifier.verify(sensed, settings, &hypotheses[..1], &mut |_| {})?;
     verifier.take_stage_times();
-    verifier.verify(sensed, settings, &hypotheses, &mut |_| {})?;
-    let stages: Vec<String> =
-        verifier.take_stage_times().iter().map(|(name, ms)| format!("{name} {:.2}", ms / 16.0)).collect();
-    Ok(format!("{} stages: {}", verifier.renderer().raster().as_str(), stages.join(", ")))
+    verifier.verify(sensed, settings, hypotheses, &mut |_| {})?;
+    Ok(verifier.take_stage_times().into_iter().map(|(name, ms)| (name, ms / per)).collect())
 }
 
 /// Hypotheses per second with each rasterizer, depth-mode shadows, batches of 64.
@@ -302,20 +318,15 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
     // (hypotheses a coverage dispatch, slots, chunks in flight): lavapipe's defaults, then
     // the GPU's with runs of four, then sixteen, then two chunks in flight.
     let configurations = [(1, 4, 1), (COVERAGE_MEMBERS, 4, 1), (COVERAGE_MEMBERS, 16, 1), (COVERAGE_MEMBERS, 16, 2)];
-    let verifiers: Vec<Verifier> = configurations
-        .iter()
-        .map(|&(members, slots, chunks)| {
-            let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
-            let verifier = Verifier::new(renderer.with_hypotheses_per_dispatch(members))?;
-            Ok(verifier.with_slots(slots).with_chunks_in_flight(chunks))
-        })
-        .collect::<rangesynth::Result<_>>()?;
+    let configured = |(members, slots, chunks): (usize, usize, usize)| -> rangesynth::Result<Verifier> {
+        let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
+        let verifier = Verifier::new(renderer.with_hypotheses_per_dispatch(members))?;
+        Ok(verifier.with_slots(slots).with_chunks_in_flight(chunks))
+    };
+    let verifiers: Vec<Verifier> = configurations.into_iter().map(configured).collect::<rangesynth::Result<_>>()?;
     // The third configuration again, timing its stages on the device (which costs a little).
-    let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
-    let timed = Verifier::new(renderer.with_hypotheses_per_dispatch(COVERAGE_MEMBERS))?
-        .with_slots(16)
-        .with_chunks_in_flight(1)
-        .with_stage_times();
+    let (members, slots, chunks) = configurations[2];
+    let timed = configured(configurations[2])?.with_stage_times();
     // Chunks of 1,024 on a GPU; on a CPU device, fewer keep the run short.
     let chunk = match (quick, verifiers[0].renderer().context().is_cpu()) {
         (true, _) => 16,
@@ -355,34 +366,20 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             recording.push(format!("{:.1}", (context.recording_time() - before.1).as_secs_f64() * 1e6 / n));
         }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
-        let stages = chunk_stages(&timed, model_name, sensed, &settings, batch)?;
+        // Its own model: a verifier's meshes live on its own device.
+        let timed_batch = hypotheses(&timed.model(model_name, Path::new("."))?, batch);
+        let stages = stage_times(&timed, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
+        let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
         let (barriers, recording) = (barriers[..3].join(" / "), recording.join(" / "));
         let [a, b, c, d] = [rates[0], rates[1], rates[2], rates[3]];
         println!("{name:<26} {a:>14.1} {b:>14.1} {c:>14.1} {d:>14.1} {barriers:>24} {recording:>26}");
         let wall = chunk as f64 / c * 1e3;
-        println!("    {}×16×1, ms a chunk: {wall:.2} in all; the device's {stages}", COVERAGE_MEMBERS);
+        println!(
+            "    {members}×{slots}×{chunks}, ms a chunk: {wall:.2} in all; the device's {total:.2} ({})",
+            listed(&stages)
+        );
     }
     Ok(())
-}
-
-/// The device's time a chunk by stage (ms), for a verifier timing its stages, over one batch
-/// after one hypothesis to warm up: where a chunk's time goes, beside its wall time.
-fn chunk_stages(
-    verifier: &Verifier,
-    model_name: &str,
-    sensed: &SensedImage,
-    settings: &VerifySettings,
-    batch: usize,
-) -> anyhow::Result<String> {
-    let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
-    verifier.verify(sensed, settings, &hypotheses[..1], &mut |_| {})?;
-    verifier.take_stage_times();
-    verifier.verify(sensed, settings, &hypotheses, &mut |_| {})?;
-    let chunks = batch.div_ceil(settings.chunk_size) as f64;
-    let stages = verifier.take_stage_times();
-    let total: f64 = stages.iter().map(|(_, ms)| ms).sum::<f64>() / chunks;
-    let each: Vec<String> = stages.iter().map(|(name, ms)| format!("{name} {:.2}", ms / chunks)).collect();
-    Ok(format!("{total:.2} ({})", each.join(", ")))
 }
 
 /// Hypotheses per second of each verifier verifying its batch: the fastest of ROUNDS, the
