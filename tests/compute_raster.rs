@@ -202,21 +202,27 @@ fn both_rasterizers_render_identical_images_of_several_objects() {
 }
 
 #[test]
-fn auto_takes_the_compute_rasterizer_for_dense_models_only() {
+fn auto_takes_the_rasterizer_its_devices_crossover_picks() {
     assert_eq!(Raster::default(), Raster::Auto);
     let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 45.0);
     let wide = centred_sensor(160, 160, 0.05, [0.0, 0.0], 45.0);
-    // Footprints with their 2-pixel margins: the sphere's about 33² pixels, so 3,968 triangles
-    // are 3.6 a pixel; the box's about 54² pixels, so 12 triangles are 0.004 a pixel; the
-    // plane's 2 triangles fill the wide image, 0.00008 a pixel. The crossover is 0.0001. A view
-    // of up to four objects counts all their triangles over all their footprints.
+    // Footprints with their 2-pixel margins (bounding spheres of radius 0.5, the box's 0.87):
+    // in `s` a sphere's about 33² pixels, so 3,968 triangles are 3.6 a pixel and 224 are 0.2;
+    // in `wide` the box's about 40² pixels, so 12 triangles are 0.0075 a pixel, and the plane's
+    // 2 triangles fill the image, 0.00008 a pixel. A CPU device takes compute from 0.0001 a
+    // pixel; a GPU from 1,500 triangles, or under 0.004 a pixel (Crossover). A view of up to
+    // four objects counts all their triangles over all their footprints.
+    let cpu = AUTO.renderer().context().is_cpu();
+    let either = |on_cpu: Raster, on_gpu: Raster| if cpu { on_cpu } else { on_gpu };
+    let (compute, graphics) = (Raster::Compute, Raster::Graphics);
     for (sensor, objects, expected) in [
-        (s, vec![("builtin:sphere:64", DMat4::IDENTITY)], Raster::Compute),
-        (s, vec![("builtin:box", turned())], Raster::Compute),
-        (wide, vec![("builtin:plane:10", DMat4::IDENTITY)], Raster::Graphics),
-        (s, vec![("builtin:sphere:64", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)], Raster::Compute),
+        (s, vec![("builtin:sphere:64", DMat4::IDENTITY)], compute),
+        (s, vec![("builtin:sphere:16", DMat4::IDENTITY)], either(compute, graphics)),
+        (wide, vec![("builtin:box", turned())], either(compute, graphics)),
+        (wide, vec![("builtin:plane:10", DMat4::IDENTITY)], either(graphics, compute)),
+        (s, vec![("builtin:sphere:64", DMat4::IDENTITY), ("builtin:plane:6", DMat4::IDENTITY)], compute),
         // More draws than a coverage dispatch's members.
-        (s, vec![("builtin:sphere:64", DMat4::IDENTITY); 5], Raster::Graphics),
+        (s, vec![("builtin:sphere:64", DMat4::IDENTITY); 5], graphics),
     ] {
         let sc = scene(sensor, ShadowMode::Depth, &objects);
         let auto = render_with(&AUTO, &sc);
@@ -233,7 +239,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         rangesynth::io::RangeImage::from(&render(&scene(s, ShadowMode::Depth, &[("builtin:step", step)])));
     let sensed = SensedImage::new(&sensed_image, &s).unwrap();
     let hypotheses = |verifier: &Verifier| -> Vec<Hypothesis> {
-        // The plane fills the image: 2 triangles over 25,600 pixels, below `auto`'s crossover.
+        // The plane fills the image: 2 triangles over 25,600 pixels, below a CPU device's
+        // crossover; the box, 12 triangles over about 44² pixels, is in a GPU's graphics band.
         ["builtin:step", "builtin:sphere:100", "builtin:box", "builtin:plane:8"]
             .iter()
             .enumerate()
@@ -284,7 +291,8 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         let far = &graphics[6].0;
         assert_eq!((far.n1_plus, far.n1_minus, far.n0), (0, 0, 0), "the sphere far outside the image renders nothing");
         assert_eq!(counts(&COMPUTE), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
-        // Auto mixes both in one batch: the plane by graphics, the others by compute.
+        // Auto mixes both in one batch: the plane by graphics on a CPU device, the box on a GPU,
+        // the others by compute.
         assert_eq!(counts(&AUTO), graphics, "{mode:?}, compare_shadow {compare_shadow}, {:?}", settings.effects);
         // Hypotheses of different models in one coverage dispatch; with auto, some of a
         // dispatch's members by graphics.

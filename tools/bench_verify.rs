@@ -264,9 +264,12 @@ fn stage_times(
 /// Hypotheses per second with each rasterizer, depth-mode shadows, batches of 64.
 fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
     println!("\nrasterizers: depth-mode shadows, batches of 64 at {}×{}", sensed.width, sensed.height);
+    // What `auto` takes on this device (Renderer::crossover), beside what ran faster.
+    let crossover = verifiers[0].renderer().crossover();
+    println!("auto's crossover on this device: compute for {crossover}");
     println!(
-        "{:<26} {:>9} {:>14} {:>14} {:>10}",
-        "model (triangles)", "tri/px", "graphics hyp/s", "compute hyp/s", "ratio"
+        "{:<26} {:>9} {:>14} {:>14} {:>10} {:>9}",
+        "model (triangles)", "tri/px", "graphics hyp/s", "compute hyp/s", "ratio", "auto"
     );
     let models: &[&str] = if quick {
         &["builtin:box", "builtin:sphere:100"]
@@ -287,6 +290,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         let settings = settings(scene.sensor, ShadowMode::Depth);
         let mut triangles = 0;
         let mut density = 0.0;
+        let mut footprint = 0;
         let mut batches = Vec::new();
         for verifier in verifiers {
             let model = verifier.model(model_name, Path::new("."))?;
@@ -296,14 +300,21 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             let grid = scene.sensor.range_grid((0.0, 0.0));
             let area =
                 grid.footprint(hypotheses(&model, 1)[0].pose.transform_point3(centre), radius, 2).expect("in view");
-            density = triangles as f64 / (f64::from(area.width) * f64::from(area.height));
+            footprint = u64::from(area.width) * u64::from(area.height);
+            density = triangles as f64 / footprint as f64;
             let hypotheses = hypotheses(&model, 64);
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             batches.push(hypotheses);
         }
         let rates = rates_in_turn(verifiers, sensed, &settings, &batches)?;
         let name = format!("{model_name} ({triangles})");
-        println!("{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}×", rates[0], rates[1], rates[1] / rates[0]);
+        let auto = if crossover.takes_compute(triangles as u64, footprint) { "compute" } else { "graphics" };
+        println!(
+            "{name:<26} {density:>9.3} {:>14.1} {:>14.1} {:>9.2}× {auto:>9}",
+            rates[0],
+            rates[1],
+            rates[1] / rates[0]
+        );
     }
     Ok(())
 }

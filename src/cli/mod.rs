@@ -14,7 +14,7 @@ use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
-use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS};
+use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::shadow::ShadowMode;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
@@ -37,9 +37,10 @@ pub struct Cli {
     memory_budget: Option<String>,
     /// Render with the graphics pipeline or the compute rasterizer, which renders views of up
     /// to four objects (every verify hypothesis) and leaves the others to the graphics
-    /// pipeline; auto (the default) takes the compute rasterizer for models of at least 0.0001
-    /// triangles per pixel of their footprint (render::COMPUTE_CROSSOVER), where the device has
-    /// it.
+    /// pipeline; auto (the default) takes the compute rasterizer where the device has it and
+    /// the crossover measured for its kind says so (render::Crossover: on a CPU device, models
+    /// of at least 0.0001 triangles per pixel of their footprint; on a GPU, of at least 1,500
+    /// triangles, or under 0.004 a footprint pixel).
     #[arg(long, global = true, value_name = "auto|graphics|compute", default_value = "auto")]
     raster: Raster,
     #[command(subcommand)]
@@ -133,9 +134,9 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     match (scene.shadow.mode, renderer.raster()) {
         (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
         (_, Raster::Auto) => println!(
-            "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of at least {COMPUTE_CROSSOVER} triangles \
-             per footprint pixel)",
-            out.raster.as_str()
+            "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
+            out.raster.as_str(),
+            renderer.crossover()
         ),
         _ => println!("raster: {}", out.raster.as_str()),
     }

@@ -15,7 +15,7 @@ use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::MemoryBudget;
-use rangesynth::render::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, MAX_SLOTS};
+use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -231,8 +231,8 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     println!("device: {}", renderer.context().device_name());
     match renderer.raster() {
         Raster::Auto => println!(
-            "raster: auto (compute for models of at least {COMPUTE_CROSSOVER} triangles per footprint pixel, where the \
-             device has it; else graphics)"
+            "raster: auto (compute for models of {}, where the device has it; else graphics)",
+            renderer.crossover()
         ),
         raster => println!("raster: {}", raster.as_str()),
     }

@@ -21,7 +21,7 @@ mod targets;
 pub use crate::render_output::{PassTime, RenderOutput};
 pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use compute_raster::{ComputeViews, CoverageGroup};
-pub use compute_raster::{Raster, COMPUTE_CROSSOVER, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
+pub use compute_raster::{Crossover, Raster, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_mesh::GpuMesh;
@@ -242,7 +242,17 @@ impl Renderer {
         words_fit
             && queue_fits
             && reach_pixels <= MAX_REACH_PIXELS
-            && self.raster.computes(self.ctx.supports_compute_raster(), draws, triangles, footprint_pixels)
+            && self.raster.computes(
+                (self.ctx.supports_compute_raster(), self.crossover()),
+                draws,
+                triangles,
+                footprint_pixels,
+            )
+    }
+
+    /// Where `auto` takes the compute rasterizer on this renderer's device.
+    pub fn crossover(&self) -> Crossover {
+        Crossover::for_device(self.ctx.is_cpu())
     }
 
     /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the
