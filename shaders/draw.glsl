@@ -5,6 +5,7 @@
 // draw.rs asserts them). Also the one way any shader reaches a mesh's triangles.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
+#include "contract.glsl"
 
 struct DrawData {
     vec4 view_from_model[3]; // rows of view rotation ∘ pose, composed in f64 on the host
@@ -21,9 +22,6 @@ struct DrawData {
     uint draw_index;         // this draw's entry in the draw table (shadow view)
     uvec2 links;             // device address of what lies across each triangle's edges
 };
-
-// An edge link that names no triangle (mesh::NO_NEIGHBOUR).
-const uint NO_NEIGHBOUR = 0xffffffffu;
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Words {
     uint word[];
@@ -89,7 +87,6 @@ vec2 depth_step(DrawData d, vec3 n) {
 // it (a NaN slope, of a face seen exactly edge-on, counts as the cap). Coincident faces
 // steeper than that may go to the higher label where a GPU's depths come from snapped corners.
 float tie_depth(DrawData d, vec2 step) {
-    const float TIE_RELATIVE = 1.0 / 131072.0; // 2^-17, about 64 ulps
     const float TIE_SLOPE = 1.0 / 128.0;
     const float TIE_STEEPEST = 57.29;
     float span = d.z_range.y - d.z_range.x;

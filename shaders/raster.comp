@@ -40,27 +40,25 @@ layout(local_size_x = 64) in;
 #include "raster_compute.glsl"
 
 // Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
-// dispatch covers up to MAX_MEMBERS jobs, one a z slice of its workgroups (the large
-// triangles' pass reads each queued triangle's member from the queue), so that a GPU pays a
-// dispatch and a barrier per group rather than per hypothesis. MEMBERS, a specialization
-// constant, is 1 or MAX_MEMBERS: with 1, the member is the constant 0 and every read of its
-// constants is at a constant offset, as a software rasterizer needs (it gathers a uniform read
-// at an index it cannot prove the same for all its lanes, lane by lane: dense sphere at 256²,
-// coverage 3.29 → 4.58 ms), and keep_word's branches fold away. MAX_MEMBERS matches
-// COVERAGE_MEMBERS in src/render/compute_raster.rs.
-#define MAX_MEMBERS 4
+// dispatch covers up to COVERAGE_MEMBERS jobs (contract.glsl), one a z slice of its
+// workgroups (the large triangles' pass reads each queued triangle's member from the queue),
+// so that a GPU pays a dispatch and a barrier per group rather than per hypothesis. MEMBERS, a
+// specialization constant, is 1 or COVERAGE_MEMBERS: with 1, the member is the constant 0 and
+// every read of its constants is at a constant offset, as a software rasterizer needs (it
+// gathers a uniform read at an index it cannot prove the same for all its lanes, lane by lane:
+// dense sphere at 256², coverage 3.29 → 4.58 ms), and keep_word's branches fold away.
 
 // Each member's draw in each view, copied from the draw tables before the pass
-// (compute_raster.rs): draws[m] the range view's of member m, draws[MAX_MEMBERS + m] its
+// (compute_raster.rs): draws[m] the range view's of member m, draws[COVERAGE_MEMBERS + m] its
 // shadow view's (where it has none, whatever was there, read only to cull: it covers no
 // pixels; member_draw). A uniform block, not a storage buffer: a software rasterizer loads a
 // uniform block's value once for all the invocations it runs together, a storage buffer's
 // invocation by invocation (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
-layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * MAX_MEMBERS]; };
+layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * COVERAGE_MEMBERS]; };
 
 // Member m's draw in view v (0: range, 1: shadow).
 DrawData member_draw(uint m, uint v) {
-    return draws[v * MAX_MEMBERS + m];
+    return draws[v * COVERAGE_MEMBERS + m];
 }
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
@@ -73,7 +71,7 @@ struct Member {
     uint place;          // where members share words, its place in the ties order, which tags
                          // its triangles there (above bit MEMBER_SHIFT); else 0
 };
-layout(set = 0, binding = 1, std140) uniform Members { Member members[MAX_MEMBERS]; };
+layout(set = 0, binding = 1, std140) uniform Members { Member members[COVERAGE_MEMBERS]; };
 
 // Each member's visibility words in each view (where a view or a member is missing, another
 // member's are bound, never written: a member with no job covers no triangles, a view of no
@@ -108,7 +106,7 @@ layout(constant_id = 1) const uint VIEW_COUNT = 2u;
 // Workgroups a block, and stripes the blocks are dealt over (powers of two; main).
 layout(constant_id = 2) const uint DEAL_BLOCK = 1u;
 layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
-// 1: a dispatch covers one job, the member the constant 0; MAX_MEMBERS: up to MAX_MEMBERS
+// 1: a dispatch covers one job, the member the constant 0; COVERAGE_MEMBERS: up to that many
 // (see above).
 layout(constant_id = 4) const uint MEMBERS = 1u;
 

@@ -15,10 +15,9 @@ struct RasterView {
     uint pad0, pad1;
 };
 
-// Where a member's place starts, above a triangle's index (meshes have fewer than 2^29
-// triangles: src/mesh/adjacency.rs): in the queue of large triangles, and in the words of a
-// view of several draws, which tag each triangle with its draw's place (raster.comp).
-const uint MEMBER_SHIFT = 29u;
+// A member's place lies above a triangle's index from bit MEMBER_SHIFT (contract.glsl): in the
+// queue of large triangles, and in the words of a view of several draws, which tag each
+// triangle with its draw's place (raster.comp).
 
 // The triangle's index in a tagged triangle or a queue entry: the bits below MEMBER_SHIFT.
 uint untagged(uint tagged) {

@@ -8,8 +8,8 @@
 // pixel (meshes have fewer than 2^29 triangles: src/mesh/adjacency.rs), so a shader that needs
 // only the triangle reads only it.
 
-// Each half of a word where no triangle covers the pixel.
-const uint EMPTY_HALF = 0xffffffffu;
+// Each half of a word where no triangle covers the pixel: EMPTY_HALF (contract.glsl).
+#include "contract.glsl"
 
 // Where a pixel's word is among a view's words, `stride` pixels a row.
 uint word_index(uint stride, ivec2 pixel) {

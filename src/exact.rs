@@ -26,10 +26,7 @@ use parry3d_f64::math::Vector as BvhVector;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
-/// Heights this close, relative to the scene's largest coordinate, are a tie: 2^-17, the GPU
-/// paths' tie tolerance for the rounding of poses (shaders/draw.glsl `TIE_RELATIVE`; they add
-/// one for depths worked out from snapped corners, which exact mode has none of).
-pub const TIE_RELATIVE: f64 = 1.0 / 131072.0;
+pub use crate::shader_contract::TIE_RELATIVE;
 
 /// n · d_cam (unit normal) at or below which a surface counts as turned away from the camera:
 /// one seen exactly edge-on, up to the rounding of its posed corners, is not measured.

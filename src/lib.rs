@@ -17,6 +17,7 @@ pub mod render;
 pub mod render_output;
 pub mod scene;
 pub mod sensor;
+pub mod shader_contract;
 pub mod shadow;
 pub mod verify;
 

@@ -12,8 +12,7 @@
 use super::Mesh;
 use std::collections::HashMap;
 
-/// Neighbour value of an edge that links no triangle; `NO_NEIGHBOUR` in shaders/draw.glsl.
-pub const NO_NEIGHBOUR: u32 = u32::MAX;
+pub use crate::shader_contract::NO_NEIGHBOUR;
 
 /// An edge link (see [`Mesh::edge_links`]) holds the neighbour's index shifted by this.
 pub const LINK_INDEX_SHIFT: u32 = 3;

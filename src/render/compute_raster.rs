@@ -64,6 +64,7 @@ use crate::error::Result;
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
+use crate::shader_contract::{EMPTY_HALF, MEMBER_SHIFT};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -274,14 +275,13 @@ const DEAL_STRIPES: u32 = 16;
 /// shader's MAX_GROUPS, a specialization constant).
 const MAX_GROUPS: u32 = 65_535;
 
-/// Most jobs one coverage dispatch covers (`MAX_MEMBERS` in shaders/raster.comp, which binds
-/// each member's words).
-pub const COVERAGE_MEMBERS: usize = 4;
+pub use crate::shader_contract::COVERAGE_MEMBERS;
 
 // A member's place (below COVERAGE_MEMBERS) goes above a triangle's index in the words and in
-// the queue of large triangles, at MEMBER_SHIFT = 29 (shaders/raster_compute.glsl), below the
-// queue's view bit 31: both fit only while meshes have fewer than 2^29 triangles.
-const _: () = assert!(crate::mesh::MAX_LINKED_TRIANGLES <= 1 << 29 && COVERAGE_MEMBERS <= 4);
+// the queue of large triangles, from bit MEMBER_SHIFT, below the queue's view bit 31: both fit
+// only while meshes have fewer than 2^MEMBER_SHIFT triangles.
+const _: () =
+    assert!(crate::mesh::MAX_LINKED_TRIANGLES <= 1 << MEMBER_SHIFT && COVERAGE_MEMBERS <= 1 << (31 - MEMBER_SHIFT));
 
 /// Storage buffers the coverage passes bind: each member's words in each view, the queue of
 /// large triangles and its dispatch arguments (a device binding fewer a stage cannot run the
@@ -714,7 +714,7 @@ impl CoverageGroup {
             // copies and updates lie within the uniform blocks.
             unsafe {
                 for (words, offset, size) in emptied {
-                    d.cmd_fill_buffer(cmd, words.raw, offset, size, u32::MAX);
+                    d.cmd_fill_buffer(cmd, words.raw, offset, size, EMPTY_HALF);
                 }
                 // No workgroups, an empty queue: (x, y, z, length).
                 d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
