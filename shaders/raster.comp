@@ -13,7 +13,8 @@
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic, by tiles of at most 8 × 8 pixels, each first as coverage bits, then keeping
-// each covered pixel, up to 33 × 33 pixels (25 tiles). A triangle whose corners lie more than
+// each covered pixel, up to 33 × 33 pixels (25 tiles; one, where the host found every box
+// fits one: TILES). A triangle whose corners lie more than
 // 32 pixels from its box's first pixel centre (beyond 32-bit edge functions; so does any box
 // over 33 pixels a side) is queued for that view instead, and LARGE_TRIANGLES, dispatched
 // indirectly, gives each queued (triangle, view) a workgroup whose 64 invocations share its
@@ -109,6 +110,14 @@ layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 // 1: a dispatch covers one job, the member the constant 0; COVERAGE_MEMBERS: up to that many
 // (see above).
 layout(constant_id = 4) const uint MEMBERS = 1u;
+// 1: boxes of up to 33 pixels a side are covered by tiles (cover_tiles); 0: the host found no
+// triangle of the dispatch's meshes can have a box over 8 pixels in its views (every edge
+// shorter than 5 pixels: compute_raster.rs), so the tiles' code is left out, and a box over 8
+// pixels, were there one, would go to the large triangles' pass (exact too, but slow for
+// many). A software rasterizer runs the tiles' loops at least once for every group of
+// invocations, whatever their boxes: without them, the dense sphere's coverage at 256² took
+// 6.6–8.5 ms against 8.3–11.0 (lavapipe, 2026-11-26, a slower machine than earlier notes').
+layout(constant_id = 5) const uint TILES = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
 // viewport transform compute them (its scale the viewport's half side, its offset the
@@ -365,7 +374,8 @@ void cover_tiles(uint t, Setup s, Edges32 e) {
     }
 }
 
-// Covers a triangle's pixels in view v of a member, or queues it there if its corners are far.
+// Covers a triangle's pixels in view v of a member, or queues it there for the large
+// triangles' pass.
 void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriangle m) {
     Setup s = set_up(member, v, d, constants, m);
     ivec2 box = s.last - s.first + 1;
@@ -377,20 +387,20 @@ void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriang
     // pixels a side; beyond, the triangle is queued).
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
-    if (!near) {
-        // The ties pass finds the same triangles far as the pass before it (the same precise
-        // arithmetic on the same inputs) and leaves them to the large triangles' ties pass,
-        // which reads the queue that pass filled.
+    // (Clamped, which changes no near corner, so that a far one converts to an integer.)
+    Edges32 e = edges_of(ivec2(clamp(a, -NEAR, NEAR)), ivec2(clamp(b, -NEAR, NEAR)), ivec2(clamp(c, -NEAR, NEAR)));
+    if (near && all(lessThanEqual(box, ivec2(8)))) {
+        cover_tile(t, s, ivec2(0), e.first, e);
+    } else if (near && TILES != 0u) {
+        cover_tiles(t, s, e);
+    } else {
+        // Far, or (TILES 0) a box over 8 pixels: the large triangles' pass covers it. The ties
+        // pass finds the same triangles so as the pass before it (the same precise arithmetic
+        // on the same inputs) and leaves them to the large triangles' ties pass, which reads
+        // the queue that pass filled.
 #ifndef TIES
         queue_large(t, s);
 #endif
-        return;
-    }
-    Edges32 e = edges_of(ivec2(a), ivec2(b), ivec2(c));
-    if (all(lessThanEqual(box, ivec2(8)))) {
-        cover_tile(t, s, ivec2(0), e.first, e);
-    } else {
-        cover_tiles(t, s, e);
     }
 }
 

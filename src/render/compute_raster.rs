@@ -291,10 +291,35 @@ pub const COVERAGE_STORAGE_BUFFERS: usize = 2 * COVERAGE_MEMBERS + 2;
 /// The coverage passes' pipelines for dispatches of `members` jobs, or (`Ties`) the passes
 /// after them that decide the ties between draws sharing words.
 struct CoveragePipelines {
-    /// The small triangles' coverage of the range view alone, and of both views.
+    /// The small triangles' coverage, covering boxes over a tile by tiles; and without the
+    /// tiles' code, for meshes whose every triangle fits one tile (`fits_one_tile`), built on
+    /// first use.
+    tiled: SmallTriangles,
+    one_tile: OnceLock<SmallTriangles>,
+    large: ComputePipeline,
+    ctx: Arc<GpuContext>,
+    members: u32,
+    kind: Coverage,
+}
+
+/// The small triangles' coverage of the range view alone, and of both views.
+struct SmallTriangles {
     range: ComputePipeline,
     both: ComputePipeline,
-    large: ComputePipeline,
+}
+
+/// Whether every triangle of a mesh whose longest edge is `longest_edge` (model units) has a
+/// box of at most 8 pixels a side (one tile) in views of pixels `pitch` or larger: its
+/// projection spans at most that edge, and a span of `w` pixels has pixel centres in a box of
+/// at most `w` + 3 (its ends' pixels rounded outward, and one more), so 4.9 pixels (below 5,
+/// for the rounding of poses and corners) leaves a box of at most 8. The small triangles'
+/// pass then leaves out the tiles' code, which a software rasterizer runs whatever the boxes:
+/// on lavapipe (2026-11-26, a slower machine than earlier notes'), the dense sphere's coverage
+/// at 256² took 6.6–8.5 ms against 8.3–11.0 (GPU stage times, best of five batches of 16, four
+/// alternations), and a 9,800-triangle sphere in the example's sensed scene verified at
+/// 713–1,010 against 566–892 hypotheses/s (batches of 256, as a GPU groups them).
+fn fits_one_tile(longest_edge: f64, pitch: f64) -> bool {
+    longest_edge <= 4.9 * pitch
 }
 
 /// Which of shaders/raster.comp's two kinds of coverage passes.
@@ -308,31 +333,72 @@ enum Coverage {
 
 impl CoveragePipelines {
     fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage) -> Result<Self> {
-        // Both uniform blocks (the members' draws, then their constants), each member's words
-        // in each view, the large-triangle queue and its dispatch arguments.
-        let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
-        // The coverage shader's specialization constants: MAX_GROUPS, the views it covers (the
-        // large triangles' pass reads each queued triangle's view), how it deals its
-        // workgroups, and whether a dispatch covers one job or up to COVERAGE_MEMBERS.
-        let covering = |code, views: u32, name: &str| {
-            let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members];
-            let dispatch = match (kind, members) {
-                (Coverage::Ties, _) => "ties",
-                (Coverage::Nearest, 1) => "one job",
-                (Coverage::Nearest, _) => "grouped",
-            };
-            ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {dispatch}"))
-        };
-        let (small, large) = match kind {
-            Coverage::Nearest => (shaders::RASTER_COMP, shaders::RASTER_LARGE_COMP),
-            Coverage::Ties => (shaders::RASTER_TIES_COMP, shaders::RASTER_LARGE_TIES_COMP),
+        let large = match kind {
+            Coverage::Nearest => shaders::RASTER_LARGE_COMP,
+            Coverage::Ties => shaders::RASTER_LARGE_TIES_COMP,
         };
         Ok(Self {
-            range: covering(small, 1, "compute raster coverage (range view)")?,
-            both: covering(small, 2, "compute raster coverage (both views)")?,
-            large: covering(large, 2, "compute raster coverage (large triangles)")?,
+            tiled: SmallTriangles::new(ctx, members, kind, true)?,
+            one_tile: OnceLock::new(),
+            large: covering(ctx, (members, kind), large, (2, true), "compute raster coverage (large triangles)")?,
+            ctx: ctx.clone(),
+            members,
+            kind,
         })
     }
+
+    /// The small triangles' pipelines, with the tiles' code or (`one_tile`) without.
+    fn small(&self, one_tile: bool) -> Result<&SmallTriangles> {
+        if !one_tile {
+            return Ok(&self.tiled);
+        }
+        if let Some(built) = self.one_tile.get() {
+            return Ok(built);
+        }
+        let built = SmallTriangles::new(&self.ctx, self.members, self.kind, false)?;
+        Ok(self.one_tile.get_or_init(|| built))
+    }
+}
+
+impl SmallTriangles {
+    fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage, tiles: bool) -> Result<Self> {
+        let code = match kind {
+            Coverage::Nearest => shaders::RASTER_COMP,
+            Coverage::Ties => shaders::RASTER_TIES_COMP,
+        };
+        let name = |view: &str| {
+            let tiles = if tiles { "" } else { ", one tile" };
+            format!("compute raster coverage ({view}{tiles})")
+        };
+        Ok(Self {
+            range: covering(ctx, (members, kind), code, (1, tiles), &name("range view"))?,
+            both: covering(ctx, (members, kind), code, (2, tiles), &name("both views"))?,
+        })
+    }
+}
+
+/// A coverage pipeline of shaders/raster.comp's variant `code`, for dispatches of `members`
+/// jobs of `kind`, covering `views` (the range view, or both; the large triangles' pass reads
+/// each queued triangle's view), boxes over a tile by tiles or not.
+fn covering(
+    ctx: &Arc<GpuContext>,
+    (members, kind): (u32, Coverage),
+    code: &[u8],
+    (views, tiles): (u32, bool),
+    name: &str,
+) -> Result<ComputePipeline> {
+    // Both uniform blocks (the members' draws, then their constants), each member's words in
+    // each view, the large-triangle queue and its dispatch arguments.
+    let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
+    // The shader's specialization constants: MAX_GROUPS, the views it covers, how it deals its
+    // workgroups, whether a dispatch covers one job or up to COVERAGE_MEMBERS, and TILES.
+    let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members, u32::from(tiles)];
+    let dispatch = match (kind, members) {
+        (Coverage::Ties, _) => "ties",
+        (Coverage::Nearest, 1) => "one job",
+        (Coverage::Nearest, _) => "grouped",
+    };
+    ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {dispatch}"))
 }
 
 pub struct ComputeRasterPipelines {
@@ -539,6 +605,8 @@ pub(crate) struct CoverageMember<'v, 'a> {
     pub shadow_area: Option<PixelRect>,
     pub index: u32,
     pub draw: &'v Draw<'v>,
+    /// The finest pixel pitch of the views it covers, in model units.
+    pub finest_pitch: f64,
 }
 
 /// The coverage passes of a submission's slots: jobs in consecutive slots share a dispatch,
@@ -588,7 +656,7 @@ impl CoverageGroup {
         let member_bytes = large_queue_bytes(u64::from(max_triangles), views).max(1);
         let fitting = usize::try_from(ctx.max_storage_buffer_range() / member_bytes).unwrap_or(usize::MAX);
         let members = members.min(fitting).max(1);
-        let layout = pipelines.coverage(members)?.both.set_layout;
+        let layout = pipelines.coverage(members)?.tiled.both.set_layout;
         let runs = slots
             .chunks(members)
             .enumerate()
@@ -736,16 +804,19 @@ impl CoverageGroup {
         let both = covered.iter().any(|(_, member)| member.shadow_area.is_some() && member.views.shadow.is_some());
         // Slices up to the last member covered; the others' triangle counts are 0.
         let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
-        let passes = |pipelines: &'s CoveragePipelines| {
-            let small = if both { &pipelines.both } else { &pipelines.range };
+        let one_tile =
+            covered.iter().all(|(_, member)| fits_one_tile(member.draw.mesh.longest_edge, member.finest_pitch));
+        let passes = |pipelines: &'s CoveragePipelines| -> Result<_> {
+            let small = pipelines.small(one_tile)?;
+            let small = if both { &small.both } else { &small.range };
             let cover =
                 move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
             let large = move |_: &GpuContext, cmd| {
                 buffers.set.dispatch_indirect(cmd, &pipelines.large, &[], &buffers.large_args)
             };
-            (cover, large)
+            Ok((cover, large))
         };
-        let (cover, large) = passes(coverage);
+        let (cover, large) = passes(coverage)?;
         // The ties passes read the queue and its dispatch as the first passes left them.
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
         let mut steps = vec![
@@ -756,7 +827,7 @@ impl CoverageGroup {
         if self.shared_words {
             // Both ties passes only raise the words' tagged triangles (their depths stay), so
             // they need no barrier between them.
-            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?);
+            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?)?;
             let ties = move |ctx: &GpuContext, cmd| {
                 cover_ties(ctx, cmd);
                 large_ties(ctx, cmd);
@@ -843,6 +914,25 @@ impl CoverageRun {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A span of window x (or y) no longer than the longest edge `fits_one_tile` allows,
+        /// in pixels, wherever it lies: the pixel centres of its box (first `floor(lo − ½)`,
+        /// last `ceil(hi − ½)`, as shaders/raster.comp's set_up finds them) number at most 8.
+        #[test]
+        fn a_span_fits_one_tile_allows_has_at_most_eight_pixel_centres(
+            lo in -1000.0f64..1000.0,
+            fraction in 0.0f64..=1.0,
+            pitch in 1e-4f64..10.0,
+        ) {
+            let edge = 4.9 * pitch * fraction;
+            prop_assume!(fits_one_tile(edge, pitch));
+            let hi = lo + edge / pitch;
+            let (first, last) = ((lo - 0.5).floor(), (hi - 0.5).ceil());
+            prop_assert!(last - first + 1.0 <= 8.0, "{lo}..{hi}: {first}..={last}");
+        }
+    }
 
     /// Each device's rule against the measured points it rests on (the Crossover constants'
     /// docs): (triangles, footprint pixels, whether compute was the faster there).

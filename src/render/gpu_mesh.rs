@@ -22,6 +22,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
+use glam::DVec3;
 use std::sync::Arc;
 
 pub struct GpuMesh {
@@ -35,6 +36,9 @@ pub struct GpuMesh {
     pub(crate) index_count: u32,
     /// Whether the mesh bounds a solid, and which way its normals point.
     pub(crate) solidity: Solidity,
+    /// Its longest edge, in model units: no triangle's projection spans more, in any view
+    /// (orthographic), which tells the compute rasterizer whether its boxes fit one tile.
+    pub(crate) longest_edge: f64,
 }
 
 impl GpuMesh {
@@ -90,8 +94,18 @@ impl GpuMesh {
             )?,
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&links),
+            longest_edge: longest_edge(&records),
         })
     }
+}
+
+/// The longest edge of the triangles, in f64 from their f32 corners.
+fn longest_edge(records: &[TriangleRecord]) -> f64 {
+    let corner = |c: [f32; 3]| DVec3::from(c.map(f64::from));
+    records
+        .iter()
+        .flat_map(|r| (0..3).map(move |k| corner(r.corners[k]).distance(corner(r.corners[(k + 1) % 3]))))
+        .fold(0.0, f64::max)
 }
 
 /// A triangle as the shaders read it (`TriangleRecord` in shaders/draw.glsl, and as six 64-bit

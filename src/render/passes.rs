@@ -319,8 +319,17 @@ impl<'p> Passes<'p> {
                 None => vec![None],
                 Some((views, _, (first, draws))) => {
                     let shadow_area = self.shadow_pass(slot, job).map(|(_, _, area, ..)| area);
-                    let member =
-                        |(index, draw)| CoverageMember { views, range_area: job.area, shadow_area, index, draw };
+                    let covered_grids =
+                        std::iter::once(&job.views.range).chain(shadow_area.and(job.views.shadow.as_ref()));
+                    let finest_pitch = covered_grids.flat_map(|grid| grid.pitch).fold(f64::INFINITY, f64::min);
+                    let member = |(index, draw)| CoverageMember {
+                        views,
+                        range_area: job.area,
+                        shadow_area,
+                        index,
+                        draw,
+                        finest_pitch,
+                    };
                     (first..).zip(draws).map(|indexed| Some(member(indexed))).collect()
                 }
             })
