@@ -14,11 +14,11 @@
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic, by tiles of at most 8 × 8 pixels, each first as coverage bits, then keeping
 // each covered pixel, up to 33 × 33 pixels (25 tiles; one, where the host found every box
-// fits one: TILES). A triangle whose corners lie more than
-// 32 pixels from its box's first pixel centre (beyond 32-bit edge functions; so does any box
-// over 33 pixels a side) is queued for that view instead, and LARGE_TRIANGLES, dispatched
-// indirectly, gives each queued (triangle, view) a workgroup whose 64 invocations share its
-// rows, in 64-bit arithmetic: one invocation never serialises thousands of pixels.
+// fits one: TILES). A triangle whose corners lie more than 32 pixels from its box's first
+// pixel centre (beyond 32-bit edge functions; so does any box over 33 pixels a side) is
+// queued for that view instead, and LARGE_TRIANGLES, dispatched indirectly, gives each queued
+// (triangle, view) a workgroup whose 64 invocations share its rows, in 64-bit arithmetic: one
+// invocation never serialises thousands of pixels.
 //
 // A view of several draws (TIES): its draws are the members of one dispatch, sharing the
 // view's words, each triangle's index tagged with its member's place in the order the
@@ -34,11 +34,11 @@
 // whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
 // as much as this one doing its work), so the small triangles' pass holds no 64-bit path of
 // its own: dense sphere at 256², coverage 5.2–5.3 → 4.65–4.8 ms.
-layout(local_size_x = 64) in;
 #ifdef TIES
 #extension GL_KHR_memory_scope_semantics : require
 #endif
 #include "raster_compute.glsl"
+layout(local_size_x = COVERAGE_GROUP) in;
 
 // Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
 // dispatch covers up to COVERAGE_MEMBERS jobs (contract.glsl), one a z slice of its
@@ -76,7 +76,11 @@ layout(set = 0, binding = 1, std140) uniform Members { Member members[COVERAGE_M
 
 // Each member's visibility words in each view (where a view or a member is missing, another
 // member's are bound, never written: a member with no job covers no triangles, a view of no
-// pixels none of them).
+// pixels none of them): a binding each, as keep_word picks them, for COVERAGE_MEMBERS = 4
+// (COVERAGE_STORAGE_BUFFERS in src/render/compute_raster.rs counts them).
+#if COVERAGE_MEMBERS != 4
+#error "raster.comp binds and picks four members' words"
+#endif
 layout(set = 0, binding = 2, std430) buffer RangeWords0 { uint64_t words[]; } range_words0;
 layout(set = 0, binding = 3, std430) buffer RangeWords1 { uint64_t words[]; } range_words1;
 layout(set = 0, binding = 4, std430) buffer RangeWords2 { uint64_t words[]; } range_words2;
@@ -85,14 +89,13 @@ layout(set = 0, binding = 6, std430) buffer ShadowWords0 { uint64_t words[]; } s
 layout(set = 0, binding = 7, std430) buffer ShadowWords1 { uint64_t words[]; } shadow_words1;
 layout(set = 0, binding = 8, std430) buffer ShadowWords2 { uint64_t words[]; } shadow_words2;
 layout(set = 0, binding = 9, std430) buffer ShadowWords3 { uint64_t words[]; } shadow_words3;
-// The queue of large (triangle, member, view) entries: the view's bit, then the member's two
-// bits, above the triangle's index (meshes have fewer than 2^29 triangles:
-// src/mesh/adjacency.rs), with room for every triangle of every member in every view; and its
-// indirect dispatch's (x, y, z), x its length up to MAX_GROUPS, then its length.
+// The queue of large (triangle, member, view) entries: the view's bit (QUEUE_VIEW_BIT), then
+// the member's bits (from MEMBER_SHIFT), above the triangle's index (meshes have fewer than
+// 2^MEMBER_SHIFT triangles: src/mesh/adjacency.rs), with room for every triangle of every
+// member in every view; and its indirect dispatch's (x, y, z), x its length up to MAX_GROUPS,
+// then its length.
 layout(set = 0, binding = 10, std430) buffer Large { uint large[]; };
 layout(set = 0, binding = 11, std430) buffer LargeArgs { uvec4 large_args; };
-
-const uint VIEW_BIT = 31u;
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -112,11 +115,11 @@ layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 layout(constant_id = 4) const uint MEMBERS = 1u;
 // 1: boxes of up to 33 pixels a side are covered by tiles (cover_tiles); 0: the host found no
 // triangle of the dispatch's meshes can have a box over 8 pixels in its views (every edge
-// shorter than 5 pixels: compute_raster.rs), so the tiles' code is left out, and a box over 8
+// shorter than 6 pixels: compute_raster.rs), so the tiles' code is left out, and a box over 8
 // pixels, were there one, would go to the large triangles' pass (exact too, but slow for
 // many). A software rasterizer runs the tiles' loops at least once for every group of
 // invocations, whatever their boxes: without them, the dense sphere's coverage at 256² took
-// 6.6–8.5 ms against 8.3–11.0 (lavapipe, 2026-11-26, a slower machine than earlier notes').
+// 6.2–9.1 ms against 8.3–11.0 (lavapipe, 2026-11-26, a slower machine than earlier notes').
 layout(constant_id = 5) const uint TILES = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
@@ -289,8 +292,8 @@ void main() {
     // The workgroups stride over the queue, which may be longer than a dispatch's groups.
     for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
         uint entry = large[queued];
-        uint v = entry >> VIEW_BIT, t = untagged(entry);
-        uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & 3u;
+        uint v = entry >> QUEUE_VIEW_BIT, t = untagged(entry);
+        uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & (COVERAGE_MEMBERS - 1u);
         DrawData d = member_draw(member, v);
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
@@ -313,7 +316,7 @@ void main() {
 // every view.
 void queue_large(uint t, Setup s) {
     uint at = atomicAdd(large_args.w, 1u);
-    large[at] = t | (s.member << MEMBER_SHIFT) | (s.view << VIEW_BIT);
+    large[at] = t | (s.member << MEMBER_SHIFT) | (s.view << QUEUE_VIEW_BIT);
     if (at < MAX_GROUPS) {
         atomicAdd(large_args.x, 1u);
     }
@@ -395,9 +398,9 @@ void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriang
         cover_tiles(t, s, e);
     } else {
         // Far, or (TILES 0) a box over 8 pixels: the large triangles' pass covers it. The ties
-        // pass finds the same triangles so as the pass before it (the same precise arithmetic
-        // on the same inputs) and leaves them to the large triangles' ties pass, which reads
-        // the queue that pass filled.
+        // pass finds the same triangles far or large as the pass before it (the same precise
+        // arithmetic on the same inputs) and leaves them to the large triangles' ties pass,
+        // which reads the queue that pass filled.
 #ifndef TIES
         queue_large(t, s);
 #endif

@@ -27,5 +27,14 @@ pub const EMPTY_HALF: u32 = u32::MAX;
 pub const MEMBER_SHIFT: u32 = 29;
 
 /// Most jobs one coverage dispatch of the compute rasterizer covers (shaders/raster.comp binds
-/// each member's words, and src/render/compute_raster.rs groups its slots by it).
+/// each member's words, four bindings a view, which it checks, and src/render/compute_raster.rs
+/// groups its slots by it).
 pub const COVERAGE_MEMBERS: usize = 4;
+
+/// The bit of a queued large triangle's entry that says its view (0 range, 1 shadow), above
+/// its member's place (shaders/raster.comp).
+pub const QUEUE_VIEW_BIT: u32 = 31;
+
+/// Invocations a workgroup of the compute rasterizer's coverage passes (`local_size_x` in
+/// shaders/raster.comp): each covers a triangle, or in the large triangles' pass a row.
+pub const COVERAGE_GROUP: u32 = 64;

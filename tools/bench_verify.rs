@@ -5,7 +5,8 @@
 //!
 //! A third table compares the rasterizers (src/render/compute_raster.rs): the same batches
 //! verified with the graphics pipeline and with the compute rasterizer, in the same run, for
-//! models of growing density (triangles per footprint pixel, what `auto` reads); a fourth, the
+//! models of growing density (triangles per footprint pixel, which with the triangle count is
+//! what `auto` reads, and its pick on this device); a fourth, the
 //! compute rasterizer's issue's workloads: a model filling the image, at 256² and 1024², with
 //! label-mode and depth-mode shadows. Both take the fastest of five batches per rasterizer,
 //! the rasterizers in turn (`fastest_in_turn`). Between them, the compute rasterizer covering

@@ -8,11 +8,12 @@
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
 //!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle; tagged
 //!   with its draw's place in a view of several draws, below) on that view's words, by tiles
-//!   of 8 × 8 pixels. A triangle whose corners lie too far from its box for 32 bits (more
-//!   than 32 pixels) is queued for that view instead, and a second,
-//!   indirect dispatch gives each queued (triangle, view) a workgroup of 64 invocations, in
-//!   64-bit arithmetic. Each view's draw reaches both as a uniform block, copied from its draw
-//!   table before them. The coverage pass deals its workgroups over the mesh ([`DEAL_BLOCK`]),
+//!   of 8 × 8 pixels (one, in a variant without the tiles' code, which a software rasterizer
+//!   would run whatever the boxes, where no triangle's box can be larger: `fits_one_tile`).
+//!   A triangle whose corners lie too far from its box for 32 bits (more than 32 pixels) is
+//!   queued for that view instead, and a second, indirect dispatch gives each queued
+//!   (triangle, view) a workgroup of 64 invocations, in 64-bit arithmetic. Each view's draw
+//!   reaches both as a uniform block, copied from its draw table before them. The coverage pass deals its workgroups over the mesh ([`DEAL_BLOCK`]),
 //!   so that each thread of a software rasterizer gets a share of every part of it. Where the
 //!   mesh bounds a solid (src/mesh/solid.rs), a
 //!   triangle facing away from the camera in a view is skipped there, and one facing away in
@@ -64,7 +65,7 @@ use crate::error::Result;
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
-use crate::shader_contract::{EMPTY_HALF, MEMBER_SHIFT};
+use crate::shader_contract::{COVERAGE_GROUP, EMPTY_HALF, MEMBER_SHIFT, QUEUE_VIEW_BIT};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -89,12 +90,13 @@ pub enum Raster {
 /// its few cores, where a GPU's graphics pipeline is fastest for few mid-sized triangles.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Crossover {
-    /// At least this many triangles and at least `min_density` take the compute rasterizer...
-    pub min_triangles: u64,
-    pub min_density: f64,
+    /// At least this many triangles and at least `min_density` take the compute rasterizer
+    /// (one of the two bounds is 0)...
+    min_triangles: u64,
+    min_density: f64,
     /// ...and so does a density under this one, however few the triangles (large triangles,
     /// which the compute rasterizer's workgroups share out).
-    pub sparse_below: f64,
+    sparse_below: f64,
 }
 
 impl Crossover {
@@ -108,12 +110,13 @@ impl Crossover {
     /// within that machine's noise, between 0.00018 and 0.001.
     pub const CPU: Crossover = Crossover { min_triangles: 0, min_density: 0.0001, sparse_below: 0.0 };
 
-    /// A GPU's (NVIDIA H100s and an H200, six runs, 2026-11-26), the same tables: the box (12
-    /// triangles, 0.001) ran 0.94–1.16× as fast by compute; spheres of 48 to 960 triangles
-    /// (0.015–0.31) 0.65–1.07×, graphics winning by up to a third; 2,208 (0.70) 1.01–1.45×;
-    /// 3,968 (1.3) 1.16–1.44×; 9,800 (3.1) 2.04–2.27×; 101,760 (32) 9.78–11.63×. Filling the
-    /// image, the box (0.00018) ran 1.72–2.14× as fast, and 101,760 triangles 8.19–9.02× at
-    /// 256² (1.6) and 12.24–13.16× at 1024² (0.1). So what parts them is the triangle count,
+    /// A GPU's, measured on NVIDIA H100s and an H200 (six runs, 2026-11-26; every GPU takes it
+    /// until others are measured), the same tables: the box (12 triangles, 0.001) ran
+    /// 0.94–1.16× as fast by compute; spheres of 48 to 960 triangles (0.015–0.31) 0.65–1.07×,
+    /// graphics winning by up to a third; 2,208 (0.70) 1.01–1.45×; 3,968 (1.3) 1.16–1.44×;
+    /// 9,800 (3.1) 2.04–2.27×; 101,760 (32) 9.78–11.63×. Filling the image, the box (0.00018)
+    /// ran 1.72–2.14× as fast, and 101,760 triangles 8.19–9.02× at 256² (1.6) and
+    /// 12.24–13.16× at 1024² (0.1). So what parts them is the triangle count,
     /// not the density: a few hundred triangles leave most of a GPU's cores idle in the compute
     /// rasterizer, which gives one invocation to each, while its large triangles' workgroups
     /// beat the graphics pipeline's few rasterizers. The bounds lie between the measured
@@ -257,8 +260,6 @@ pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
 /// pixels past the view went missing.
 pub const MAX_REACH_PIXELS: f64 = 2_097_152.0;
 
-/// Invocations per coverage workgroup (`local_size_x` in shaders/raster.comp).
-const COVERAGE_GROUP: u32 = 64;
 /// Coverage workgroups a block, and stripes of the mesh the blocks are dealt over (`main` in
 /// shaders/raster.comp): each thread of a software rasterizer takes a share of every stripe,
 /// from meshes of DEAL_BLOCK × DEAL_STRIPES × 2 workgroups (4,096 triangles). Measured on
@@ -278,10 +279,13 @@ const MAX_GROUPS: u32 = 65_535;
 pub use crate::shader_contract::COVERAGE_MEMBERS;
 
 // A member's place (below COVERAGE_MEMBERS) goes above a triangle's index in the words and in
-// the queue of large triangles, from bit MEMBER_SHIFT, below the queue's view bit 31: both fit
+// the queue of large triangles, from bit MEMBER_SHIFT, below the queue's view bit: both fit
 // only while meshes have fewer than 2^MEMBER_SHIFT triangles.
-const _: () =
-    assert!(crate::mesh::MAX_LINKED_TRIANGLES <= 1 << MEMBER_SHIFT && COVERAGE_MEMBERS <= 1 << (31 - MEMBER_SHIFT));
+const _: () = assert!(
+    crate::mesh::MAX_LINKED_TRIANGLES <= 1 << MEMBER_SHIFT
+        && COVERAGE_MEMBERS <= 1 << (QUEUE_VIEW_BIT - MEMBER_SHIFT)
+        && COVERAGE_MEMBERS.is_power_of_two()
+);
 
 /// Storage buffers the coverage passes bind: each member's words in each view, the queue of
 /// large triangles and its dispatch arguments (a device binding fewer a stage cannot run the
@@ -310,16 +314,16 @@ struct SmallTriangles {
 
 /// Whether every triangle of a mesh whose longest edge is `longest_edge` (model units) has a
 /// box of at most 8 pixels a side (one tile) in views of pixels `pitch` or larger: its
-/// projection spans at most that edge, and a span of `w` pixels has pixel centres in a box of
-/// at most `w` + 3 (its ends' pixels rounded outward, and one more), so 4.9 pixels (below 5,
-/// for the rounding of poses and corners) leaves a box of at most 8. The small triangles'
-/// pass then leaves out the tiles' code, which a software rasterizer runs whatever the boxes:
-/// on lavapipe (2026-11-26, a slower machine than earlier notes'), the dense sphere's coverage
-/// at 256² took 6.6–8.5 ms against 8.3–11.0 (GPU stage times, best of five batches of 16, four
-/// alternations), and a 9,800-triangle sphere in the example's sensed scene verified at
-/// 713–1,010 against 566–892 hypotheses/s (batches of 256, as a GPU groups them).
+/// projection spans at most that edge, and a span of `w` pixels from `lo` has its box's pixel
+/// centres from floor(`lo` − ½) to ceil(`lo` + `w` − ½), at most ceil(`w`) + 2 of them, so 5.9
+/// pixels (below 6, for the rounding of poses and corners) leaves at most 8. The small
+/// triangles' pass then leaves out the tiles' code, which a software rasterizer runs whatever
+/// the boxes: on lavapipe (2026-11-26, a slower machine than earlier notes'), the dense
+/// sphere's coverage at 256² took 6.2–9.1 ms against 8.3–11.0 (GPU stage times, best of five
+/// batches of 16, ten alternations), and a 9,800-triangle sphere in the example's sensed scene
+/// verified at 713–1,010 against 566–892 hypotheses/s (batches of 256, as a GPU groups them).
 fn fits_one_tile(longest_edge: f64, pitch: f64) -> bool {
-    longest_edge <= 4.9 * pitch
+    longest_edge <= 5.9 * pitch
 }
 
 /// Which of shaders/raster.comp's two kinds of coverage passes.
@@ -920,13 +924,14 @@ mod tests {
         /// A span of window x (or y) no longer than the longest edge `fits_one_tile` allows,
         /// in pixels, wherever it lies: the pixel centres of its box (first `floor(lo − ½)`,
         /// last `ceil(hi − ½)`, as shaders/raster.comp's set_up finds them) number at most 8.
+        /// (Spans up to 10 pixels are drawn: one of 6.5 may have 9.)
         #[test]
         fn a_span_fits_one_tile_allows_has_at_most_eight_pixel_centres(
             lo in -1000.0f64..1000.0,
-            fraction in 0.0f64..=1.0,
+            pixels in 0.0f64..10.0,
             pitch in 1e-4f64..10.0,
         ) {
-            let edge = 4.9 * pitch * fraction;
+            let edge = pixels * pitch;
             prop_assume!(fits_one_tile(edge, pitch));
             let hi = lo + edge / pitch;
             let (first, last) = ((lo - 0.5).floor(), (hi - 0.5).ceil());
@@ -935,7 +940,8 @@ mod tests {
     }
 
     /// Each device's rule against the measured points it rests on (the Crossover constants'
-    /// docs): (triangles, footprint pixels, whether compute was the faster there).
+    /// docs): (triangles, footprint pixels, whether the rule should pick compute there: where
+    /// it ran faster, or even).
     #[test]
     fn each_devices_crossover_picks_the_rasterizer_measured_faster() {
         let cpu = [

@@ -22,7 +22,6 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
-use glam::DVec3;
 use std::sync::Arc;
 
 pub struct GpuMesh {
@@ -94,17 +93,16 @@ impl GpuMesh {
             )?,
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&links),
-            longest_edge: longest_edge(&records),
+            longest_edge: longest_edge(mesh),
         })
     }
 }
 
-/// The longest edge of the triangles, in f64 from their f32 corners.
-fn longest_edge(records: &[TriangleRecord]) -> f64 {
-    let corner = |c: [f32; 3]| DVec3::from(c.map(f64::from));
-    records
+/// The longest edge of the mesh's triangles, in f64 from their f32 corners.
+fn longest_edge(mesh: &Mesh) -> f64 {
+    mesh.triangles
         .iter()
-        .flat_map(|r| (0..3).map(move |k| corner(r.corners[k]).distance(corner(r.corners[(k + 1) % 3]))))
+        .flat_map(|t| (0..3).map(move |k| mesh.vertex(t[k]).distance(mesh.vertex(t[(k + 1) % 3]))))
         .fold(0.0, f64::max)
 }
 
@@ -130,4 +128,18 @@ fn unit_normals(mesh: &Mesh) -> Vec<[f32; 3]> {
             [n.x as f32, n.y as f32, n.z as f32]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::builtin_mesh;
+
+    #[test]
+    fn a_meshs_longest_edge_is_its_longest_side_or_diagonal() {
+        // The unit cube's triangles have sides of 1 and face diagonals of √2.
+        assert_eq!(longest_edge(&builtin_mesh("builtin:box").unwrap()), 2f64.sqrt());
+        // A square plate of side 4: its two triangles share the diagonal 4√2.
+        assert!((longest_edge(&builtin_mesh("builtin:plane:4").unwrap()) - 4.0 * 2f64.sqrt()).abs() < 1e-12);
+    }
 }
