@@ -253,6 +253,48 @@ fn verify_runs_a_batch_of_1024_from_the_cli() {
     assert!(text(&out.stdout).contains("1024 hypotheses"));
 }
 
+/// The summary says how many hypotheses each rasterizer rendered. The step: 20 triangles over
+/// its footprint of about 190² pixels (bounding radius 1.84 at pitch 0.02, with margins), 0.0006
+/// a pixel; a plate filling the image: 2 triangles over 256², 0.00003 a pixel; and the step far
+/// outside the image, which renders nothing. `auto` on a CPU device takes compute from 0.0001
+/// a pixel (the step); on a GPU under 0.004 too (both).
+#[test]
+fn verify_says_how_many_hypotheses_each_rasterizer_rendered() {
+    let (d, exr) = sensed_example("verify_rasters");
+    let pose = |x: f64| [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+    let hypotheses = serde_json::json!({ "hypotheses": [
+        { "id": "step", "model": "builtin:step", "pose": pose(0.0), "bindings": [[1, 1]] },
+        { "id": "plate", "model": "builtin:plane:8", "pose": pose(0.0), "bindings": [[1, 1]] },
+        { "id": "away", "model": "builtin:step", "pose": pose(100.0), "bindings": [[1, 1]] },
+    ]});
+    let hyps = d.join("hyps.json");
+    std::fs::write(&hyps, hypotheses.to_string()).unwrap();
+    let raster_line = |flags: &[&str]| {
+        let out = verify(&hyps, &exr, &d.join("scores.jsonl"), flags);
+        let stdout = text(&out.stdout);
+        assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+        stdout.lines().find(|l| l.starts_with("raster: ")).expect("a raster line").to_string()
+    };
+    let not_rendered = "1 not rendered (outside the image, or cast by exact mode)";
+    let auto = match common::renderer().context().is_cpu() {
+        true => "1 by compute, 1 by graphics",
+        false => "2 by compute, 0 by graphics",
+    };
+    let line = raster_line(&[]);
+    assert!(line.starts_with("raster: auto (") && line.ends_with(&format!("): {auto}, {not_rendered}")), "{line}");
+    let line = raster_line(&["--raster", "graphics"]);
+    assert_eq!(line, format!("raster: graphics: 0 by compute, 2 by graphics, {not_rendered}"));
+    // Shadow mode exact casts every hypothesis' rays on the host: none is rasterized.
+    let mut exact = hypotheses.clone();
+    exact["shadow"] = serde_json::json!({ "mode": "exact" });
+    std::fs::write(&hyps, exact.to_string()).unwrap();
+    let line = raster_line(&["--raster", "graphics"]);
+    assert_eq!(
+        line,
+        "raster: graphics: 0 by compute, 0 by graphics, 3 not rendered (outside the image, or cast by exact mode)"
+    );
+}
+
 #[test]
 fn verify_covers_hypotheses_in_groups_with_the_same_scores() {
     let (d, exr) = sensed_example("verify_grouped");

@@ -212,6 +212,7 @@ struct SummaryRow {
     scores: [f64; 7],
     rejected: Option<String>,
     unshadowed: Option<f64>,
+    raster: Option<Raster>,
 }
 
 impl From<&Verification> for SummaryRow {
@@ -222,8 +223,24 @@ impl From<&Verification> for SummaryRow {
             scores: [s.s, s.s1, s.s2, s.s3, s.s4, s.s5, s.s6],
             rejected: s.rejected.clone(),
             unshadowed: v.unshadowed.as_ref().map(|(_, u)| u.s),
+            raster: v.raster,
         }
     }
+}
+
+/// How many hypotheses each rasterizer rendered: "12 by compute, 4 by graphics", and those
+/// that rendered nothing (their footprints missed the image, or exact mode cast rays).
+fn rasterized(results: &[SummaryRow]) -> String {
+    let count = |raster: Option<Raster>| results.iter().filter(|r| r.raster == raster).count();
+    let mut parts: Vec<String> = [Raster::Compute, Raster::Graphics]
+        .into_iter()
+        .map(|raster| format!("{} by {}", count(Some(raster)), raster.as_str()))
+        .collect();
+    let none = count(None);
+    if none > 0 {
+        parts.push(format!("{none} not rendered (outside the image, or cast by exact mode)"));
+    }
+    parts.join(", ")
 }
 
 fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
@@ -231,10 +248,11 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     println!("device: {}", renderer.context().device_name());
     match renderer.raster() {
         Raster::Auto => println!(
-            "raster: auto (compute for models of {}, where the device has it; else graphics)",
-            renderer.crossover()
+            "raster: auto (compute for models of {}, where the device has it; else graphics): {}",
+            renderer.crossover(),
+            rasterized(results)
         ),
-        raster => println!("raster: {}", raster.as_str()),
+        raster => println!("raster: {}: {}", raster.as_str(), rasterized(results)),
     }
     if renderer.may_compute() {
         let n = renderer.hypotheses_per_dispatch();

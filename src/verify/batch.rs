@@ -27,7 +27,8 @@ use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestam
 use crate::mesh::Mesh;
 use crate::render::{
     draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock,
-    PassTime, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN, VISIBILITY_WORD_BYTES,
+    PassTime, Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
+    VISIBILITY_WORD_BYTES,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -151,17 +152,24 @@ pub(crate) fn slot_memory(
     Ok(rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width)) + queue)
 }
 
-/// Records and runs one batch; returns the counts (`counts_words` u32 words, each item's at
-/// its `counts_offset`).
+/// What one batch counted: `counts_words` u32 words, each item's at its `counts_offset`, and
+/// which rasterizer rendered each item (none where it rendered nothing: its footprint missed
+/// the image, or shadow mode `exact` cast its rays on the host).
+pub(crate) struct BatchCounts {
+    pub words: Vec<u32>,
+    pub rasters: Vec<Option<Raster>>,
+}
+
+/// Records and runs one batch.
 pub(crate) fn count_batch(
     renderer: &Renderer,
     score_pass: &ScorePass,
     settings: &BatchSettings,
     items: &[BatchItem],
     counts_words: usize,
-) -> Result<Vec<u32>> {
+) -> Result<BatchCounts> {
     if items.is_empty() {
-        return Ok(vec![0; counts_words]);
+        return Ok(BatchCounts { words: vec![0; counts_words], rasters: Vec::new() });
     }
     let ctx = renderer.context();
     let sensor = settings.sensor;
@@ -392,7 +400,14 @@ pub(crate) fn count_batch(
         words[item.counts_offset..item.counts_offset + item.counts_words]
             .copy_from_slice(&read[from..from + item.counts_words]);
     }
-    Ok(words)
+    let rasters = jobs
+        .iter()
+        .map(|job| match job {
+            Some(job) if job.host_view.is_none() => Some(if job.compute { Raster::Compute } else { Raster::Graphics }),
+            _ => None,
+        })
+        .collect();
+    Ok(BatchCounts { words, rasters })
 }
 
 /// What one hypothesis' score passes need: the batch's settings, the item and its job, and its

@@ -13,7 +13,9 @@
 //! images are cast on the CPU before it is submitted.
 
 use super::area::unit_scale;
-use super::batch::{count_batch, default_slots, slot_memory, BatchItem, BatchSettings, SensedBuffers, StageTimes};
+use super::batch::{
+    count_batch, default_slots, slot_memory, BatchCounts, BatchItem, BatchSettings, SensedBuffers, StageTimes,
+};
 use super::counts::{Counts, CountsLayout};
 use super::lanes::{default_chunks_in_flight, in_two_lanes};
 use super::score_pass::ScorePass;
@@ -25,7 +27,7 @@ use crate::exact;
 use crate::mesh::Mesh;
 use crate::pose::check_rigid;
 use crate::render::HostView;
-use crate::render::{GpuMesh, Renderer, MAX_SLOTS};
+use crate::render::{GpuMesh, Raster, Renderer, MAX_SLOTS};
 use crate::scene::{load_model, model_key};
 use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -88,6 +90,10 @@ pub struct Verification {
     pub scores: Scores,
     /// With `compare_shadow` and a shadow pass: the counts and scores without shadowing.
     pub unshadowed: Option<(Counts, Scores)>,
+    /// The rasterizer that rendered it (`Renderer::with_raster`; `auto` picks one a
+    /// hypothesis): none where nothing was rendered, its footprint missing the image or shadow
+    /// mode `exact` casting its rays on the host.
+    pub raster: Option<Raster>,
 }
 
 /// What a batch's checks settle for its recording.
@@ -400,8 +406,8 @@ impl Verifier {
                     item
                 })
                 .collect();
-            let words = count_batch(&self.renderer, &self.score_pass, &batch, &items, offset)?;
-            let verified = chunk.iter().zip(&items).map(|(h, item)| {
+            let BatchCounts { words, rasters } = count_batch(&self.renderer, &self.score_pass, &batch, &items, offset)?;
+            let verified = chunk.iter().zip(&items).zip(rasters).map(|((h, item), raster)| {
                 let l = layout(h);
                 let counts = l.decode(&words[item.counts_offset..item.counts_offset + l.words()], sensed.valid);
                 let scores = score(&counts, sensed, &h.bindings);
@@ -414,7 +420,7 @@ impl Verifier {
                     Some(_) => Some((counts.clone(), scores.clone())),
                     None => None,
                 };
-                Verification { id: h.id.clone(), counts, scores, unshadowed }
+                Verification { id: h.id.clone(), counts, scores, unshadowed, raster }
             });
             Ok(verified.collect())
         };
