@@ -281,6 +281,9 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             "builtin:sphere:16",
             "builtin:sphere:24",
             "builtin:sphere:32",
+            // 1,224 and 1,520 triangles: either side of a GPU crossover's 1,500 (Crossover::GPU).
+            "builtin:sphere:36",
+            "builtin:sphere:40",
             "builtin:sphere:48",
             "builtin:sphere:64",
             "builtin:sphere:100",
