@@ -13,11 +13,11 @@
 //!   A triangle whose corners lie too far from its box for 32 bits (more than 32 pixels) is
 //!   queued for that view instead, and a second, indirect dispatch gives each queued
 //!   (triangle, view) a workgroup of 64 invocations, in 64-bit arithmetic. Each view's draw
-//!   reaches both as a uniform block, copied from its draw table before them. The coverage pass deals its workgroups over the mesh ([`DEAL_BLOCK`]),
-//!   so that each thread of a software rasterizer gets a share of every part of it. Where the
-//!   mesh bounds a solid (src/mesh/solid.rs), a
-//!   triangle facing away from the camera in a view is skipped there, and one facing away in
-//!   both is skipped before its corners are read.
+//!   reaches both as a uniform block, copied from its draw table before them. The coverage
+//!   pass deals its workgroups over the mesh ([`DEAL_BLOCK`]), so that each thread of a
+//!   software rasterizer gets a share of every part of it. Where the mesh bounds a solid
+//!   (src/mesh/solid.rs), a triangle facing away from the camera in a view is skipped there,
+//!   and one facing away in both is skipped before its corners are read.
 //! - Many hypotheses a dispatch ([`CoverageGroup`]): the jobs of up to [`COVERAGE_MEMBERS`]
 //!   consecutive slots of a batch are covered by one coverage dispatch (a z slice of workgroups
 //!   each, their draws and constants in uniform blocks, their words bound side by side) and
@@ -58,6 +58,7 @@
 //! that kind of device, the graphics pipeline elsewhere.
 
 use super::draw::DrawConstants;
+use super::pipelines::built_once;
 use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use super::Draw;
@@ -356,11 +357,7 @@ impl CoveragePipelines {
         if !one_tile {
             return Ok(&self.tiled);
         }
-        if let Some(built) = self.one_tile.get() {
-            return Ok(built);
-        }
-        let built = SmallTriangles::new(&self.ctx, self.members, self.kind, false)?;
-        Ok(self.one_tile.get_or_init(|| built))
+        built_once(&self.one_tile, || SmallTriangles::new(&self.ctx, self.members, self.kind, false))
     }
 }
 
@@ -464,11 +461,7 @@ impl ComputeRasterPipelines {
 
     /// The grouped pipelines of `kind`, in `cell`, built on first use.
     fn built<'s>(&self, cell: &'s OnceLock<CoveragePipelines>, kind: Coverage) -> Result<&'s CoveragePipelines> {
-        if let Some(built) = cell.get() {
-            return Ok(built);
-        }
-        let built = CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind)?;
-        Ok(cell.get_or_init(|| built))
+        built_once(cell, || CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind))
     }
 }
 

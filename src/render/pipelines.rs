@@ -85,32 +85,36 @@ impl Pipelines {
     }
 }
 
+/// What `cell` holds, built by `build` on first use. Two threads may both build it; the one
+/// that comes second drops its own (std's fallible `get_or_try_init` is not stable).
+pub(super) fn built_once<T>(cell: &OnceLock<T>, build: impl FnOnce() -> Result<T>) -> Result<&T> {
+    if let Some(built) = cell.get() {
+        return Ok(built);
+    }
+    let built = build()?;
+    Ok(cell.get_or_init(|| built))
+}
+
 impl Pipelines {
     /// The effect pipelines, built on first use: a renderer that never meets an effect never
     /// compiles them.
     pub fn effects(&self) -> Result<&EffectPipelines> {
-        if let Some(built) = self.effects.get() {
-            return Ok(built);
-        }
-        let built = EffectPipelines::new(&self.ctx)?;
-        Ok(self.effects.get_or_init(|| built))
+        built_once(&self.effects, || EffectPipelines::new(&self.ctx))
     }
 
     /// The compute rasterizer's pipelines, built on first use; an error on a device without
     /// 64-bit buffer atomics.
     pub fn compute_raster(&self) -> Result<&ComputeRasterPipelines> {
-        if let Some(built) = self.compute_raster.get() {
-            return Ok(built);
-        }
-        if !self.ctx.supports_compute_raster() {
-            return Err(Error::Unsupported(format!(
-                "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \
-                 use the graphics rasterizer",
-                self.ctx.device_name()
-            )));
-        }
-        let built = ComputeRasterPipelines::new(&self.ctx)?;
-        Ok(self.compute_raster.get_or_init(|| built))
+        built_once(&self.compute_raster, || {
+            if !self.ctx.supports_compute_raster() {
+                return Err(Error::Unsupported(format!(
+                    "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \
+                     use the graphics rasterizer",
+                    self.ctx.device_name()
+                )));
+            }
+            ComputeRasterPipelines::new(&self.ctx)
+        })
     }
 }
 
