@@ -337,7 +337,7 @@ fn verify_keeps_the_slots_and_chunks_asked_for_with_the_same_scores() {
         std::fs::read_to_string(path).unwrap()
     };
     assert_eq!(scores("3", "1"), scores("1", "2"));
-    for (flag, bad) in [("--slots", "0"), ("--slots", "65"), ("--slots", "many"), ("--chunks-in-flight", "3")] {
+    for (flag, bad) in [("--slots", "0"), ("--slots", "65"), ("--slots", "many"), ("--chunks-in-flight", "5")] {
         let out = verify(&hyps, &exr, &d.join("s.jsonl"), &[flag, bad]);
         let stderr = text(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{flag} {bad}: {stderr}");

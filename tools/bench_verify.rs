@@ -11,9 +11,9 @@
 //! label-mode and depth-mode shadows. Both take the fastest of five batches per rasterizer,
 //! the rasterizers in turn (`fastest_in_turn`). Between them, the compute rasterizer covering
 //! one hypothesis a coverage dispatch against four (`Renderer::with_hypotheses_per_dispatch`),
-//! in runs of 4 slots and of 16 (`Verifier::with_slots`), one chunk in flight and two
+//! in runs of 4 slots, 16 and 64 (`Verifier::with_slots`), one to four chunks in flight
 //! (`Verifier::with_chunks_in_flight`), and under each model where a chunk's time goes: its
-//! wall time in runs of 16 with one chunk in flight, and the device's by stage.
+//! wall time in runs of 16 with one chunk in flight and with three, and the device's by stage.
 //! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
 //! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these four.
 //!
@@ -324,24 +324,38 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
 }
 
 /// Hypotheses per second with the compute rasterizer covering one hypothesis a coverage
-/// dispatch or COVERAGE_MEMBERS, in runs of 4 slots or 16 (`Verifier::with_slots`: one barrier
-/// a stage for each run), one chunk in flight or two (`Verifier::with_chunks_in_flight`: one
-/// recorded while the device runs the other), label-mode shadows at 256², in batches of four
+/// dispatch or COVERAGE_MEMBERS, in runs of 4 slots, 16 or 64 (`Verifier::with_slots`: one barrier
+/// a stage for each run), one to four chunks in flight (`Verifier::with_chunks_in_flight`:
+/// chunks recorded while the device runs another), label-mode shadows at 256², in batches of four
 /// chunks: of 1,024 on a GPU (the issue's goal there: 100,000 a second for a 10k-triangle
 /// model), of 64 on a CPU device.
 fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
     // (hypotheses a coverage dispatch, slots, chunks in flight): lavapipe's defaults, then
-    // the GPU's with runs of four, then sixteen, then two chunks in flight.
-    let configurations = [(1, 4, 1), (COVERAGE_MEMBERS, 4, 1), (COVERAGE_MEMBERS, 16, 1), (COVERAGE_MEMBERS, 16, 2)];
+    // the GPU's with runs of four, then sixteen, then two, three and four chunks in flight,
+    // then runs of 64 with two and four.
+    let configurations = [
+        (1, 4, 1),
+        (COVERAGE_MEMBERS, 4, 1),
+        (COVERAGE_MEMBERS, 16, 1),
+        (COVERAGE_MEMBERS, 16, 2),
+        (COVERAGE_MEMBERS, 16, 3),
+        (COVERAGE_MEMBERS, 16, 4),
+        (COVERAGE_MEMBERS, 64, 2),
+        (COVERAGE_MEMBERS, 64, 4),
+    ];
     let configured = |(members, slots, chunks): (usize, usize, usize)| -> rangesynth::Result<Verifier> {
         let renderer = Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute);
         let verifier = Verifier::new(renderer.with_hypotheses_per_dispatch(members))?;
         Ok(verifier.with_slots(slots).with_chunks_in_flight(chunks))
     };
     let verifiers: Vec<Verifier> = configurations.into_iter().map(configured).collect::<rangesynth::Result<_>>()?;
-    // The third configuration again, timing its stages on the device (which costs a little).
-    let (members, slots, chunks) = configurations[2];
-    let timed = configured(configurations[2])?.with_stage_times();
+    // The third configuration (one chunk in flight) and the fifth (a GPU's default, three)
+    // again, timing their stages on the device (which costs a little): with one chunk in
+    // flight the device waits for the host's recording, with three it need not.
+    let timed: Vec<(usize, Verifier)> = [2, 4]
+        .into_iter()
+        .map(|index| Ok((index, configured(configurations[index])?.with_stage_times())))
+        .collect::<rangesynth::Result<_>>()?;
     // Chunks of 1,024 on a GPU; on a CPU device, fewer keep the run short.
     let chunk = match (quick, verifiers[0].renderer().context().is_cpu()) {
         (true, _) => 16,
@@ -353,12 +367,11 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         "\ncompute rasterizer, hypotheses a coverage dispatch × slots a run × chunks in flight: label-mode shadows, \
          batches of {batch} in chunks of {chunk}"
     );
-    let names: Vec<String> =
-        configurations.iter().map(|(members, slots, chunks)| format!("{members}×{slots}×{chunks} hyp/s")).collect();
-    println!(
-        "{:<26} {:>14} {:>14} {:>14} {:>14} {:>24} {:>26}",
-        "model (triangles)", names[0], names[1], names[2], names[3], "barriers a hyp.", "recording µs a hyp."
-    );
+    let names: String = configurations
+        .iter()
+        .map(|(members, slots, chunks)| format!(" {:>14}", format!("{members}×{slots}×{chunks} hyp/s")))
+        .collect();
+    println!("{:<26}{names} {:>24} {:>34}", "model (triangles)", "barriers a hyp.", "recording µs a hyp.");
     let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor, ShadowMode::Label) };
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
         let mut batches = Vec::new();
@@ -367,7 +380,7 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             batches.push(hypotheses);
         }
-        let rates = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
+        let rates_by_configuration = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
         // Barriers a GPU waits at, and the host's time recording command buffers (which two
         // chunks in flight overlap with the device's work), a hypothesis: over one more batch
         // of each (the two-lane configuration's barriers are its runs'; it adds none).
@@ -381,18 +394,21 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             recording.push(format!("{:.1}", (context.recording_time() - before.1).as_secs_f64() * 1e6 / n));
         }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
-        // Its own model: a verifier's meshes live on its own device.
-        let timed_batch = hypotheses(&timed.model(model_name, Path::new("."))?, batch);
-        let stages = stage_times(&timed, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
-        let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
         let (barriers, recording) = (barriers[..3].join(" / "), recording.join(" / "));
-        let [a, b, c, d] = [rates[0], rates[1], rates[2], rates[3]];
-        println!("{name:<26} {a:>14.1} {b:>14.1} {c:>14.1} {d:>14.1} {barriers:>24} {recording:>26}");
-        let wall = chunk as f64 / c * 1e3;
-        println!(
-            "    {members}×{slots}×{chunks}, ms a chunk: {wall:.2} in all; the device's {total:.2} ({})",
-            listed(&stages)
-        );
+        let rates: String = rates_by_configuration.iter().map(|rate| format!(" {rate:>14.1}")).collect();
+        println!("{name:<26}{rates} {barriers:>24} {recording:>34}");
+        for (index, verifier) in &timed {
+            let (members, slots, chunks) = configurations[*index];
+            // Its own model: a verifier's meshes live on its own device.
+            let timed_batch = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
+            let stages = stage_times(verifier, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
+            let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
+            let wall = chunk as f64 / rates_by_configuration[*index] * 1e3;
+            println!(
+                "    {members}×{slots}×{chunks}, ms a {chunk} hypotheses: {wall:.2} in all; the device's {total:.2} ({})",
+                listed(&stages)
+            );
+        }
     }
     Ok(())
 }

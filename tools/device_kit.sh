@@ -131,7 +131,7 @@ run() {
     done
     # Much as tools/test.sh runs them: every suite with the graphics pipeline, then all but
     # compute_raster (which compares the two itself) with the compute rasterizer, which on a
-    # GPU covers four hypotheses a dispatch, in runs of 16 slots, two chunks in flight. One log
+    # GPU covers four hypotheses a dispatch, in runs of 16 slots, three chunks in flight. One log
     # a rasterizer: the device tool brings back at most 8 files.
     for raster in graphics compute; do
         for suite in "${suites[@]}"; do

@@ -15,10 +15,10 @@ export RANGESYNTH_EXPECT_DEVICE=llvmpipe
 cargo test --locked "$@"
 # The compute rasterizer through the conformance, stability and analytic suites as well (the
 # graphics pipeline ran them above), and through the verification, effects and portability
-# suites as a GPU verifies: four hypotheses a coverage dispatch, batches of 16 slots and two
+# suites as a GPU verifies: four hypotheses a coverage dispatch, batches of 16 slots and three
 # chunks in flight (lavapipe's defaults are one, 4 and one); only on a full run.
 if [ $# -eq 0 ]; then
   RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic
   RANGESYNTH_TEST_RASTER=compute RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH=4 RANGESYNTH_TEST_SLOTS=16 \
-    RANGESYNTH_TEST_CHUNKS_IN_FLIGHT=2 cargo test --locked --test verify --test effects --test portability
+    RANGESYNTH_TEST_CHUNKS_IN_FLIGHT=3 cargo test --locked --test verify --test effects --test portability
 fi

@@ -19,6 +19,7 @@ use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
+    MAX_CHUNKS_IN_FLIGHT,
 };
 use rangesynth::Renderer;
 use std::io::{BufWriter, IsTerminal, Write};
@@ -60,10 +61,11 @@ pub struct VerifyArgs {
     /// nothing). Fewer where the memory budget holds fewer. The scores are the same either way.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS as u64))]
     slots: Option<u64>,
-    /// Chunks (submissions) in flight at once, 1 or 2: with 2, one is recorded while the device
-    /// runs the other (default: 2 on a GPU; 1 on a CPU device, whose device work runs on the
-    /// same cores). One where the memory budget holds one. The scores are the same either way.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=2))]
+    /// Chunks (submissions) in flight at once, 1 to 4: with more than one, chunks are recorded
+    /// while the device runs another (default: 3 on a GPU; 1 on a CPU device, whose device work
+    /// runs on the same cores). Fewer where the memory budget holds fewer. The scores are the
+    /// same either way.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_CHUNKS_IN_FLIGHT as u64))]
     chunks_in_flight: Option<u64>,
     /// How many of the best hypotheses the summary lists.
     #[arg(long, default_value_t = 10)]

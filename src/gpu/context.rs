@@ -402,8 +402,8 @@ impl GpuContext {
     }
 
     /// Host time spent recording command buffers through this context so far, in every
-    /// thread: the host's share of a verification, which two chunks in flight overlap with the
-    /// device's work (verify/lanes.rs; bench_verify prints it a hypothesis).
+    /// thread: the host's share of a verification, which several chunks in flight overlap with
+    /// the device's work (verify/lanes.rs; bench_verify prints it a hypothesis).
     pub fn recording_time(&self) -> std::time::Duration {
         std::time::Duration::from_nanos(self.recording_nanos.load(Ordering::Relaxed))
     }

@@ -28,6 +28,9 @@ pub struct Encoder<'a> {
     pub cmd: vk::CommandBuffer,
     /// By object type and handle: handles of different types may coincide.
     current: HashMap<(vk::ObjectType, u64), Access>,
+    /// The uses named by the steps [`Encoder::record_together`] records, kept between its
+    /// calls so that its table is not built anew, and grown, for every stage.
+    named: HashMap<(vk::ObjectType, u64), Access>,
     /// Called after each stage recorded together that has a timed step, with that step's name
     /// (the first of the stage's): where a caller times stages (with_stage_laps).
     stage_lap: Option<&'a mut dyn FnMut(vk::CommandBuffer, &'static str)>,
@@ -35,7 +38,9 @@ pub struct Encoder<'a> {
 
 impl<'a> Encoder<'a> {
     pub fn new(ctx: &'a GpuContext, cmd: vk::CommandBuffer) -> Self {
-        Self { ctx, cmd, current: HashMap::new(), stage_lap: None }
+        // Room for a batch's run of slots (up to 64, several resources each) from the start.
+        let room = 512;
+        Self { ctx, cmd, current: HashMap::with_capacity(room), named: HashMap::with_capacity(room), stage_lap: None }
     }
 
     /// The same encoder, calling `lap` after each stage recorded together whose steps include
@@ -51,13 +56,13 @@ impl<'a> Encoder<'a> {
 
     /// Makes each image and buffer ready for its next use, recording one barrier for all.
     pub fn access(&mut self, images: &[(&Image, Access)], buffers: &[(&Buffer, Access)]) {
-        let mut image_transitions = Vec::new();
+        let mut image_transitions = Vec::with_capacity(images.len());
         for &(image, to) in images {
             if let Some(from) = self.transition((vk::ObjectType::IMAGE, image.raw.as_raw()), to) {
                 image_transitions.push(ImageTransition { image, from, to });
             }
         }
-        let mut buffer_transitions = Vec::new();
+        let mut buffer_transitions = Vec::with_capacity(buffers.len());
         for &(buffer, to) in buffers {
             if let Some(from) = self.transition((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to) {
                 buffer_transitions.push(BufferTransition { buffer, from, to });
@@ -73,7 +78,8 @@ impl<'a> Encoder<'a> {
     /// must be named for one use, a read: nothing would order two writes, or a write and a
     /// read, between their commands. It takes one transition.
     pub fn record_together(&mut self, steps: Vec<Step<'_>>) {
-        let mut named = HashMap::new();
+        let named = &mut self.named;
+        named.clear();
         let mut first_use = |handle: (vk::ObjectType, u64), to: Access| match named.insert(handle, to) {
             None => true,
             Some(before) => {
@@ -81,16 +87,20 @@ impl<'a> Encoder<'a> {
                 false
             }
         };
-        let images: Vec<_> = steps
-            .iter()
-            .flat_map(|step| step.images.iter().copied())
-            .filter(|&(image, to)| first_use((vk::ObjectType::IMAGE, image.raw.as_raw()), to))
-            .collect();
-        let buffers: Vec<_> = steps
-            .iter()
-            .flat_map(|step| step.buffers.iter().copied())
-            .filter(|&(buffer, to)| first_use((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to))
-            .collect();
+        let mut images = Vec::with_capacity(steps.iter().map(|step| step.images.len()).sum());
+        images.extend(
+            steps
+                .iter()
+                .flat_map(|step| step.images.iter().copied())
+                .filter(|&(image, to)| first_use((vk::ObjectType::IMAGE, image.raw.as_raw()), to)),
+        );
+        let mut buffers = Vec::with_capacity(steps.iter().map(|step| step.buffers.len()).sum());
+        buffers.extend(
+            steps
+                .iter()
+                .flat_map(|step| step.buffers.iter().copied())
+                .filter(|&(buffer, to)| first_use((vk::ObjectType::BUFFER, buffer.raw.as_raw()), to)),
+        );
         self.access(&images, &buffers);
         let lap = steps.iter().find_map(|step| step.lap);
         for step in steps {

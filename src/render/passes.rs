@@ -381,7 +381,8 @@ impl<'p> Passes<'p> {
             steps.extend(self.effects_and_sink(slot, job, Some(shadowed), sink));
             return steps;
         }
-        let mut steps = Vec::new();
+        // Room for the rasters, the mask, an effect and the sink's steps: no growing.
+        let mut steps = Vec::with_capacity(8);
         let compute = self.compute_job(slot, job);
         let shadow = self.shadow_pass(slot, job);
         match compute {
@@ -459,9 +460,11 @@ impl<'p> Passes<'p> {
                 _ => None,
             };
             let range_use = if reading_words.is_some() { Access::ComputeWrite } else { Access::ComputeRead };
-            let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, range_use)).collect();
+            let mut images = Vec::with_capacity(slot.range.colour.len() + targets.colour.len());
+            images.extend(slot.range.colour.iter().map(|image| (image, range_use)));
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
-            let mut buffers = vec![(masked, Access::ComputeWrite)];
+            let mut buffers = Vec::with_capacity(5);
+            buffers.push((masked, Access::ComputeWrite));
             buffers.extend(slot.shadow_table.map(|table| (table, Access::ComputeRead)));
             if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));

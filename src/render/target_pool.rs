@@ -8,12 +8,13 @@ use super::passes::MAX_SLOTS;
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::GpuContext;
+use crate::verify::MAX_CHUNKS_IN_FLIGHT;
 use std::sync::{Arc, Mutex};
 
-/// Views' targets the pool keeps when no call uses them: those of a verification's two chunks
+/// Views' targets the pool keeps when no call uses them: those of a verification's most chunks
 /// in flight (src/verify/lanes.rs), each of the most slots a batch may keep, each slot with a
 /// range and a shadow view (a call returns only those it used).
-pub const KEPT: usize = 2 * 2 * MAX_SLOTS;
+pub const KEPT: usize = MAX_CHUNKS_IN_FLIGHT * 2 * MAX_SLOTS;
 
 /// Free targets with their kind and size.
 type Kept = (ViewKind, (u32, u32), ViewTargets);

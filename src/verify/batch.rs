@@ -429,8 +429,9 @@ impl<'a> ScoreJob<'a> {
         let (counts, at) = self.slot_counts;
         let steps = move |images: JobImages<'a>| -> Vec<Step<'a>> {
             let reads = vec![(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
-            let mut buffers = vec![(settings.sensed.pixels, Access::ComputeRead), (counts, Access::ComputeWrite)];
             let effect_outputs = [images.shadowed_labels, images.losses, images.measured_z];
+            let mut buffers = Vec::with_capacity(2 + effect_outputs.len());
+            buffers.extend([(settings.sensed.pixels, Access::ComputeRead), (counts, Access::ComputeWrite)]);
             buffers.extend(effect_outputs.into_iter().flatten().map(|b| (b, Access::ComputeRead)));
             let sources = ScoreSources {
                 shadowed: images.shadowed_labels.is_some(),
@@ -439,15 +440,17 @@ impl<'a> ScoreJob<'a> {
             };
             let first = self.constants(at);
             let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
-            let mut steps = vec![Step::new(reads.clone(), buffers.clone(), record).timed("score")];
-            if let (Some(offset), Some(_)) = (item.unshadowed_offset, images.shadowed_labels) {
-                debug_assert!((item.counts_offset..item.counts_offset + item.counts_words).contains(&offset));
-                let again = self.constants(at + offset - item.counts_offset);
-                let unshadowed = ScoreSources { shadowed: false, ..sources };
-                let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
-                steps.push(Step::new(reads, buffers, record).timed("score (unshadowed)"));
-            }
-            steps
+            let Some(offset) = item.unshadowed_offset.filter(|_| images.shadowed_labels.is_some()) else {
+                return vec![Step::new(reads, buffers, record).timed("score")];
+            };
+            debug_assert!((item.counts_offset..item.counts_offset + item.counts_words).contains(&offset));
+            let again = self.constants(at + offset - item.counts_offset);
+            let unshadowed = ScoreSources { shadowed: false, ..sources };
+            let record_again = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
+            vec![
+                Step::new(reads.clone(), buffers.clone(), record).timed("score"),
+                Step::new(reads, buffers, record_again).timed("score (unshadowed)"),
+            ]
         };
         // The unshadowed labels are the range view's.
         Sink::Compute { steps: Box::new(steps), reads_range_label: item.unshadowed_offset.is_some() }

@@ -1,37 +1,45 @@
-//! Two chunks of a verification in flight: while the device runs one chunk's command buffer,
-//! the host records the next. A chunk's recording is host work: 5.0–8.2 µs a hypothesis on
-//! this project's 2-core machine (`GpuContext::recording_time`, which bench_verify's grouping
-//! table prints, 2026-11-25), with 0.5–1.8 µs more to plan it. Recorded and run one after the
-//! other,
-//! that adds to every hypothesis' time on a GPU, whose passes for a 10k-triangle model at 256²
-//! should take about 10 µs (the compute rasterizer's goal: 100,000 hypotheses a second). So
-//! on a GPU a call's chunks go to two lanes, the caller's thread and one more, each taking the
-//! next chunk when it is done with its last: each lane has at most one chunk in flight, and
-//! the verifier's plan counts the memory of two. A call is then split into a few chunks at
-//! least (verifier.rs, `LANE_CHUNKS`), or one chunk's recording would overlap nothing.
+//! Several chunks of a verification in flight: while the device runs one chunk's command
+//! buffer, the host records the next. A chunk's recording is host work: 5.0–8.2 µs a
+//! hypothesis on this project's 2-core machine (`GpuContext::recording_time`, which
+//! bench_verify's grouping table prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and
+//! 6–10 µs on the NVIDIA machines' hosts, where the device takes about 6 µs a hypothesis for a
+//! 10k-triangle model at 256². Recorded and run one after the other, that adds to every
+//! hypothesis' time. So on a GPU a call's chunks go to lanes, the caller's thread and more,
+//! each taking the next chunk when it is done with its last: each lane has at most one chunk
+//! in flight, and the verifier's plan counts the memory of one chunk a lane. A call is then
+//! split into a few chunks a lane at least (verifier.rs, `LANE_CHUNKS`), or one chunk's
+//! recording would overlap nothing.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 
+/// Most chunks a verification may keep in flight (`Verifier::with_chunks_in_flight`).
+pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
+
 /// Chunks a verification keeps in flight unless the caller says otherwise
-/// (`Verifier::with_chunks_in_flight`): 2 on a GPU; 1 on a CPU device such as lavapipe, whose
-/// device work runs on the host's own cores, where a second lane only contends with it.
+/// (`Verifier::with_chunks_in_flight`): 3 on a GPU; 1 on a CPU device such as lavapipe, whose
+/// device work runs on the host's own cores, where a second lane only contends with it. On an
+/// NVIDIA H200 (2026-11-26, two runs of `bench_verify -- --rasters`, batches of 4,096 at 256²),
+/// a third lane took the box from 110,000–114,000 to 125,000–131,000 hypotheses a second and
+/// the 9,800-triangle sphere from 117,000–119,000 to 128,000–131,000; a fourth gained no more,
+/// and took the 101,760-triangle sphere from 104,000–105,000 down to 84,000–86,000.
 pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
     if ctx.is_cpu() {
         1
     } else {
-        2
+        3
     }
 }
 
-/// Runs `job` on chunks `0..count` in two lanes (the calling thread, and one more where one
-/// can be started; else all on the caller's), and hands each chunk's output to `done`, on the
-/// calling thread, in chunk order. The first failure, a job's in chunk order or `done`'s,
-/// stops the lanes from starting further chunks and is returned; the outputs before it have
-/// been handed on. A job that panics stops them too, and its panic goes on in the caller's
-/// thread.
-pub(crate) fn in_two_lanes<T: Send, E: Send>(
+/// Runs `job` on chunks `0..count` in `lanes` lanes (the calling thread, and one more thread
+/// a lane where it can be started; else fewer, down to the caller's alone), and hands each
+/// chunk's output to `done`, on the calling thread, in chunk order. The first failure, a
+/// job's in chunk order or `done`'s, stops the lanes from starting further chunks and is
+/// returned; the outputs before it have been handed on. A job that panics stops them too, and
+/// its panic goes on in the caller's thread.
+pub(crate) fn in_lanes<T: Send, E: Send>(
+    lanes: usize,
     count: usize,
     job: impl Fn(usize) -> Result<T, E> + Sync,
     mut done: impl FnMut(usize, T) -> Result<(), E>,
@@ -57,19 +65,27 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
     };
     let take = &take;
     std::thread::scope(|scope| {
-        // The other lane waits to send a second output until the first is taken: neither
-        // lane runs more than a chunk ahead of those handed on, so a call holds the outputs
-        // of a few chunks at most.
-        let (send, receive) = mpsc::sync_channel(1);
-        // Without a second thread, the caller's lane takes every chunk.
-        let helper =
-            std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, move || {
-                while let Some(ran) = take() {
-                    if send.send(ran).is_err() {
-                        return;
+        // The other lanes wait to send a second output until their first is taken: no lane
+        // runs more than a chunk ahead of those handed on, so a call holds the outputs of a
+        // few chunks a lane at most.
+        let (send, receive) = mpsc::sync_channel(lanes.saturating_sub(1));
+        // Where a thread cannot be started, the lanes that could take every chunk.
+        let helpers: Vec<_> = (1..lanes.max(1))
+            .filter_map(|_| {
+                let send = send.clone();
+                let lane = move || {
+                    while let Some(ran) = take() {
+                        if send.send(ran).is_err() {
+                            return;
+                        }
                     }
-                }
-            });
+                };
+                std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, lane).ok()
+            })
+            .collect();
+        // The receiver ends once every other lane has.
+        drop(send);
+        let running = 1 + helpers.len();
         let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
         let handed = (|| {
             // The caller's lane, handing on what is ready before each of its chunks.
@@ -78,8 +94,9 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
                     order.waiting[chunk] = Some(output);
                 }
                 order.hand_on(&mut done)?;
-                // Two chunks taken and not handed on: the other lane's is next; wait for it.
-                if next.load(Ordering::Acquire) >= order.handed + 2 {
+                // A chunk taken and not handed on in every lane: another lane's is next; wait
+                // for it.
+                if next.load(Ordering::Acquire) >= order.handed + running {
                     if let Ok((chunk, output)) = receive.recv() {
                         order.waiting[chunk] = Some(output);
                         continue;
@@ -88,7 +105,7 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
                 let Some((chunk, output)) = take() else { break };
                 order.waiting[chunk] = Some(output);
             }
-            // The other lane's last chunks.
+            // The other lanes' last chunks.
             for (chunk, output) in receive {
                 order.waiting[chunk] = Some(output);
                 order.hand_on(&mut done)?;
@@ -96,13 +113,15 @@ pub(crate) fn in_two_lanes<T: Send, E: Send>(
             Ok(())
         })();
         if handed.is_err() {
-            // `done` may have failed with the other lane still running: it starts no more.
+            // `done` may have failed with other lanes still running: they start no more.
             failed.store(true, Ordering::Release);
             return handed;
         }
-        // A panic in the other lane goes on here, as it would have in one lane.
-        if let Ok(Err(panic)) = helper.map(|lane| lane.join()) {
-            std::panic::resume_unwind(panic);
+        // A panic in another lane goes on here, as it would have in one lane.
+        for helper in helpers {
+            if let Err(panic) = helper.join() {
+                std::panic::resume_unwind(panic);
+            }
         }
         Ok(())
     })
@@ -137,61 +156,67 @@ impl<T, E> InOrder<T, E> {
 
 #[cfg(test)]
 mod tests {
-    use super::in_two_lanes;
+    use super::in_lanes;
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::time::{Duration, Instant};
 
     #[test]
-    fn outputs_come_in_chunk_order_from_two_threads_at_once() {
-        // Chunks 0 and 1 each wait, up to 10 s, until both are running: in one lane they
-        // cannot be, and the first fails.
-        let inside = AtomicUsize::new(0);
-        let mut handed = Vec::new();
-        let result = in_two_lanes(
-            6,
-            |chunk| {
-                if chunk < 2 {
-                    inside.fetch_add(1, Ordering::SeqCst);
-                    let start = Instant::now();
-                    while inside.load(Ordering::SeqCst) < 2 {
-                        if start.elapsed() > Duration::from_secs(10) {
-                            return Err(format!("chunk {chunk} ran alone"));
+    fn outputs_come_in_chunk_order_from_as_many_threads_at_once_as_lanes() {
+        for lanes in [2, 4] {
+            // Chunks 0 to lanes - 1 each wait, up to 10 s, until all of them are running: in
+            // fewer lanes they cannot be, and the first fails.
+            let inside = AtomicUsize::new(0);
+            let mut handed = Vec::new();
+            let result = in_lanes(
+                lanes,
+                3 * lanes,
+                |chunk| {
+                    if chunk < lanes {
+                        inside.fetch_add(1, Ordering::SeqCst);
+                        let start = Instant::now();
+                        while inside.load(Ordering::SeqCst) < lanes {
+                            if start.elapsed() > Duration::from_secs(10) {
+                                return Err(format!("chunk {chunk} of {lanes} lanes ran without the others"));
+                            }
+                            std::thread::sleep(Duration::from_millis(1));
                         }
-                        std::thread::sleep(Duration::from_millis(1));
                     }
-                }
-                Ok(chunk * 10)
-            },
-            |chunk, output| {
-                handed.push((chunk, output));
-                Ok(())
-            },
-        );
-        assert_eq!(result, Ok(()));
-        assert_eq!(handed, (0..6).map(|c| (c, c * 10)).collect::<Vec<_>>());
+                    Ok(chunk * 10)
+                },
+                |chunk, output| {
+                    handed.push((chunk, output));
+                    Ok(())
+                },
+            );
+            assert_eq!(result, Ok(()));
+            assert_eq!(handed, (0..3 * lanes).map(|c| (c, c * 10)).collect::<Vec<_>>());
+        }
     }
 
     #[test]
     fn no_lane_runs_far_ahead_of_a_slow_chunk() {
-        // While chunk 0 takes 200 ms, the other lane may run a chunk and hold one more
-        // output: chunks 0 to 3 have started by its end, not the other 96.
-        let started = AtomicUsize::new(0);
-        let started_by_the_end_of_0 = AtomicUsize::new(0);
-        let result: Result<(), ()> = in_two_lanes(
-            100,
-            |chunk| {
-                started.fetch_add(1, Ordering::SeqCst);
-                if chunk == 0 {
-                    std::thread::sleep(Duration::from_millis(200));
-                    started_by_the_end_of_0.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
-                }
-                Ok(chunk)
-            },
-            |_, _| Ok(()),
-        );
-        assert_eq!(result, Ok(()));
-        let ahead = started_by_the_end_of_0.load(Ordering::SeqCst);
-        assert!(ahead <= 4, "{ahead} chunks had started when chunk 0 ended");
+        for lanes in [2, 3] {
+            // While chunk 0 takes 200 ms, each other lane may run a chunk and hold one more
+            // output: at most two chunks a lane have started by its end, not the other 90-odd.
+            let started = AtomicUsize::new(0);
+            let started_by_the_end_of_0 = AtomicUsize::new(0);
+            let result: Result<(), ()> = in_lanes(
+                lanes,
+                100,
+                |chunk| {
+                    started.fetch_add(1, Ordering::SeqCst);
+                    if chunk == 0 {
+                        std::thread::sleep(Duration::from_millis(200));
+                        started_by_the_end_of_0.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
+                    }
+                    Ok(chunk)
+                },
+                |_, _| Ok(()),
+            );
+            assert_eq!(result, Ok(()));
+            let ahead = started_by_the_end_of_0.load(Ordering::SeqCst);
+            assert!(ahead <= 2 * lanes, "{ahead} chunks had started in {lanes} lanes when chunk 0 ended");
+        }
     }
 
     #[test]
@@ -200,7 +225,8 @@ mod tests {
         // they could run the other 96.
         let started = AtomicUsize::new(0);
         let mut handed = Vec::new();
-        let result = in_two_lanes(
+        let result = in_lanes(
+            2,
             100,
             |chunk| {
                 started.fetch_add(1, Ordering::Relaxed);
@@ -224,7 +250,8 @@ mod tests {
     #[test]
     fn a_failure_to_take_an_output_stops_the_lanes() {
         let started = AtomicUsize::new(0);
-        let result = in_two_lanes(
+        let result = in_lanes(
+            2,
             100,
             |chunk| -> Result<usize, usize> {
                 started.fetch_add(1, Ordering::Relaxed);
@@ -243,7 +270,8 @@ mod tests {
         // take tens of milliseconds) and the unwinding begins: chunks of 20 ms leave room.
         let started = AtomicUsize::new(0);
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            in_two_lanes(
+            in_lanes(
+                2,
                 100,
                 |chunk| -> Result<usize, ()> {
                     started.fetch_add(1, Ordering::Relaxed);

@@ -15,6 +15,7 @@ mod verifier;
 
 pub use counts::{Counts, CountsLayout};
 pub use hypothesis::{HypothesisEntry, HypothesisFile, DEFAULT_TOLERANCE};
+pub use lanes::MAX_CHUNKS_IN_FLIGHT;
 pub use report::{CountsRecord, Record, ScoresRecord};
 pub use scores::{score, BindingDetail, Scores};
 pub use sensed::SensedImage;

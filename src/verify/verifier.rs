@@ -17,7 +17,7 @@ use super::batch::{
     count_batch, default_slots, slot_memory, BatchCounts, BatchItem, BatchSettings, SensedBuffers, StageTimes,
 };
 use super::counts::{Counts, CountsLayout};
-use super::lanes::{default_chunks_in_flight, in_two_lanes};
+use super::lanes::{default_chunks_in_flight, in_lanes, MAX_CHUNKS_IN_FLIGHT};
 use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
@@ -46,9 +46,10 @@ pub const EXACT_CHUNK: usize = 16;
 /// Most bytes of counts one chunk may hold (less on a device with a small heap).
 pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
 
-/// Chunks a call is split into, at least, where two are in flight (lanes.rs): all but the
-/// first one's recording (a quarter of the host's work) overlaps the device's work.
-const LANE_CHUNKS: usize = 4;
+/// Chunks a call is split into, at least, a lane, where several are in flight (lanes.rs): with
+/// two, all but the first one's recording (a quarter of the host's work) overlaps the device's
+/// work.
+const LANE_CHUNKS: usize = 2;
 /// Fewest hypotheses in such a chunk: a chunk's own set-up (its slots, counts and readback,
 /// one submission and wait) is paid over at least this many.
 const MIN_LANE_CHUNK: usize = 64;
@@ -106,8 +107,8 @@ struct BatchPlan {
     counts_budget: u64,
     /// Render-target slots a batch keeps: as many as asked for that the budget holds.
     slots: usize,
-    /// Chunks in flight at once (lanes.rs): 2 where the verifier asks for two and the budget
-    /// holds their slots and counts, else 1.
+    /// Chunks in flight at once (lanes.rs): as many as the verifier asks for whose slots and
+    /// counts the budget holds, at least 1.
     lanes: usize,
 }
 
@@ -159,14 +160,15 @@ impl Verifier {
         self.slots
     }
 
-    /// The same verifier, keeping up to `n` chunks of a call in flight at once (1 or 2): with
-    /// 2, one chunk is recorded while the device runs another (lanes.rs). The default is 2 on
-    /// a GPU and 1 on a CPU device, whose "device" is the host's own cores: there the two
-    /// lanes only contend (lavapipe: 0.32–0.40 against 0.33–0.45 ms a hypothesis for the box
-    /// at 64² in chunks of 64). Two need the memory of two chunks; a call keeps one where the
-    /// budget holds one. The counts and scores are the same either way.
+    /// The same verifier, keeping up to `n` chunks of a call in flight at once (clamped to 1
+    /// to [`MAX_CHUNKS_IN_FLIGHT`]): with more than one, chunks are recorded while the device
+    /// runs another (lanes.rs). The default is 3 on a GPU and 1 on a CPU device, whose
+    /// "device" is the host's own cores: there the lanes only contend (lavapipe: 0.32–0.40
+    /// against 0.33–0.45 ms a hypothesis for the box at 64² in chunks of 64). Each needs the
+    /// memory of a chunk; a call keeps as many as the budget holds. The counts and scores are
+    /// the same either way.
     pub fn with_chunks_in_flight(self, n: usize) -> Self {
-        Self { chunks_in_flight: n.clamp(1, 2), ..self }
+        Self { chunks_in_flight: n.clamp(1, MAX_CHUNKS_IN_FLIGHT), ..self }
     }
 
     /// Most chunks of a call in flight at once.
@@ -294,7 +296,7 @@ impl Verifier {
         };
         // The sensed image on the host and the GPU; and a chunk's: its counts with their
         // readback, its exact images and its slots, as many as the budget holds, up to those
-        // asked for. Two chunks in flight (lanes.rs) where the budget holds both.
+        // asked for. As many chunks in flight (lanes.rs) as asked for and the budget holds.
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
         let chunk_bytes = 2 * counts + exact_bytes;
@@ -304,9 +306,10 @@ impl Verifier {
         let in_flight = chunk_bytes + per_slot * plan.slots as u64;
         let what = format_args!("verifying against a {}×{} image", sensor.width, sensor.height);
         budget.check(what, sensed_bytes + in_flight)?;
-        if self.chunks_in_flight == 2 && sensed_bytes + 2 * in_flight <= budget.bytes() {
-            plan.lanes = 2;
-        }
+        plan.lanes = (1..=self.chunks_in_flight)
+            .rev()
+            .find(|&lanes| sensed_bytes + lanes as u64 * in_flight <= budget.bytes())
+            .unwrap_or(1);
         Ok(plan)
     }
 
@@ -361,12 +364,12 @@ impl Verifier {
             ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
             _ => settings.chunk_size.clamp(1, MAX_CHUNK),
         };
-        // In two lanes, a call of one chunk would overlap nothing: it goes in a few
+        // In lanes, a call of one chunk would overlap nothing: it goes in a few a lane
         // (LANE_CHUNKS), so that every chunk's recording but the first's overlaps the device's
         // work on another.
         let chunk_cap = match plan.lanes {
-            2 => chunk_cap.min(hypotheses.len().div_ceil(LANE_CHUNKS).max(MIN_LANE_CHUNK)),
-            _ => chunk_cap,
+            1 => chunk_cap,
+            lanes => chunk_cap.min(hypotheses.len().div_ceil(LANE_CHUNKS * lanes).max(MIN_LANE_CHUNK)),
         };
         // Each chunk as long as its cap and the counts budget allow.
         let mut chunks: Vec<Range<usize>> = Vec::new();
@@ -424,9 +427,10 @@ impl Verifier {
             });
             Ok(verified.collect())
         };
-        // Two chunks in flight where there are two and the budget holds both (lanes.rs).
-        if plan.lanes == 2 && chunks.len() > 1 {
-            in_two_lanes(chunks.len(), |chunk| verify_chunk(chunks[chunk].clone()), |_, verified| each(verified))
+        // Several chunks in flight where there are several and the budget holds them (lanes.rs).
+        if plan.lanes > 1 && chunks.len() > 1 {
+            let lanes = plan.lanes.min(chunks.len());
+            in_lanes(lanes, chunks.len(), |chunk| verify_chunk(chunks[chunk].clone()), |_, verified| each(verified))
         } else {
             chunks.iter().try_for_each(|range| each(verify_chunk(range.clone())?))
         }

@@ -24,7 +24,7 @@ use std::sync::{Arc, LazyLock};
 /// The test binary's one verifier; its renderer is the one every GPU test uses. It keeps as
 /// many slots a batch, and chunks in flight, as `RANGESYNTH_TEST_SLOTS` and
 /// `RANGESYNTH_TEST_CHUNKS_IN_FLIGHT` say (the device's defaults unless they are set:
-/// tools/test.sh runs the verification suite again with a GPU's, 16 and 2).
+/// tools/test.sh runs the verification suite again with a GPU's, 16 and 3).
 pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
     let count =
         |name: &str| std::env::var(name).ok().map(|n| n.parse().unwrap_or_else(|_| panic!("{name} is a count")));
