@@ -20,10 +20,10 @@ pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
 /// Chunks a verification keeps in flight unless the caller says otherwise
 /// (`Verifier::with_chunks_in_flight`): 3 on a GPU; 1 on a CPU device such as lavapipe, whose
 /// device work runs on the host's own cores, where a second lane only contends with it. On an
-/// NVIDIA H200 (2026-11-26, two runs of `bench_verify -- --rasters`, batches of 4,096 at 256²),
-/// a third lane took the box from 110,000–114,000 to 125,000–131,000 hypotheses a second and
-/// the 9,800-triangle sphere from 117,000–119,000 to 128,000–131,000; a fourth gained no more,
-/// and took the 101,760-triangle sphere from 104,000–105,000 down to 84,000–86,000.
+/// NVIDIA H200 (2026-11-26, nine runs of `bench_verify -- --rasters`, batches of 4,096 at 256²),
+/// a third lane gained 1–21% over two in every run (the 9,800-triangle sphere 93,100–119,800 →
+/// 101,600–131,000 hypotheses a second); a fourth gained 0–14% more for that sphere and the box,
+/// but lost 9–22% for a 101,760-triangle sphere.
 pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
     if ctx.is_cpu() {
         1
