@@ -258,8 +258,8 @@ fn a_batch_of_1024_runs_in_chunks() {
     let settings = VerifySettings { chunk_size: 256, ..settings(sensor, ShadowMode::Depth) };
     let results = VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |done| reports.push(done)).unwrap();
     assert_no_validation_messages();
-    // Chunks of 256, or in lanes at least two chunks a lane (src/verify/lanes.rs): with three
-    // lanes, six chunks of ⌈1024 / 6⌉ = 171 (the last 169), with four, eight of 128.
+    // Chunks of 256, or in lanes at least two chunks a lane (LANE_CHUNKS, verifier.rs): with
+    // three lanes, six chunks of ⌈1024 / 6⌉ = 171 (the last 169), with four, eight of 128.
     let chunk = match VERIFIER.chunks_in_flight() {
         1 | 2 => 256,
         3 => 171,

@@ -371,7 +371,7 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         .iter()
         .map(|(members, slots, chunks)| format!(" {:>14}", format!("{members}×{slots}×{chunks} hyp/s")))
         .collect();
-    println!("{:<26}{names} {:>24} {:>34}", "model (triangles)", "barriers a hyp.", "recording µs a hyp.");
+    println!("{:<26}{names} {:>40} {:>34}", "model (triangles)", "barriers a hyp.", "recording µs a hyp.");
     let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor, ShadowMode::Label) };
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
         let mut batches = Vec::new();
@@ -381,9 +381,9 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             batches.push(hypotheses);
         }
         let rates_by_configuration = rates_in_turn(&verifiers.iter().collect::<Vec<_>>(), sensed, &settings, &batches)?;
-        // Barriers a GPU waits at, and the host's time recording command buffers (which two
-        // chunks in flight overlap with the device's work), a hypothesis: over one more batch
-        // of each (the two-lane configuration's barriers are its runs'; it adds none).
+        // Barriers a GPU waits at, and the host's time recording command buffers (which chunks
+        // in flight overlap with the device's work), a hypothesis: over one more batch of each
+        // (more chunks in flight add no barriers: a configuration's barriers are its runs').
         let (mut barriers, mut recording) = (Vec::new(), Vec::new());
         for (verifier, hypotheses) in verifiers.iter().zip(&batches) {
             let context = verifier.renderer().context();
@@ -394,18 +394,21 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             recording.push(format!("{:.1}", (context.recording_time() - before.1).as_secs_f64() * 1e6 / n));
         }
         let name = format!("{model_name} ({})", batches[0][0].model.mesh.triangles.len());
-        let (barriers, recording) = (barriers[..3].join(" / "), recording.join(" / "));
+        let (barriers, recording) = (barriers.join(" / "), recording.join(" / "));
         let rates: String = rates_by_configuration.iter().map(|rate| format!(" {rate:>14.1}")).collect();
-        println!("{name:<26}{rates} {barriers:>24} {recording:>34}");
+        println!("{name:<26}{rates} {barriers:>40} {recording:>34}");
         for (index, verifier) in &timed {
             let (members, slots, chunks) = configurations[*index];
             // Its own model: a verifier's meshes live on its own device.
             let timed_batch = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
             let stages = stage_times(verifier, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
             let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
+            // In time a chunk of `chunk` hypotheses (with several in flight, a call goes in
+            // shorter ones: two a lane at least; verifier.rs).
             let wall = chunk as f64 / rates_by_configuration[*index] * 1e3;
+            let shape = format!("{members}×{slots}×{chunks}");
             println!(
-                "    {members}×{slots}×{chunks}, ms a {chunk} hypotheses: {wall:.2} in all; the device's {total:.2} ({})",
+                "    {shape}, ms a {chunk} hypotheses: {wall:.2} in all; the device's {total:.2} ({})",
                 listed(&stages)
             );
         }

@@ -2,7 +2,7 @@
 //! buffer, the host records the next. A chunk's recording is host work: 5.0–8.2 µs a
 //! hypothesis on this project's 2-core machine (`GpuContext::recording_time`, which
 //! bench_verify's grouping table prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and
-//! 6–10 µs on the NVIDIA machines' hosts, where the device takes about 6 µs a hypothesis for a
+//! 5–11 µs on the NVIDIA machines' hosts, where the device takes about 6 µs a hypothesis for a
 //! 10k-triangle model at 256². Recorded and run one after the other, that adds to every
 //! hypothesis' time. So on a GPU a call's chunks go to lanes, the caller's thread and more,
 //! each taking the next chunk when it is done with its last: each lane has at most one chunk
@@ -12,7 +12,7 @@
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::{mpsc, Condvar, Mutex};
 
 /// Most chunks a verification may keep in flight (`Verifier::with_chunks_in_flight`).
 pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
@@ -44,19 +44,22 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
     job: impl Fn(usize) -> Result<T, E> + Sync,
     mut done: impl FnMut(usize, T) -> Result<(), E>,
 ) -> Result<(), E> {
-    let next = AtomicUsize::new(0);
-    let failed = AtomicBool::new(false);
+    let shared = Shared::default();
+    // How far ahead of the outputs handed on a lane may start a chunk: a call holds the outputs
+    // of a few chunks a lane at most, however slow one chunk is.
+    let window = 2 * lanes.max(1);
     // The next chunk a lane runs, and its output; none once every chunk is taken or one failed.
-    let take = || {
-        if failed.load(Ordering::Acquire) {
+    // The caller's lane takes one only when it may (below); another lane waits for its window.
+    let take = |helper: bool| {
+        if shared.failed.load(Ordering::Acquire) {
             return None;
         }
-        let chunk = next.fetch_add(1, Ordering::AcqRel);
-        if chunk >= count {
+        let chunk = shared.next.fetch_add(1, Ordering::AcqRel);
+        if chunk >= count || (helper && !shared.may_start(chunk, window)) {
             return None;
         }
-        // Marks the lanes failed unless the job returns Ok: an Err, or a panic unwinding.
-        let stop = StopUnlessDone(&failed);
+        // Stops the lanes unless the job returns Ok: an Err, or a panic unwinding.
+        let stop = StopUnlessDone(&shared);
         let output = job(chunk);
         if output.is_ok() {
             std::mem::forget(stop);
@@ -65,56 +68,59 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
     };
     let take = &take;
     std::thread::scope(|scope| {
-        // The other lanes wait to send a second output until their first is taken: no lane
-        // runs more than a chunk ahead of those handed on, so a call holds the outputs of a
-        // few chunks a lane at most.
+        // The other lanes wait to send a second output until their first is taken.
         let (send, receive) = mpsc::sync_channel(lanes.saturating_sub(1));
         // Where a thread cannot be started, the lanes that could take every chunk.
         let helpers: Vec<_> = (1..lanes.max(1))
             .filter_map(|_| {
                 let send = send.clone();
                 let lane = move || {
-                    while let Some(ran) = take() {
+                    while let Some(ran) = take(true) {
                         if send.send(ran).is_err() {
                             return;
                         }
                     }
                 };
-                std::thread::Builder::new().name("rangesynth verification lane".into()).spawn_scoped(scope, lane).ok()
+                std::thread::Builder::new().name(LANE_THREAD.into()).spawn_scoped(scope, lane).ok()
             })
             .collect();
         // The receiver ends once every other lane has.
         drop(send);
         let running = 1 + helpers.len();
         let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
+        let mut hand_on = |order: &mut InOrder<T, E>| {
+            let result = order.hand_on(&mut done);
+            shared.handed_on(order.handed);
+            result
+        };
         let handed = (|| {
             // The caller's lane, handing on what is ready before each of its chunks.
             loop {
                 for (chunk, output) in receive.try_iter() {
                     order.waiting[chunk] = Some(output);
                 }
-                order.hand_on(&mut done)?;
+                hand_on(&mut order)?;
                 // A chunk taken and not handed on in every lane: another lane's is next; wait
                 // for it.
-                if next.load(Ordering::Acquire) >= order.handed + running {
+                if shared.next.load(Ordering::Acquire) >= order.handed + running {
                     if let Ok((chunk, output)) = receive.recv() {
                         order.waiting[chunk] = Some(output);
                         continue;
                     }
                 }
-                let Some((chunk, output)) = take() else { break };
+                let Some((chunk, output)) = take(false) else { break };
                 order.waiting[chunk] = Some(output);
             }
             // The other lanes' last chunks.
             for (chunk, output) in receive {
                 order.waiting[chunk] = Some(output);
-                order.hand_on(&mut done)?;
+                hand_on(&mut order)?;
             }
             Ok(())
         })();
         if handed.is_err() {
             // `done` may have failed with other lanes still running: they start no more.
-            failed.store(true, Ordering::Release);
+            shared.stop();
             return handed;
         }
         // A panic in another lane goes on here, as it would have in one lane.
@@ -127,12 +133,51 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
     })
 }
 
-/// Sets the flag when dropped: forgotten once a job succeeds.
-struct StopUnlessDone<'a>(&'a AtomicBool);
+/// The name of the threads of the lanes beside the caller's.
+const LANE_THREAD: &str = "rangesynth verification lane";
+
+/// What the lanes share: the next chunk to take, whether they stop, and how many outputs the
+/// caller's lane has handed on, which the other lanes wait on to start a chunk.
+#[derive(Default)]
+struct Shared {
+    next: AtomicUsize,
+    failed: AtomicBool,
+    handed: Mutex<usize>,
+    moved: Condvar,
+}
+
+impl Shared {
+    /// Stops the lanes: none starts a chunk after this, and none waits to.
+    fn stop(&self) {
+        self.failed.store(true, Ordering::Release);
+        // Under the lock, so that a lane between its test of the flag and its wait is woken.
+        let _handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
+        self.moved.notify_all();
+    }
+
+    /// `handed` outputs have been handed on.
+    fn handed_on(&self, handed: usize) {
+        *self.handed.lock().unwrap_or_else(|p| p.into_inner()) = handed;
+        self.moved.notify_all();
+    }
+
+    /// Waits until `chunk` lies within `window` chunks of the outputs handed on, and says
+    /// whether to start it: not once the lanes stop.
+    fn may_start(&self, chunk: usize, window: usize) -> bool {
+        let mut handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
+        while chunk >= *handed + window && !self.failed.load(Ordering::Acquire) {
+            handed = self.moved.wait(handed).unwrap_or_else(|p| p.into_inner());
+        }
+        !self.failed.load(Ordering::Acquire)
+    }
+}
+
+/// Stops the lanes when dropped: forgotten once a job succeeds.
+struct StopUnlessDone<'a>(&'a Shared);
 
 impl Drop for StopUnlessDone<'_> {
     fn drop(&mut self) {
-        self.0.store(true, Ordering::Release);
+        self.0.stop();
     }
 }
 
@@ -156,8 +201,9 @@ impl<T, E> InOrder<T, E> {
 
 #[cfg(test)]
 mod tests {
-    use super::in_lanes;
+    use super::{in_lanes, LANE_THREAD};
     use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
     use std::time::{Duration, Instant};
 
     #[test]
@@ -195,27 +241,38 @@ mod tests {
 
     #[test]
     fn no_lane_runs_far_ahead_of_a_slow_chunk() {
-        for lanes in [2, 3] {
-            // While chunk 0 takes 200 ms, each other lane may run a chunk and hold one more
-            // output: at most two chunks a lane have started by its end, not the other 90-odd.
+        for lanes in [2, 3, 4] {
+            // The first chunk a lane beside the caller's runs takes 200 ms, the others 1 ms:
+            // while it runs, the caller's lane waits for it, and the other lanes may start no
+            // chunk two a lane past it (before their windows, from three lanes on, the others
+            // ran every other chunk meanwhile).
             let started = AtomicUsize::new(0);
-            let started_by_the_end_of_0 = AtomicUsize::new(0);
+            let slow = Mutex::new(None);
+            let started_by_the_end_of_the_slow_chunk = AtomicUsize::new(0);
             let result: Result<(), ()> = in_lanes(
                 lanes,
                 100,
                 |chunk| {
                     started.fetch_add(1, Ordering::SeqCst);
-                    if chunk == 0 {
+                    let on_a_lane = std::thread::current().name() == Some(LANE_THREAD);
+                    let first = on_a_lane && slow.lock().unwrap().get_or_insert(chunk) == &chunk;
+                    if first {
                         std::thread::sleep(Duration::from_millis(200));
-                        started_by_the_end_of_0.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
+                        started_by_the_end_of_the_slow_chunk.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
+                    } else {
+                        std::thread::sleep(Duration::from_millis(1));
                     }
                     Ok(chunk)
                 },
                 |_, _| Ok(()),
             );
             assert_eq!(result, Ok(()));
-            let ahead = started_by_the_end_of_0.load(Ordering::SeqCst);
-            assert!(ahead <= 2 * lanes, "{ahead} chunks had started in {lanes} lanes when chunk 0 ended");
+            let slow = slow.lock().unwrap().expect("a lane beside the caller's ran a chunk");
+            let ahead = started_by_the_end_of_the_slow_chunk.load(Ordering::SeqCst);
+            assert!(
+                ahead <= slow + 2 * lanes,
+                "{ahead} chunks had started in {lanes} lanes when chunk {slow}, the slow one, ended"
+            );
         }
     }
 

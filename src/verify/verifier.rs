@@ -6,9 +6,9 @@
 //! size comes from the device (a sixteenth of its device-local heap, at most
 //! [`CHUNK_COUNTS_BUDGET`]) and from the size of one hypothesis' counts, so a batch of any
 //! length runs in bounded memory: the render-target slots and counts of the chunks in flight
-//! (one, or two on a GPU), and the sensed image. A batch keeps as many slots as the verifier
+//! (one, or three on a GPU), and the sensed image. A batch keeps as many slots as the verifier
 //! asks for ([`Verifier::with_slots`]) and the memory budget holds, at least one. On a GPU,
-//! two chunks are in flight at once, one recorded while the device runs the other
+//! three chunks are in flight at once, chunks recorded while the device runs another
 //! (lanes.rs). In shadow mode `exact` a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose
 //! images are cast on the CPU before it is submitted.
 
