@@ -8,7 +8,8 @@
 //! each taking the next chunk when it is done with its last: each lane has at most one chunk
 //! in flight, and the verifier's plan counts the memory of one chunk a lane. A call is then
 //! split into a few chunks a lane at least (verifier.rs, `LANE_CHUNKS`), or one chunk's
-//! recording would overlap nothing.
+//! recording would overlap nothing. No lane starts a chunk two a lane past the outputs handed
+//! on, so a call holds a few chunks' outputs at a time, however slow one of them is.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -36,8 +37,8 @@ pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
 /// a lane where it can be started; else fewer, down to the caller's alone), and hands each
 /// chunk's output to `done`, on the calling thread, in chunk order. The first failure, a
 /// job's in chunk order or `done`'s, stops the lanes from starting further chunks and is
-/// returned; the outputs before it have been handed on. A job that panics stops them too, and
-/// its panic goes on in the caller's thread.
+/// returned; the outputs before it have been handed on. A job or a `done` that panics stops
+/// them too, and the panic goes on in the caller's thread.
 pub(crate) fn in_lanes<T: Send, E: Send>(
     lanes: usize,
     count: usize,
@@ -48,25 +49,17 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
     // How far ahead of the outputs handed on a lane may start a chunk: a call holds the outputs
     // of a few chunks a lane at most, however slow one chunk is.
     let window = 2 * lanes.max(1);
-    // The next chunk a lane runs, and its output; none once every chunk is taken or one failed.
-    // The caller's lane takes one only when it may (below); another lane waits for its window.
-    let take = |helper: bool| {
-        if shared.failed.load(Ordering::Acquire) {
-            return None;
-        }
-        let chunk = shared.next.fetch_add(1, Ordering::AcqRel);
-        if chunk >= count || (helper && !shared.may_start(chunk, window)) {
-            return None;
-        }
-        // Stops the lanes unless the job returns Ok: an Err, or a panic unwinding.
-        let stop = StopUnlessDone(&shared);
+    // Runs a chunk taken (every chunk taken is run, so that no output the caller waits for is
+    // lost), and stops the lanes unless the job returns Ok: an Err, or a panic unwinding.
+    let run = |chunk: usize| {
+        let stop = StopOnDrop(&shared);
         let output = job(chunk);
         if output.is_ok() {
             std::mem::forget(stop);
         }
-        Some((chunk, output))
+        (chunk, output)
     };
-    let take = &take;
+    let (run, shared) = (&run, &shared);
     std::thread::scope(|scope| {
         // The other lanes wait to send a second output until their first is taken.
         let (send, receive) = mpsc::sync_channel(lanes.saturating_sub(1));
@@ -75,8 +68,9 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
             .filter_map(|_| {
                 let send = send.clone();
                 let lane = move || {
-                    while let Some(ran) = take(true) {
-                        if send.send(ran).is_err() {
+                    while let Some(chunk) = shared.take(count) {
+                        shared.wait_for_window(chunk, window);
+                        if send.send(run(chunk)).is_err() {
                             return;
                         }
                     }
@@ -87,6 +81,9 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
         // The receiver ends once every other lane has.
         drop(send);
         let running = 1 + helpers.len();
+        // However the caller's lane ends (an error, or a panic in `done`), the others stop
+        // rather than wait for outputs that will not be handed on.
+        let _stop = StopOnDrop(shared);
         let mut order = InOrder { waiting: (0..count).map(|_| None).collect(), handed: 0 };
         let mut hand_on = |order: &mut InOrder<T, E>| {
             let result = order.hand_on(&mut done);
@@ -94,22 +91,25 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
             result
         };
         let handed = (|| {
-            // The caller's lane, handing on what is ready before each of its chunks.
+            // The caller's lane, handing on what is ready before each of its chunks, and taking
+            // one only while fewer than a chunk a lane are taken and not handed on; else another
+            // lane's is next: it waits for it.
             loop {
                 for (chunk, output) in receive.try_iter() {
                     order.waiting[chunk] = Some(output);
                 }
                 hand_on(&mut order)?;
-                // A chunk taken and not handed on in every lane: another lane's is next; wait
-                // for it.
-                if shared.next.load(Ordering::Acquire) >= order.handed + running {
-                    if let Ok((chunk, output)) = receive.recv() {
+                match shared.take_below(count, order.handed + running) {
+                    Take::Chunk(chunk) => {
+                        let (chunk, output) = run(chunk);
                         order.waiting[chunk] = Some(output);
-                        continue;
                     }
+                    Take::Later => match receive.recv() {
+                        Ok((chunk, output)) => order.waiting[chunk] = Some(output),
+                        Err(_) => break,
+                    },
+                    Take::Nothing => break,
                 }
-                let Some((chunk, output)) = take(false) else { break };
-                order.waiting[chunk] = Some(output);
             }
             // The other lanes' last chunks.
             for (chunk, output) in receive {
@@ -118,17 +118,15 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
             }
             Ok(())
         })();
-        if handed.is_err() {
-            // `done` may have failed with other lanes still running: they start no more.
-            shared.stop();
-            return handed;
-        }
+        // `done` may have failed with other lanes still running: they start no more (`_stop`).
+        handed?;
         // A panic in another lane goes on here, as it would have in one lane.
         for helper in helpers {
             if let Err(panic) = helper.join() {
                 std::panic::resume_unwind(panic);
             }
         }
+        debug_assert_eq!(order.handed, count, "every output was handed on");
         Ok(())
     })
 }
@@ -146,13 +144,48 @@ struct Shared {
     moved: Condvar,
 }
 
+/// What the caller's lane may take.
+enum Take {
+    Chunk(usize),
+    /// Nothing yet: as many chunks are taken and not handed on as there are lanes.
+    Later,
+    /// Nothing: every chunk is taken, or the lanes stopped.
+    Nothing,
+}
+
 impl Shared {
-    /// Stops the lanes: none starts a chunk after this, and none waits to.
-    fn stop(&self) {
-        self.failed.store(true, Ordering::Release);
-        // Under the lock, so that a lane between its test of the flag and its wait is woken.
-        let _handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
-        self.moved.notify_all();
+    /// The next of `count` chunks for a lane beside the caller's; none once every chunk is
+    /// taken or the lanes stopped.
+    fn take(&self, count: usize) -> Option<usize> {
+        if self.failed.load(Ordering::Acquire) {
+            return None;
+        }
+        Some(self.next.fetch_add(1, Ordering::AcqRel)).filter(|&chunk| chunk < count)
+    }
+
+    /// The next of `count` chunks for the caller's lane, if it lies below `limit`.
+    fn take_below(&self, count: usize, limit: usize) -> Take {
+        loop {
+            let chunk = self.next.load(Ordering::Acquire);
+            if self.failed.load(Ordering::Acquire) || chunk >= count {
+                return Take::Nothing;
+            }
+            if chunk >= limit {
+                return Take::Later;
+            }
+            if self.next.compare_exchange(chunk, chunk + 1, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+                return Take::Chunk(chunk);
+            }
+        }
+    }
+
+    /// Waits until `chunk` lies within `window` chunks of the outputs handed on, or the lanes
+    /// stop.
+    fn wait_for_window(&self, chunk: usize, window: usize) {
+        let mut handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
+        while chunk >= *handed + window && !self.failed.load(Ordering::Acquire) {
+            handed = self.moved.wait(handed).unwrap_or_else(|p| p.into_inner());
+        }
     }
 
     /// `handed` outputs have been handed on.
@@ -161,21 +194,19 @@ impl Shared {
         self.moved.notify_all();
     }
 
-    /// Waits until `chunk` lies within `window` chunks of the outputs handed on, and says
-    /// whether to start it: not once the lanes stop.
-    fn may_start(&self, chunk: usize, window: usize) -> bool {
-        let mut handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
-        while chunk >= *handed + window && !self.failed.load(Ordering::Acquire) {
-            handed = self.moved.wait(handed).unwrap_or_else(|p| p.into_inner());
-        }
-        !self.failed.load(Ordering::Acquire)
+    /// Stops the lanes: none takes a chunk after this, and none waits to start one.
+    fn stop(&self) {
+        self.failed.store(true, Ordering::Release);
+        // Under the lock, so that a lane between its test of the flag and its wait is woken.
+        let _handed = self.handed.lock().unwrap_or_else(|p| p.into_inner());
+        self.moved.notify_all();
     }
 }
 
-/// Stops the lanes when dropped: forgotten once a job succeeds.
-struct StopUnlessDone<'a>(&'a Shared);
+/// Stops the lanes when dropped (forgotten where they go on).
+struct StopOnDrop<'a>(&'a Shared);
 
-impl Drop for StopUnlessDone<'_> {
+impl Drop for StopOnDrop<'_> {
     fn drop(&mut self) {
         self.0.stop();
     }
@@ -343,5 +374,31 @@ mod tests {
         let message = panic.downcast_ref::<String>().map(String::as_str).or(panic.downcast_ref::<&str>().copied());
         assert_eq!(message, Some("chunk 3 panics"));
         assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
+    }
+    #[test]
+    fn a_panic_taking_an_output_goes_on_in_the_caller_and_stops_the_lanes() {
+        // Lanes beside the caller's wait for their window while `done` panics: they must be
+        // woken, or the call never ends. Run on a thread of its own, so that a call that hangs
+        // fails the test after 10 s instead of hanging it.
+        let (finished, outcome) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let caught = std::panic::catch_unwind(|| {
+                in_lanes(
+                    3,
+                    100,
+                    |chunk| -> Result<usize, ()> {
+                        std::thread::sleep(Duration::from_millis(1));
+                        Ok(chunk)
+                    },
+                    |chunk, _| {
+                        assert!(chunk != 2, "taking chunk 2 panics");
+                        Ok(())
+                    },
+                )
+            });
+            let _ = finished.send(caught.is_err());
+        });
+        let panicked = outcome.recv_timeout(Duration::from_secs(10)).expect("the call ended");
+        assert!(panicked, "the panic went on in the caller");
     }
 }
