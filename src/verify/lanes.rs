@@ -118,13 +118,20 @@ pub(crate) fn in_lanes<T: Send, E: Send>(
             }
             Ok(())
         })();
-        // `done` may have failed with other lanes still running: they start no more (`_stop`).
-        handed?;
-        // A panic in another lane goes on here, as it would have in one lane.
+        // A failure (`done`'s, or a job's) may have come with other lanes still running: they
+        // start no more, and each ends (the receiver is gone) before the call returns.
+        shared.stop();
+        let mut panicked = None;
         for helper in helpers {
             if let Err(panic) = helper.join() {
-                std::panic::resume_unwind(panic);
+                panicked.get_or_insert(panic);
             }
+        }
+        // The failure handed on comes first in chunk order: a chunk whose job panicked was
+        // never handed on. Else a panic in another lane goes on here, as it would have in one.
+        handed?;
+        if let Some(panic) = panicked {
+            std::panic::resume_unwind(panic);
         }
         debug_assert_eq!(order.handed, count, "every output was handed on");
         Ok(())
@@ -280,12 +287,22 @@ mod tests {
             let started = AtomicUsize::new(0);
             let slow = Mutex::new(None);
             let started_by_the_end_of_the_slow_chunk = AtomicUsize::new(0);
+            // The caller's lane runs its chunks only once another lane has started one (for
+            // 10 s at most), so that it cannot run them all before another lane is scheduled.
+            let a_lane_started = std::sync::atomic::AtomicBool::new(false);
             let result: Result<(), ()> = in_lanes(
                 lanes,
                 100,
                 |chunk| {
                     started.fetch_add(1, Ordering::SeqCst);
                     let on_a_lane = std::thread::current().name() == Some(LANE_THREAD);
+                    if on_a_lane {
+                        a_lane_started.store(true, Ordering::SeqCst);
+                    }
+                    let waiting = Instant::now();
+                    while !a_lane_started.load(Ordering::SeqCst) && waiting.elapsed() < Duration::from_secs(10) {
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
                     let first = on_a_lane && slow.lock().unwrap().get_or_insert(chunk) == &chunk;
                     if first {
                         std::thread::sleep(Duration::from_millis(200));
@@ -400,5 +417,25 @@ mod tests {
         });
         let panicked = outcome.recv_timeout(Duration::from_secs(10)).expect("the call ended");
         assert!(panicked, "the panic went on in the caller");
+    }
+    #[test]
+    fn an_earlier_failure_is_returned_though_a_later_chunk_panicked() {
+        // Chunk 0 fails after 50 ms; meanwhile the lanes beside the caller's panic at whatever
+        // later chunk they run. The failure comes first in chunk order: it is returned, not
+        // the panic, nor the scope's "a scoped thread panicked" for a lane never joined.
+        let result = in_lanes(
+            3,
+            100,
+            |chunk| {
+                if chunk == 0 {
+                    std::thread::sleep(Duration::from_millis(50));
+                    return Err(chunk);
+                }
+                assert!(std::thread::current().name() != Some(LANE_THREAD), "a later chunk panics");
+                Ok(chunk)
+            },
+            |_, _| Ok(()),
+        );
+        assert_eq!(result, Err(0));
     }
 }
