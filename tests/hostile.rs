@@ -13,7 +13,7 @@ use rangesynth::mesh::load_obj;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::Scene;
 use std::io::Read;
-use std::os::unix::process::ExitStatusExt;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -270,13 +270,22 @@ fn a_killed_verify_leaves_the_earlier_output_whole() {
     let many = hypotheses((0..200_000).map(|i| (format!("h{i}"), vec![[1, 1]])));
     let hyps = write_scene(&d, "many.json", &many.to_string());
     for signal in [libc::SIGKILL, libc::SIGINT] {
-        let child = rangesynth()
+        let mut command = rangesynth();
+        command
             .args(["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out"])
             .arg(&scores)
             .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+            .stderr(Stdio::piped());
+        // SIGINT's default disposition, as at a terminal: a test run started in the background
+        // of a shell without job control inherits SIGINT ignored, and verify then runs on.
+        // SAFETY: between fork and exec only async-signal-safe calls: signal(2) is one.
+        unsafe {
+            command.pre_exec(|| {
+                libc::signal(libc::SIGINT, libc::SIG_DFL);
+                Ok(())
+            });
+        }
+        let child = command.spawn().unwrap();
         std::thread::sleep(Duration::from_secs(4));
         // SAFETY: signalling our own child.
         assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
