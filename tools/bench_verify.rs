@@ -324,11 +324,13 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
 }
 
 /// Hypotheses per second with the compute rasterizer covering one hypothesis a coverage
-/// dispatch or COVERAGE_MEMBERS, in runs of 4 slots, 16 or 64 (`Verifier::with_slots`: one barrier
-/// a stage for each run), one to four chunks in flight (`Verifier::with_chunks_in_flight`:
-/// chunks recorded while the device runs another), label-mode shadows at 256², in batches of four
-/// chunks: of 1,024 on a GPU (the issue's goal there: 100,000 a second for a 10k-triangle
-/// model), of 64 on a CPU device.
+/// dispatch or COVERAGE_MEMBERS, in runs of 4 slots, 16 or 64 (`Verifier::with_slots`: one
+/// barrier a stage for each run), one to four chunks in flight
+/// (`Verifier::with_chunks_in_flight`: chunks recorded while the device runs another),
+/// label-mode shadows at 256², in chunks of 1,024 on a GPU (the issue's goal there: 100,000 a
+/// second for a 10k-triangle model) and of 64 on a CPU device, batches of four chunks or two a
+/// chunk in flight, so that every configuration runs chunks of one size (until 2026-11-26's
+/// third session, batches of four chunks, which more lanes split into shorter ones).
 fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::Result<()> {
     // (hypotheses a coverage dispatch, slots, chunks in flight): lavapipe's defaults, then
     // the GPU's with runs of four, then sixteen, then two, three and four chunks in flight,
@@ -362,10 +364,12 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         (false, true) => 64,
         (false, false) => 1024,
     };
-    let batch = 4 * chunk;
+    // Batches of four chunks, or two a lane where there are more lanes: a call goes in at least
+    // two chunks a lane (verifier.rs), so that every configuration runs chunks of `chunk`.
+    let batch_of = |(_, _, chunks): (usize, usize, usize)| chunk * (2 * chunks).max(4);
     println!(
         "\ncompute rasterizer, hypotheses a coverage dispatch × slots a run × chunks in flight: label-mode shadows, \
-         batches of {batch} in chunks of {chunk}"
+         chunks of {chunk}, batches of four chunks or two a chunk in flight"
     );
     let names: String = configurations
         .iter()
@@ -375,8 +379,8 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
     let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor, ShadowMode::Label) };
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
         let mut batches = Vec::new();
-        for verifier in &verifiers {
-            let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
+        for (verifier, &configuration) in verifiers.iter().zip(&configurations) {
+            let hypotheses = hypotheses(&verifier.model(model_name, Path::new("."))?, batch_of(configuration));
             verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
             batches.push(hypotheses);
         }
@@ -400,17 +404,14 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         for (index, verifier) in &timed {
             let (members, slots, chunks) = configurations[*index];
             // Its own model: a verifier's meshes live on its own device.
+            let batch = batch_of(configurations[*index]);
             let timed_batch = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
             let stages = stage_times(verifier, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
             let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
-            // In time a chunk of `chunk` hypotheses (with several in flight, a call goes in
-            // shorter ones: two a lane at least; verifier.rs).
+            // In time a chunk.
             let wall = chunk as f64 / rates_by_configuration[*index] * 1e3;
             let shape = format!("{members}×{slots}×{chunks}");
-            println!(
-                "    {shape}, ms a {chunk} hypotheses: {wall:.2} in all; the device's {total:.2} ({})",
-                listed(&stages)
-            );
+            println!("    {shape}, ms a chunk: {wall:.2} in all; the device's {total:.2} ({})", listed(&stages));
         }
     }
     Ok(())
