@@ -408,7 +408,7 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             let timed_batch = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
             let stages = stage_times(verifier, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
             let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
-            // In time a chunk.
+            // Wall time a chunk, from this configuration's rate.
             let wall = chunk as f64 / rates_by_configuration[*index] * 1e3;
             let shape = format!("{members}×{slots}×{chunks}");
             println!("    {shape}, ms a chunk: {wall:.2} in all; the device's {total:.2} ({})", listed(&stages));
