@@ -258,14 +258,24 @@ fn a_batch_of_1024_runs_in_chunks() {
     let settings = VerifySettings { chunk_size: 256, ..settings(sensor, ShadowMode::Depth) };
     let results = VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |done| reports.push(done)).unwrap();
     assert_no_validation_messages();
-    // Chunks of 256, or in lanes at least two chunks a lane (LANE_CHUNKS, verifier.rs): with
-    // three lanes, six chunks of ⌈1024 / 6⌉ = 171 (the last 169), with four, eight of 128.
-    let chunk = match VERIFIER.chunks_in_flight() {
-        1 | 2 => 256,
-        3 => 171,
-        _ => 128,
+    // Chunks of 256; in lanes at least two chunks a lane, and the first chunks k = 0, 1, …
+    // ramping up (src/verify/lanes.rs): (k + 1) eighths of the cap, no fewer than 64. Two lanes:
+    // a cap of 256, chunks of 64, 64, 96, 128, 160, 192, 224, then 96 left. Three: a cap of
+    // ⌈1024 / 6⌉ = 171, chunks of 64, 64, 64, 85, 106, 128, 149, 171, 171, then 22. Four: a cap
+    // of 128, chunks of 64, 64, 64, 64, 80, 96, 112, then 128s.
+    let chunks: Vec<usize> = match VERIFIER.chunks_in_flight() {
+        1 => vec![256; 4],
+        2 => vec![64, 64, 96, 128, 160, 192, 224, 96],
+        3 => vec![64, 64, 64, 85, 106, 128, 149, 171, 171, 22],
+        _ => vec![64, 64, 64, 64, 80, 96, 112, 128, 128, 128, 96],
     };
-    let expected: Vec<usize> = (1..).map(|n| (n * chunk).min(1024)).take(1024usize.div_ceil(chunk)).collect();
+    let expected: Vec<usize> = chunks
+        .iter()
+        .scan(0, |done, chunk| {
+            *done += chunk;
+            Some(*done)
+        })
+        .collect();
     assert_eq!(reports, expected);
     assert_eq!(results.len(), 1024);
     assert!(results.iter().all(|v| v.scores.s.is_finite() && v.counts.synthetic_valid() > 0));
@@ -276,7 +286,8 @@ fn a_batch_of_1024_runs_in_chunks() {
 /// A call's chunks go to three lanes where the verifier asks for three chunks in flight (a
 /// GPU's default; src/verify/lanes.rs): chunks are recorded while the device runs another, so
 /// that a GPU does not wait for the host between chunks. A call of one chunk's length goes in
-/// two chunks a lane there, six of 86, which overlap. Eight chunks of 64: the context sees
+/// two chunks a lane there, of at most 86, its first ones no longer than 64 (the ramp,
+/// src/verify/lanes.rs), which overlap. Eight chunks of 64: the context sees
 /// three submissions in flight at once, and the results and progress come in order, the counts
 /// those the test binary's verifier counts (one chunk of all 512 on lavapipe's default of one
 /// lane).
@@ -290,8 +301,8 @@ fn chunks_are_recorded_while_the_device_runs_another() {
     let model = verifier.model("builtin:step", Path::new(".")).expect("model");
     let hypotheses = turning(&model, 512, 0.001, &[(1, 1), (2, 2)]);
     let mut reports = Vec::new();
-    verifier.verify(&sensed, &one_chunk, &hypotheses, &mut |done| reports.push(done)).expect("six chunks");
-    assert_eq!(reports, [86, 172, 258, 344, 430, 512]);
+    verifier.verify(&sensed, &one_chunk, &hypotheses, &mut |done| reports.push(done)).expect("eight chunks");
+    assert_eq!(reports, [64, 128, 192, 256, 320, 384, 459, 512]);
     let mut reports = Vec::new();
     let chunked = VerifySettings { chunk_size: 64, ..one_chunk };
     let context = verifier.renderer().context();

@@ -365,11 +365,12 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         (false, false) => 1024,
     };
     // Batches of four chunks, or two a lane where there are more lanes: a call goes in at least
-    // two chunks a lane (verifier.rs), so that every configuration runs chunks of `chunk`.
+    // two chunks a lane (verify/lanes.rs), so that every configuration runs chunks of up to
+    // `chunk` (in lanes, a call's first chunks ramp up to it).
     let batch_of = |(_, _, chunks): (usize, usize, usize)| chunk * (2 * chunks).max(4);
     println!(
         "\ncompute rasterizer, hypotheses a coverage dispatch × slots a run × chunks in flight: label-mode shadows, \
-         chunks of {chunk}, batches of four chunks or two a chunk in flight"
+         chunks of up to {chunk}, batches of four chunks or two a chunk in flight"
     );
     let names: String = configurations
         .iter()
@@ -408,10 +409,14 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
             let timed_batch = hypotheses(&verifier.model(model_name, Path::new("."))?, batch);
             let stages = stage_times(verifier, sensed, &settings, &timed_batch, batch.div_ceil(chunk) as f64)?;
             let total: f64 = stages.iter().map(|(_, ms)| ms).sum();
-            // Wall time a chunk, from this configuration's rate.
+            // Wall time a chunk's length of hypotheses, from this configuration's rate (in
+            // lanes, a call's first chunks are shorter: verify/lanes.rs).
             let wall = chunk as f64 / rates_by_configuration[*index] * 1e3;
             let shape = format!("{members}×{slots}×{chunks}");
-            println!("    {shape}, ms a chunk: {wall:.2} in all; the device's {total:.2} ({})", listed(&stages));
+            println!(
+                "    {shape}, ms a {chunk} hypotheses: {wall:.2} in all; the device's {total:.2} ({})",
+                listed(&stages)
+            );
         }
     }
     Ok(())

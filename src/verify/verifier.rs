@@ -17,7 +17,7 @@ use super::batch::{
     count_batch, default_slots, slot_memory, BatchCounts, BatchItem, BatchSettings, SensedBuffers, StageTimes,
 };
 use super::counts::{Counts, CountsLayout};
-use super::lanes::{default_chunks_in_flight, in_lanes, MAX_CHUNKS_IN_FLIGHT};
+use super::lanes::{default_chunks_in_flight, in_lanes, lane_chunk_cap, MAX_CHUNKS_IN_FLIGHT};
 use super::score_pass::ScorePass;
 use super::scores::{score, Scores};
 use super::sensed::SensedImage;
@@ -45,14 +45,6 @@ pub const EXACT_CHUNK: usize = 16;
 
 /// Most bytes of counts one chunk may hold (less on a device with a small heap).
 pub const CHUNK_COUNTS_BUDGET: u64 = 64 << 20;
-
-/// Chunks a call is split into, at least, a lane, where several are in flight (lanes.rs): with
-/// two, all but the first one's recording (a quarter of the host's work) overlaps the device's
-/// work.
-const LANE_CHUNKS: usize = 2;
-/// Fewest hypotheses in such a chunk: a chunk's own set-up (its slots, counts and readback,
-/// one submission and wait) is paid over at least this many.
-const MIN_LANE_CHUNK: usize = 64;
 
 /// A model uploaded once and shared by every hypothesis that names it.
 pub struct Model {
@@ -364,21 +356,19 @@ impl Verifier {
             ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
             _ => settings.chunk_size.clamp(1, MAX_CHUNK),
         };
-        // In lanes, a call of one chunk would overlap nothing: it goes in a few a lane
-        // (LANE_CHUNKS), so that every chunk's recording but the first's overlaps the device's
-        // work on another.
-        let chunk_cap = match plan.lanes {
-            1 => chunk_cap,
-            lanes => chunk_cap.min(hypotheses.len().div_ceil(LANE_CHUNKS * lanes).max(MIN_LANE_CHUNK)),
-        };
-        // Each chunk as long as its cap and the counts budget allow.
+        // Each chunk as long as its cap (in lanes, shorter: lane_chunk_cap) and the counts
+        // budget allow.
         let mut chunks: Vec<Range<usize>> = Vec::new();
         let mut start = 0;
         while start < hypotheses.len() {
+            let cap = match plan.lanes {
+                1 => chunk_cap,
+                lanes => lane_chunk_cap(chunk_cap, hypotheses.len(), lanes, chunks.len()),
+            };
             let mut end = start;
             let mut bytes = 0;
             while end < hypotheses.len()
-                && end - start < chunk_cap
+                && end - start < cap
                 && bytes + per_hypothesis(&hypotheses[end]) <= counts_budget
             {
                 bytes += per_hypothesis(&hypotheses[end]);
