@@ -49,18 +49,13 @@ layout(local_size_x = COVERAGE_GROUP) in;
 // gathers a uniform read at an index it cannot prove the same for all its lanes, lane by lane:
 // dense sphere at 256², coverage 3.29 → 4.58 ms), and keep_word's branches fold away.
 
-// Each member's draw in each view, copied from the draw tables before the pass
-// (compute_raster.rs): draws[m] the range view's of member m, draws[COVERAGE_MEMBERS + m] its
-// shadow view's (where it has none, whatever was there, read only to cull: it covers no
-// pixels; member_draw). A uniform block, not a storage buffer: a software rasterizer loads a
-// uniform block's value once for all the invocations it runs together, a storage buffer's
-// invocation by invocation (dense sphere at 256², coverage 4.7–4.8 → 4.45–4.55 ms).
-layout(set = 0, binding = 0, std140) uniform Draws { DrawData draws[2 * COVERAGE_MEMBERS]; };
-
-// Member m's draw in view v (0: range, 1: shadow).
-DrawData member_draw(uint m, uint v) {
-    return draws[v * COVERAGE_MEMBERS + m];
-}
+// Each member's draw in each view and its constants (Member, below), which the host writes
+// before the pass (CoverageUniforms in src/render/compute_raster.rs): draws[m] the range view's
+// of member m, draws[COVERAGE_MEMBERS + m] its shadow view's (where it has none, zeros, read
+// only to cull: it covers no pixels; member_draw). A uniform block, not a storage buffer: a
+// software rasterizer loads a uniform block's value once for all the invocations it runs
+// together, a storage buffer's invocation by invocation (dense sphere at 256², coverage
+// 4.7–4.8 → 4.45–4.55 ms).
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
 // src/render/compute_raster.rs.
@@ -72,7 +67,15 @@ struct Member {
     uint place;          // where members share words, its place in the ties order, which tags
                          // its triangles there (above bit MEMBER_SHIFT); else 0
 };
-layout(set = 0, binding = 1, std140) uniform Members { Member members[COVERAGE_MEMBERS]; };
+layout(set = 0, binding = 0, std140) uniform Coverage {
+    DrawData draws[2 * COVERAGE_MEMBERS];
+    Member members[COVERAGE_MEMBERS];
+};
+
+// Member m's draw in view v (0: range, 1: shadow).
+DrawData member_draw(uint m, uint v) {
+    return draws[v * COVERAGE_MEMBERS + m];
+}
 
 // Each member's visibility words in each view (where a view or a member is missing, another
 // member's are bound, never written: a member with no job covers no triangles, a view of no
@@ -81,21 +84,21 @@ layout(set = 0, binding = 1, std140) uniform Members { Member members[COVERAGE_M
 #if COVERAGE_MEMBERS != 4
 #error "raster.comp binds and picks four members' words"
 #endif
-layout(set = 0, binding = 2, std430) buffer RangeWords0 { uint64_t words[]; } range_words0;
-layout(set = 0, binding = 3, std430) buffer RangeWords1 { uint64_t words[]; } range_words1;
-layout(set = 0, binding = 4, std430) buffer RangeWords2 { uint64_t words[]; } range_words2;
-layout(set = 0, binding = 5, std430) buffer RangeWords3 { uint64_t words[]; } range_words3;
-layout(set = 0, binding = 6, std430) buffer ShadowWords0 { uint64_t words[]; } shadow_words0;
-layout(set = 0, binding = 7, std430) buffer ShadowWords1 { uint64_t words[]; } shadow_words1;
-layout(set = 0, binding = 8, std430) buffer ShadowWords2 { uint64_t words[]; } shadow_words2;
-layout(set = 0, binding = 9, std430) buffer ShadowWords3 { uint64_t words[]; } shadow_words3;
+layout(set = 0, binding = 1, std430) buffer RangeWords0 { uint64_t words[]; } range_words0;
+layout(set = 0, binding = 2, std430) buffer RangeWords1 { uint64_t words[]; } range_words1;
+layout(set = 0, binding = 3, std430) buffer RangeWords2 { uint64_t words[]; } range_words2;
+layout(set = 0, binding = 4, std430) buffer RangeWords3 { uint64_t words[]; } range_words3;
+layout(set = 0, binding = 5, std430) buffer ShadowWords0 { uint64_t words[]; } shadow_words0;
+layout(set = 0, binding = 6, std430) buffer ShadowWords1 { uint64_t words[]; } shadow_words1;
+layout(set = 0, binding = 7, std430) buffer ShadowWords2 { uint64_t words[]; } shadow_words2;
+layout(set = 0, binding = 8, std430) buffer ShadowWords3 { uint64_t words[]; } shadow_words3;
 // The queue of large (triangle, member, view) entries: the view's bit (QUEUE_VIEW_BIT), then
 // the member's bits (from MEMBER_SHIFT), above the triangle's index (meshes have fewer than
 // 2^MEMBER_SHIFT triangles: src/mesh/adjacency.rs), with room for every triangle of every
 // member in every view; and its indirect dispatch's (x, y, z), x its length up to MAX_GROUPS,
 // then its length.
-layout(set = 0, binding = 10, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 11, std430) buffer LargeArgs { uvec4 large_args; };
+layout(set = 0, binding = 9, std430) buffer Large { uint large[]; };
+layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 large_args; };
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.

@@ -13,14 +13,14 @@
 //!   A triangle whose corners lie too far from its box for 32 bits (more than 32 pixels) is
 //!   queued for that view instead, and a second, indirect dispatch gives each queued
 //!   (triangle, view) a workgroup of 64 invocations, in 64-bit arithmetic. Each view's draw
-//!   reaches both as a uniform block, copied from its draw table before them. The coverage
+//!   reaches both in a uniform block, which the host writes before them. The coverage
 //!   pass deals its workgroups over the mesh ([`DEAL_BLOCK`]), so that each thread of a
 //!   software rasterizer gets a share of every part of it. Where the mesh bounds a solid
 //!   (src/mesh/solid.rs), a triangle facing away from the camera in a view is skipped there,
 //!   and one facing away in both is skipped before its corners are read.
 //! - Many hypotheses a dispatch ([`CoverageGroup`]): the jobs of up to [`COVERAGE_MEMBERS`]
 //!   consecutive slots of a batch are covered by one coverage dispatch (a z slice of workgroups
-//!   each, their draws and constants in uniform blocks, their words bound side by side) and
+//!   each, their draws and constants in one uniform block, their words bound side by side) and
 //!   one large triangles' dispatch, so that a GPU pays a dispatch and a barrier per group
 //!   rather than per hypothesis. How many is the renderer's
 //!   ([`Renderer::with_hypotheses_per_dispatch`](super::Renderer::with_hypotheses_per_dispatch)):
@@ -58,6 +58,7 @@
 //! that kind of device, the graphics pipeline elsewhere.
 
 use super::draw::DrawConstants;
+use super::passes::DrawTable;
 use super::pipelines::built_once;
 use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
@@ -233,6 +234,19 @@ const _: () = assert!(std::mem::offset_of!(MemberConstants, dealt_rows) == 72);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, place) == 76);
 const _: () = assert!(size_of::<MemberConstants>() == 80);
 
+/// The coverage passes' uniform block; matches `Coverage` in shaders/raster.comp (std140: the
+/// same offsets, as DrawData and Member keep them and their sizes are multiples of 16). Each
+/// member's draw in each view: draws[m] its range view's, draws[COVERAGE_MEMBERS + m] its
+/// shadow view's; then each member's constants.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CoverageUniforms {
+    draws: [DrawConstants; 2 * COVERAGE_MEMBERS],
+    members: [MemberConstants; COVERAGE_MEMBERS],
+}
+
+const _: () = assert!(size_of::<DrawConstants>().is_multiple_of(16) && size_of::<MemberConstants>().is_multiple_of(16));
+
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
 fn cull_sign(solidity: Solidity) -> i32 {
@@ -388,9 +402,9 @@ fn covering(
     (views, tiles): (u32, bool),
     name: &str,
 ) -> Result<ComputePipeline> {
-    // Both uniform blocks (the members' draws, then their constants), each member's words in
-    // each view, the large-triangle queue and its dispatch arguments.
-    let shape = SetShape { images: 0, uniform_buffers: 2, storage_buffers: COVERAGE_STORAGE_BUFFERS };
+    // The uniform block (the members' draws and constants), each member's words in each view,
+    // the large-triangle queue and its dispatch arguments.
+    let shape = SetShape { images: 0, uniform_buffers: 1, storage_buffers: COVERAGE_STORAGE_BUFFERS };
     // The shader's specialization constants: MAX_GROUPS, the views it covers, how it deals its
     // workgroups, whether a dispatch covers one job or up to COVERAGE_MEMBERS, and TILES.
     let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members, u32::from(tiles)];
@@ -468,7 +482,7 @@ impl ComputeRasterPipelines {
 /// A view the compute rasterizer renders: its attachments' size, and its draw table.
 pub(crate) struct ComputeTarget<'a> {
     pub size: (u32, u32),
-    pub draw_table: &'a Buffer,
+    pub draw_table: &'a DrawTable,
 }
 
 /// One view's visibility words.
@@ -476,7 +490,7 @@ struct ViewWords<'a> {
     nearest: Buffer,
     /// Pixels per row of `nearest` (the attachments' width).
     stride: u32,
-    draw_table: &'a Buffer,
+    draw_table: &'a DrawTable,
 }
 
 /// One slot's visibility words: the range view's and (where a shadow pass runs) the shadow
@@ -513,7 +527,7 @@ impl<'a> ComputeViews<'a> {
         };
         let resolve_set = |pipeline: &ComputePipeline, targets: &ViewTargets, words: &ViewWords, kind: ViewKind| {
             let images: Vec<&Image> = targets.colour.iter().collect();
-            let buffers = [words.draw_table, &words.nearest];
+            let buffers = [&words.draw_table.buffer, &words.nearest];
             StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), &format!("{name} {kind:?} resolve"))
         };
         let range = words(ViewKind::Range, range)?;
@@ -537,7 +551,7 @@ impl<'a> ComputeViews<'a> {
         self.shadow.as_ref().map(|shadow| {
             let words = WordsToMask {
                 shadow_words: &shadow.nearest,
-                range_table: self.range.draw_table,
+                range_table: &self.range.draw_table.buffer,
                 range_words: &self.range.nearest,
             };
             (words, (self.range.stride, shadow.stride))
@@ -587,7 +601,7 @@ impl<'a> ComputeViews<'a> {
         first: u32,
     ) -> Step<'s> {
         let writes: Vec<_> = targets.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
-        let reads = vec![(&words.nearest, Access::ComputeRead), (words.draw_table, Access::ComputeRead)];
+        let reads = vec![(&words.nearest, Access::ComputeRead), (&words.draw_table.buffer, Access::ComputeRead)];
         let pixels = [area.width, area.height].map(|n| n.div_ceil(8));
         let view = Self::raster_view(words, area, first);
         Step::new(writes, reads, move |_, cmd| set.dispatch(cmd, pipeline, bytemuck::bytes_of(&view), pixels))
@@ -627,10 +641,9 @@ struct CoverageRun {
     /// member in every view, and its indirect dispatch's (x, y, z), then its length.
     large: Buffer,
     large_args: Buffer,
-    /// Each member's draw in each view, copied from the draw tables before each coverage pass,
-    /// and the members' constants.
-    draws: Buffer,
-    constants: Buffer,
+    /// The members' draws and constants ([`CoverageUniforms`]), written before each coverage
+    /// pass.
+    uniforms: Buffer,
     set: StorageSet,
 }
 
@@ -734,15 +747,14 @@ impl CoverageGroup {
         // graphics job's slot, slots past a short run's end) are never touched, their members
         // covering no triangles.
         let mut cleared: Vec<_> = emptied.iter().map(|&(words, ..)| (words, Access::TransferWrite)).collect();
-        cleared.extend([&buffers.large_args, &buffers.draws, &buffers.constants].map(|b| (b, Access::TransferWrite)));
-        let entry = size_of::<DrawConstants>() as u64;
-        let mut constants = [<MemberConstants as bytemuck::Zeroable>::zeroed(); COVERAGE_MEMBERS];
-        // Each view's draw the member has: draws[m] its range view's, draws[COVERAGE_MEMBERS +
-        // m] its shadow view's, so that consecutive members' draws, consecutive in their
-        // tables too, come in one copy a view (merged below): each transfer command costs a
-        // GPU about a microsecond (NVIDIA H100: the set-ups of 16 slots' hypotheses, four
-        // coverage dispatches of 18 commands, took 70 µs).
-        let mut draw_copies: Vec<(&'s Buffer, vk::BufferCopy)> = Vec::new();
+        cleared.extend([&buffers.large_args, &buffers.uniforms].map(|b| (b, Access::TransferWrite)));
+        // The members' draws and constants, written in one command: each transfer command costs
+        // a GPU a microsecond or two. On an NVIDIA H200 (2026-11-26), one update where there had
+        // been an update and two copies from the draw tables a dispatch took the set-up stage
+        // from 2.24–2.26 to 1.32–1.34 ms a 1,024 hypotheses (device 5.90 → 4.92 ms for a
+        // 9,800-triangle sphere at 256²), and its verification, three chunks in flight, from
+        // 125,600–129,400 to 136,500–146,100 hypotheses a second.
+        let mut uniforms = <CoverageUniforms as bytemuck::Zeroable>::zeroed();
         for &(m, member) in &covered {
             let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);
             let shadow = member.views.shadow.as_ref().zip(member.shadow_area);
@@ -750,7 +762,7 @@ impl CoverageGroup {
             // A member without a shadow view, in a dispatch covering others' (no batch has
             // one today: the mode and θ decide for all its jobs), covers no pixels there.
             let no_shadow = RasterView { area: [0; 4], ..range };
-            constants[m] = MemberConstants {
+            uniforms.members[m] = MemberConstants {
                 views: [
                     range,
                     shadow.map_or(no_shadow, |(view, area)| ComputeViews::raster_view(view, area, member.index)),
@@ -761,38 +773,27 @@ impl CoverageGroup {
                 place: if self.shared_words { m as u32 } else { 0 },
             };
             for (slot, view) in [m, COVERAGE_MEMBERS + m].into_iter().zip(member.views.views()) {
-                let copy = vk::BufferCopy {
-                    src_offset: u64::from(member.index) * entry,
-                    dst_offset: slot as u64 * entry,
-                    size: entry,
-                };
-                draw_copies.push((view.draw_table, copy));
+                uniforms.draws[slot] = view.draw_table.entries[member.index as usize];
             }
         }
-        draw_copies.sort_by_key(|(_, copy)| copy.dst_offset);
-        let draw_copies = merged_copies(draw_copies, |a: &Buffer, b: &Buffer| std::ptr::eq(a, b));
-        cleared.extend(draw_copies.iter().map(|&(table, _)| (table, Access::TransferRead)));
         let prepare = move |ctx: &GpuContext, cmd| {
             let d = &ctx.device;
             // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffers;
             // the rows lie within the views' words, and their bytes are a multiple of 4; the
-            // copies and updates lie within the uniform blocks.
+            // updates fill the dispatch's arguments and the uniform block.
             unsafe {
                 for (words, offset, size) in emptied {
                     d.cmd_fill_buffer(cmd, words.raw, offset, size, EMPTY_HALF);
                 }
                 // No workgroups, an empty queue: (x, y, z, length).
                 d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
-                d.cmd_update_buffer(cmd, buffers.constants.raw, 0, bytemuck::cast_slice(&constants));
-                for (table, copy) in draw_copies {
-                    d.cmd_copy_buffer(cmd, table.raw, buffers.draws.raw, &[copy]);
-                }
+                d.cmd_update_buffer(cmd, buffers.uniforms.raw, 0, bytemuck::bytes_of(&uniforms));
             }
         };
         let uses = |queue: Access, args: Access| {
             let mut uses: Vec<_> = covered_words.iter().map(|&words| (words, Access::ComputeWrite)).collect();
             uses.extend([(&buffers.large, queue), (&buffers.large_args, args)]);
-            uses.extend([&buffers.draws, &buffers.constants].map(|b| (b, Access::UniformRead)));
+            uses.push((&buffers.uniforms, Access::UniformRead));
             uses
         };
         let triangles = covered.iter().map(|(_, member)| member.draw.mesh.index_count / 3).max().unwrap_or(0);
@@ -835,28 +836,6 @@ impl CoverageGroup {
     }
 }
 
-/// `copies` (by destination) with each run of copies from one source (as `same_source` tells)
-/// that are contiguous at both ends made one.
-fn merged_copies<T: Copy>(
-    copies: Vec<(T, vk::BufferCopy)>,
-    same_source: impl Fn(T, T) -> bool,
-) -> Vec<(T, vk::BufferCopy)> {
-    let mut merged: Vec<(T, vk::BufferCopy)> = Vec::with_capacity(copies.len());
-    for (source, copy) in copies {
-        match merged.last_mut() {
-            Some((last_source, last))
-                if same_source(*last_source, source)
-                    && last.src_offset + last.size == copy.src_offset
-                    && last.dst_offset + last.size == copy.dst_offset =>
-            {
-                last.size += copy.size
-            }
-            _ => merged.push((source, copy)),
-        }
-    }
-    merged
-}
-
 impl CoverageRun {
     /// The buffers and bindings of run number `run`, of `slots` (one a member), with a queue
     /// of `large_bytes`.
@@ -877,20 +856,11 @@ impl CoverageRun {
             ..BufferDesc::gpu_storage(16)
         };
         let large_args = Buffer::new(ctx, args, &format!("coverage run {run} large-triangle dispatch"))?;
-        let uniform = |bytes: usize| BufferDesc {
+        let uniform = BufferDesc {
             usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            ..BufferDesc::gpu_storage(bytes as u64)
+            ..BufferDesc::gpu_storage(size_of::<CoverageUniforms>() as u64)
         };
-        let draws = Buffer::new(
-            ctx,
-            uniform(2 * COVERAGE_MEMBERS * size_of::<DrawConstants>()),
-            &format!("coverage run {run} draws"),
-        )?;
-        let constants = Buffer::new(
-            ctx,
-            uniform(COVERAGE_MEMBERS * size_of::<MemberConstants>()),
-            &format!("coverage run {run} members"),
-        )?;
+        let uniforms = Buffer::new(ctx, uniform, &format!("coverage run {run} draws and members"))?;
         // Each member's words in each view; where a member or a view is missing, the run's
         // first range view's, never written.
         let member_words = |m: usize, shadow: bool| {
@@ -903,8 +873,8 @@ impl CoverageRun {
         let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
         buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
         buffers.extend([&large, &large_args]);
-        let set = StorageSet::new(ctx, layout, &[], (&[&draws, &constants], &buffers), &format!("coverage run {run}"))?;
-        Ok(Self { large, large_args, draws, constants, set })
+        let set = StorageSet::new(ctx, layout, &[], (&[&uniforms], &buffers), &format!("coverage run {run}"))?;
+        Ok(Self { large, large_args, uniforms, set })
     }
 }
 
@@ -970,27 +940,5 @@ mod tests {
         assert_eq!(Crossover::for_device(false), Crossover::GPU);
         assert_eq!(Crossover::CPU.to_string(), "at least 0.0001 triangles per footprint pixel");
         assert_eq!(Crossover::GPU.to_string(), "at least 1500 triangles, or under 0.004 triangles per footprint pixel");
-    }
-
-    #[test]
-    fn copies_contiguous_at_both_ends_from_one_source_are_merged() {
-        let copy = |source: u32, src_offset: u64, dst_offset: u64| {
-            (source, vk::BufferCopy { src_offset, dst_offset, size: 128 })
-        };
-        // Members 0–2 of consecutive hypotheses (7, 8, 9) from one table, then one whose
-        // hypothesis is not the next (11), then the other table's entries for 0 and 1.
-        let copies = vec![copy(0, 896, 0), copy(0, 1024, 128), copy(0, 1152, 256), copy(0, 1408, 384)];
-        let mut all = copies.clone();
-        all.extend([copy(1, 896, 512), copy(1, 1024, 640)]);
-        let ends = |merged: Vec<(u32, vk::BufferCopy)>| {
-            merged.iter().map(|(s, c)| (*s, c.src_offset, c.dst_offset, c.size)).collect::<Vec<_>>()
-        };
-        assert_eq!(
-            ends(merged_copies(all, |a, b| a == b)),
-            [(0, 896, 0, 384), (0, 1408, 384, 128), (1, 896, 512, 256)]
-        );
-        // Contiguous at the source but not the destination, or from two sources: kept apart.
-        let apart = vec![copy(0, 0, 0), copy(0, 128, 256), copy(1, 256, 384)];
-        assert_eq!(ends(merged_copies(apart, |a, b| a == b)), [(0, 0, 0, 128), (0, 128, 256, 128), (1, 256, 384, 128)]);
     }
 }

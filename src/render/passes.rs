@@ -44,7 +44,7 @@ pub(crate) struct Slot<'a> {
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
     /// The shadow view's draw table, which the mask reads.
-    shadow_table: Option<&'a Buffer>,
+    shadow_table: Option<&'a DrawTable>,
     /// The effect passes' outputs, where effects are named.
     effects: Option<EffectBuffers>,
     /// The reflectivity table the effect passes read, where the reflectivity effect is named.
@@ -59,14 +59,14 @@ pub(crate) struct SlotShape<'a> {
     /// Range view width and height (the shadow view has the same rows).
     pub size: (u32, u32),
     /// Shadow view width, when a shadow pass runs; its draw table.
-    pub shadow: Option<(u32, &'a Buffer)>,
+    pub shadow: Option<(u32, &'a DrawTable)>,
     /// `render` reads the masked labels on the host; `verify` scores them on the GPU.
     pub sink: SinkKind,
     /// The effect buffers to make, where effects are named.
     pub effects: Option<EffectShape<'a>>,
     /// The range view's draw table, where the compute rasterizer renders (it reads the shadow
     /// view's table from `shadow`).
-    pub compute_raster: Option<&'a Buffer>,
+    pub compute_raster: Option<&'a DrawTable>,
     /// The compute rasterizer's views hold several draws (a scene of several objects): the
     /// slot resolves the shadow view's words too (compute_raster.rs).
     pub several_draws: bool,
@@ -129,7 +129,7 @@ impl<'a> Slot<'a> {
             (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
-                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, draw_table, words.as_ref())?;
+                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, &draw_table.buffer, words.as_ref())?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
             _ => (None, None, None),
@@ -465,7 +465,7 @@ impl<'p> Passes<'p> {
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
             let mut buffers = Vec::with_capacity(5);
             buffers.push((masked, Access::ComputeWrite));
-            buffers.extend(slot.shadow_table.map(|table| (table, Access::ComputeRead)));
+            buffers.extend(slot.shadow_table.map(|table| (&table.buffer, Access::ComputeRead)));
             if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }
@@ -573,15 +573,23 @@ impl<'p> Passes<'p> {
 /// A view's draw table: for each group of draws seen on planned views, in order, each draw's
 /// constants in that view, numbered consecutively from 0 (a job's `first_draw_index` is the
 /// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
-/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer reads both.
-/// `None` for the shadow view where there is none (mode `none` or θ = 0, which every job of a
-/// submission shares).
+/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer's passes read
+/// both, its coverage passes from a uniform block the host writes with their entries (one
+/// command a coverage dispatch, not a copy a view: compute_raster.rs), so the entries are kept
+/// on the host too.
+pub(crate) struct DrawTable {
+    pub buffer: Buffer,
+    pub entries: Vec<DrawConstants>,
+}
+
+/// A view's [`DrawTable`]; `None` for the shadow view where there is none (mode `none` or
+/// θ = 0, which every job of a submission shares).
 pub(crate) fn draw_table<'a>(
     ctx: &Arc<GpuContext>,
     kind: ViewKind,
     sensor: &Sensor,
     groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
-) -> Result<Option<Buffer>> {
+) -> Result<Option<DrawTable>> {
     let view_from_range = match kind {
         ViewKind::Range => DMat4::IDENTITY,
         ViewKind::Shadow => sensor.to_shadow_frame(),
@@ -605,9 +613,8 @@ pub(crate) fn draw_table<'a>(
     match entries.is_empty() {
         true => Ok(None),
         false => {
-            // Read by the shadow mask, and copied entry by entry for the compute rasterizer.
-            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-            Ok(Some(Buffer::with_data(ctx, usage, &entries, &name)?))
+            let buffer = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, &name)?;
+            Ok(Some(DrawTable { buffer, entries }))
         }
     }
 }
