@@ -2,8 +2,8 @@
 //! buffer, the host records the next. A chunk's recording is host work: 5.0–8.2 µs a
 //! hypothesis on this project's 2-core machine (`GpuContext::recording_time`, which
 //! bench_verify's grouping table prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and
-//! 5–11 µs on the NVIDIA machines' hosts, where the device takes about 6 µs a hypothesis for a
-//! 10k-triangle model at 256². Recorded and run one after the other, that adds to every
+//! 5–11 µs on the NVIDIA machines' hosts, where the device takes about 5 µs a hypothesis for a
+//! 10k-triangle model at 256² (an H200, 2026-11-26). Recorded and run one after the other, that adds to every
 //! hypothesis' time. So on a GPU a call's chunks go to lanes, the caller's thread and more,
 //! each taking the next chunk when it is done with its last: each lane has at most one chunk
 //! in flight, and the verifier's plan counts the memory of one chunk a lane. A call is then
@@ -25,7 +25,9 @@ pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
 /// NVIDIA H200 (2026-11-26, nine runs of `bench_verify -- --rasters`, batches of 4,096 at 256²),
 /// a third lane gained 1–21% over two in every run (the 9,800-triangle sphere 93,100–119,800 →
 /// 101,600–131,000 hypotheses a second); a fourth gained 0–14% more for that sphere and the box,
-/// but lost 9–22% for a 101,760-triangle sphere.
+/// but lost 9–22% for a 101,760-triangle sphere. After the ramp and the coverage set-up's one
+/// update (the next session, two rounds) a fourth still gained 10–17% for the box and the
+/// 9,800-triangle sphere and lost 11% for the 101,760-triangle one.
 pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
     if ctx.is_cpu() {
         1
