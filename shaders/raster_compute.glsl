@@ -10,7 +10,8 @@
 struct RasterView {
     uvec4 area;        // the pixels to draw: first column, first row, width, height
     uint draw;         // the draw's entry in the view's draw table (the coverage passes
-                       // read a copy of that entry; raster.comp)
+                       // read that entry as the host wrote it into their uniform block;
+                       // raster.comp)
     uint stride;       // pixels per row of the view's words (the attachments' width)
     uint pad0, pad1;
 };

@@ -262,7 +262,7 @@ fn a_batch_of_1024_runs_in_chunks() {
     // ramping up (src/verify/lanes.rs): (k + 1) eighths of the cap, no fewer than 64. Two lanes:
     // a cap of 256, chunks of 64, 64, 96, 128, 160, 192, 224, then 96 left. Three: a cap of
     // ⌈1024 / 6⌉ = 171, chunks of 64, 64, 64, 85, 106, 128, 149, 171, 171, then 22. Four: a cap
-    // of 128, chunks of 64, 64, 64, 64, 80, 96, 112, then 128s.
+    // of 128, chunks of 64, 64, 64, 64, 80, 96, 112, 128, 128, 128, then 96 left.
     let chunks: Vec<usize> = match VERIFIER.chunks_in_flight() {
         1 => vec![256; 4],
         2 => vec![64, 64, 96, 128, 160, 192, 224, 96],

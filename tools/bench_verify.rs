@@ -248,7 +248,8 @@ fn listed(stages: &[(&str, f64)]) -> String {
 }
 
 /// A verifier's GPU time by stage (`Verifier::with_stage_times`), ms, over one verification of
-/// `hypotheses` after one hypothesis to warm up, divided by `per` (hypotheses, or chunks).
+/// `hypotheses` after one hypothesis to warm up, divided by `per` (hypotheses, or chunks'
+/// lengths of hypotheses).
 fn stage_times(
     verifier: &Verifier,
     sensed: &SensedImage,
