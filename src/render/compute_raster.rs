@@ -246,6 +246,8 @@ struct CoverageUniforms {
 }
 
 const _: () = assert!(size_of::<DrawConstants>().is_multiple_of(16) && size_of::<MemberConstants>().is_multiple_of(16));
+const _: () = assert!(std::mem::offset_of!(CoverageUniforms, members) == 1024);
+const _: () = assert!(size_of::<CoverageUniforms>() == 1344);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
