@@ -752,8 +752,8 @@ impl CoverageGroup {
         cleared.extend([&buffers.large_args, &buffers.uniforms].map(|b| (b, Access::TransferWrite)));
         // The members' draws and constants, written in one command: on an NVIDIA H200
         // (2026-11-26), one update where there had been an update and two copies from the draw
-        // tables a dispatch (about 1.8 µs of the GPU's each) took the set-up stage
-        // from 2.24–2.26 to 1.32–1.34 ms a 1,024 hypotheses (device 5.90 → 4.92 ms for a
+        // tables a dispatch (about 1.8 µs of the GPU's each) took the set-up stage from
+        // 2.24–2.26 to 1.32–1.34 ms a 1,024 hypotheses (device 5.90 → 4.92 ms for a
         // 9,800-triangle sphere at 256²), and its verification, three chunks in flight, from
         // 125,600–129,400 to 136,500–146,100 hypotheses a second.
         let mut uniforms = <CoverageUniforms as bytemuck::Zeroable>::zeroed();

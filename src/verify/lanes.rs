@@ -1,16 +1,15 @@
-//! Several chunks of a verification in flight: while the device runs one chunk's command
-//! buffer, the host records the next. A chunk's recording is host work: 5.0–8.2 µs a
-//! hypothesis on this project's 2-core machine (`GpuContext::recording_time`, which
-//! bench_verify's grouping table prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and
-//! 5–11 µs on the NVIDIA machines' hosts, where the device takes about 5 µs a hypothesis for a
-//! 10k-triangle model at 256² (an H200, 2026-11-26). Recorded and run one after the other,
-//! that adds to every hypothesis' time. So on a GPU a call's chunks go to lanes, the caller's
-//! thread and more, each taking the next chunk when it is done with its last: each lane has at
-//! most one chunk in flight, and the verifier's plan counts the memory of one chunk a lane. A call is then
-//! split into a few chunks a lane at least, or one chunk's recording would overlap nothing, and
-//! its first chunks are shorter, so that the device starts sooner (`lane_chunk_cap`). No lane
-//! starts a chunk two a lane past the outputs handed on, so a call holds a few chunks' outputs
-//! at a time, however slow one of them is.
+//! Several chunks of a verification in flight: while the device runs one chunk's command buffer,
+//! the host records the next. A chunk's recording is host work: 5.0–8.2 µs a hypothesis on this
+//! project's 2-core machine (`GpuContext::recording_time`, which bench_verify's grouping table
+//! prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and 5–11 µs on the NVIDIA machines' hosts,
+//! where the device takes about 5 µs a hypothesis for a 10k-triangle model at 256² (an H200,
+//! 2026-11-26). Recorded and run one after the other, that adds to every hypothesis' time. So on a
+//! GPU a call's chunks go to lanes, the caller's thread and more, each taking the next chunk when
+//! it is done with its last: each lane has at most one chunk in flight, and the verifier's plan
+//! counts the memory of one chunk a lane. A call is then split into a few chunks a lane at least,
+//! or one chunk's recording would overlap nothing, and its first chunks are shorter, so that the
+//! device starts sooner (`lane_chunk_cap`). No lane starts a chunk two a lane past the outputs
+//! handed on, so a call holds a few chunks' outputs at a time, however slow one of them is.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
