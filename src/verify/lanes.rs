@@ -423,6 +423,7 @@ mod tests {
         assert_eq!(message, Some("chunk 3 panics"));
         assert!(started.load(Ordering::Relaxed) < 50, "{} chunks started", started.load(Ordering::Relaxed));
     }
+
     #[test]
     fn a_panic_taking_an_output_goes_on_in_the_caller_and_stops_the_lanes() {
         // Lanes beside the caller's wait for their window while `done` panics: they must be
@@ -449,6 +450,7 @@ mod tests {
         let panicked = outcome.recv_timeout(Duration::from_secs(10)).expect("the call ended");
         assert!(panicked, "the panic went on in the caller");
     }
+
     #[test]
     fn an_earlier_failure_is_returned_though_a_later_chunk_panicked() {
         // Chunk 0 fails after 50 ms; meanwhile the lanes beside the caller's panic at whatever
