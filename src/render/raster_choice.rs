@@ -1,0 +1,184 @@
+//! Which rasterizer renders a view (DESIGN.md "Raster paths"): the graphics pipeline, the
+//! compute rasterizer (compute_raster.rs), or `auto`, which picks per view from the
+//! [`Crossover`] measured for the device's kind. Kept apart from the rasterizer itself because
+//! the CLI, the library's settings and the summaries all name the choice, and the rule rests on
+//! measurements (docs/compute-rasterizer.md), not on how either rasterizer works.
+
+use crate::shader_contract::COVERAGE_MEMBERS;
+
+/// Which rasterizer renders the views.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Raster {
+    /// Per view: compute where the device's [`Crossover`] says so, else graphics.
+    #[default]
+    Auto,
+    /// The graphics pipeline (the prescribed path).
+    Graphics,
+    /// The compute rasterizer, for views of up to [`COVERAGE_MEMBERS`] draws whose visibility
+    /// words the device can bind; needs 64-bit buffer atomics.
+    Compute,
+}
+
+/// Where `auto` takes the compute rasterizer for a view: its triangles, and their density, the
+/// triangles per pixel of its footprint (each object's bounding sphere's pixels, with a 2-pixel
+/// margin). One measured on each kind of device (`bench_verify -- --rasters`: compute against
+/// graphics in the same run, batches taken in turn; docs/compute-rasterizer.md), as the two
+/// kinds part the work differently: a CPU device runs every triangle of either rasterizer on
+/// its few cores, where a GPU's graphics pipeline is fastest for few mid-sized triangles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossover {
+    /// At least this many triangles and at least `min_density` take the compute rasterizer
+    /// (one of the two bounds is 0)...
+    min_triangles: u64,
+    min_density: f64,
+    /// ...and so does a density under this one, however few the triangles (large triangles,
+    /// which the compute rasterizer's workgroups share out).
+    sparse_below: f64,
+}
+
+impl Crossover {
+    /// A CPU device's (lavapipe, 2 cores; three runs, 2026-11-25, confirmed in two on
+    /// 2026-11-26): in depth-mode verification at 256², batches of 64, the box, 0.001 triangles
+    /// per footprint pixel, ran 0.94–1.17× as fast by compute, spheres of 0.015 1.27–1.43×,
+    /// 0.071 1.26–1.46×, 0.17 1.36–1.49×, 0.31 1.57–1.61×, 0.70 1.72–1.83×, 1.3 2.09–2.11×, 3.1
+    /// 2.74–2.86×, 32 9.15–9.44×; the box filling a 256² image, 0.00018, 0.87–1.19× in label
+    /// mode and 0.95–1.00× in depth mode. Filling 512², 0.000046, it ran 0.70–0.80× (label) and
+    /// 0.90–0.95× (depth) as fast (two runs of batches of 16, 2026-11-23). The two are even,
+    /// within that machine's noise, between 0.00018 and 0.001.
+    pub const CPU: Crossover = Crossover { min_triangles: 0, min_density: 0.0001, sparse_below: 0.0 };
+
+    /// A GPU's, measured on NVIDIA H100s and an H200 (six runs, 2026-11-26; every GPU takes it
+    /// until others are measured), the same tables: the box (12 triangles, 0.001) ran
+    /// 0.94–1.16× as fast by compute; spheres of 48 to 960 triangles (0.015–0.31) 0.65–1.07×,
+    /// graphics winning by up to a third; 2,208 (0.70) 1.01–1.45×; 3,968 (1.3) 1.16–1.44×;
+    /// 9,800 (3.1) 2.04–2.27×; 101,760 (32) 9.78–11.63×. Filling the image, the box (0.00018)
+    /// ran 1.72–2.14× as fast, and 101,760 triangles 8.19–9.02× at 256² (1.6) and
+    /// 12.24–13.16× at 1024² (0.1). So what parts them is the triangle count,
+    /// not the density: a few hundred triangles leave most of a GPU's cores idle in the compute
+    /// rasterizer, which gives one invocation to each, while its large triangles' workgroups
+    /// beat the graphics pipeline's few rasterizers. The bounds lie between the measured
+    /// points, near their geometric means (960 and 2,208 triangles; 0.001 and 0.015).
+    pub const GPU: Crossover = Crossover { min_triangles: 1_500, min_density: 0.0, sparse_below: 0.004 };
+
+    /// The crossover measured for a CPU device (`is_cpu`) or a GPU.
+    pub fn for_device(is_cpu: bool) -> Self {
+        if is_cpu {
+            Self::CPU
+        } else {
+            Self::GPU
+        }
+    }
+
+    /// Whether a view of `triangles` over `footprint_pixels` takes the compute rasterizer.
+    pub fn takes_compute(self, triangles: u64, footprint_pixels: u64) -> bool {
+        let (triangles_f, pixels) = (triangles as f64, footprint_pixels as f64);
+        let dense = triangles >= self.min_triangles && triangles_f >= self.min_density * pixels;
+        dense || triangles_f < self.sparse_below * pixels
+    }
+}
+
+/// The rule as the summaries print it: "at least 0.0001 triangles per footprint pixel".
+impl std::fmt::Display for Crossover {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let mut parts = Vec::new();
+        if self.min_triangles > 0 {
+            parts.push(format!("{} triangles", self.min_triangles));
+        }
+        if self.min_density > 0.0 {
+            parts.push(format!("{} triangles per footprint pixel", self.min_density));
+        }
+        write!(f, "at least {}", parts.join(" and "))?;
+        if self.sparse_below > 0.0 {
+            write!(f, ", or under {} triangles per footprint pixel", self.sparse_below)?;
+        }
+        Ok(())
+    }
+}
+
+impl Raster {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Raster::Auto => "auto",
+            Raster::Graphics => "graphics",
+            Raster::Compute => "compute",
+        }
+    }
+
+    /// Whether this choice renders a view of `draws` draws, with `triangles` triangles in all
+    /// over a footprint of `footprint_pixels`, with the compute rasterizer, on a device that
+    /// `has_compute` (64-bit buffer atomics) or not, whose `crossover` `auto` follows: 1 to
+    /// [`COVERAGE_MEMBERS`] draws, the members of one coverage dispatch. `Compute` on a
+    /// device without them is refused where its pipelines are built.
+    pub fn computes(
+        self,
+        (has_compute, crossover): (bool, Crossover),
+        draws: usize,
+        triangles: u64,
+        footprint_pixels: u64,
+    ) -> bool {
+        let members = (1..=COVERAGE_MEMBERS).contains(&draws);
+        match self {
+            Raster::Graphics => false,
+            Raster::Compute => members,
+            Raster::Auto => has_compute && members && crossover.takes_compute(triangles, footprint_pixels),
+        }
+    }
+}
+
+impl std::str::FromStr for Raster {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text {
+            "auto" => Ok(Raster::Auto),
+            "graphics" => Ok(Raster::Graphics),
+            "compute" => Ok(Raster::Compute),
+            other => Err(format!("unknown rasterizer {other:?}: expected auto, graphics or compute")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each device's rule against the measured points it rests on (the Crossover constants'
+    /// docs): (triangles, footprint pixels, whether the rule should pick compute there: where
+    /// it ran faster, or even).
+    #[test]
+    fn each_devices_crossover_picks_the_rasterizer_measured_faster() {
+        let cpu = [
+            (12, 12_000, true),         // box, 0.001 (even: 0.94–1.17×)
+            (48, 3_200, true),          // sphere:8, 0.015
+            (960, 3_137, true),         // sphere:32, 0.31
+            (101_760, 3_140, true),     // sphere:320, 32
+            (12, 66_000, true),         // box filling 256², 0.00018 (even)
+            (12, 262_000, false),       // box filling 512², 0.000046
+            (101_760, 1_048_576, true), // sphere:320 filling 1024², 0.1
+        ];
+        let gpu = [
+            (12, 12_000, true),         // box, 0.001 (even: 0.94–1.16×)
+            (48, 3_200, false),         // sphere:8, 0.015: 0.65–0.89×
+            (224, 3_150, false),        // sphere:16, 0.071
+            (960, 3_137, false),        // sphere:32, 0.31
+            (2_208, 3_136, true),       // sphere:48, 0.70: 1.01–1.45×
+            (9_800, 3_136, true),       // sphere:100, 3.1
+            (12, 66_000, true),         // box filling 256², 0.00018: 1.72–2.14×
+            (101_760, 65_536, true),    // sphere:320 filling 256²
+            (101_760, 1_048_576, true), // sphere:320 filling 1024², 0.1: 12.24–13.16×
+        ];
+        for (crossover, points) in [(Crossover::CPU, &cpu[..]), (Crossover::GPU, &gpu[..])] {
+            for &(triangles, pixels, faster) in points {
+                assert_eq!(
+                    crossover.takes_compute(triangles, pixels),
+                    faster,
+                    "{crossover}: {triangles} over {pixels}"
+                );
+            }
+        }
+        assert_eq!(Crossover::for_device(true), Crossover::CPU);
+        assert_eq!(Crossover::for_device(false), Crossover::GPU);
+        assert_eq!(Crossover::CPU.to_string(), "at least 0.0001 triangles per footprint pixel");
+        assert_eq!(Crossover::GPU.to_string(), "at least 1500 triangles, or under 0.004 triangles per footprint pixel");
+    }
+}
