@@ -134,12 +134,17 @@ vec3 triangle_normal(DrawData d, uint triangle) {
 }
 
 // The view-frame z at the centre of pixel (c, r), given as floats, of the plane through
-// corner a with unit normal n: for the range view (range_pixel) and the compute rasterizer's
-// depths (raster.comp).
-float plane_z(DrawData d, vec3 a, vec3 n, vec2 pixel) {
-    precise vec2 centre = vec2(d.grid.x + pixel.x * d.grid.z, d.grid.y - pixel.y * d.grid.w);
+// corner a with unit normal n, in a view whose pixels lie on `grid` (DrawData.grid): for the
+// range view (range_pixel), and the compute rasterizer's depths and z keys (raster.comp).
+float plane_z(vec4 grid, vec3 a, vec3 n, vec2 pixel) {
+    precise vec2 centre = vec2(grid.x + pixel.x * grid.z, grid.y - pixel.y * grid.w);
     precise float z = a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
     return z;
+}
+
+// The gradient (∂z/∂x, ∂z/∂y) of a plane whose unit normal in the view's frame is n.
+vec2 plane_gradient(vec3 n) {
+    return vec2(-n.x / n.z, -n.y / n.z);
 }
 
 // What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that
@@ -164,7 +169,7 @@ struct RangePixel {
 // unit normal (model frame, as the mesh stores them) and label: see range_pixel.
 RangePixel range_pixel_of(DrawData d, vec3 corner, vec3 normal, uint label, vec2 pixel) {
     vec3 n = rotate_to_view(d, normal);
-    return RangePixel(label, plane_z(d, to_view(d, corner), n, pixel), vec2(-n.x / n.z, -n.y / n.z));
+    return RangePixel(label, plane_z(d.grid, to_view(d, corner), n, pixel), plane_gradient(n));
 }
 
 // The range view at pixel (c, r), given as floats, that triangle t of draw d covers: its label, and the view-frame z

@@ -6,10 +6,12 @@
 // (lavapipe's sub-pixel precision), and a pixel is covered when its centre is inside every
 // edge, or on a top or left edge (the top-left rule, framebuffer y down), in exact integer
 // arithmetic (raster_edges.glsl). Each covered pixel keeps the nearest triangle by atomicMin
-// on its view's visibility word, ordered by the depth of the triangle's plane, affine in the
-// pixel's column and row in an orthographic view (two multiply-adds a pixel where evaluating
-// the plane afresh took two divisions). That depth only orders the triangles at a pixel; the
-// z the range view holds is the plane's at the exact pixel centre (range_pixel, draw.glsl).
+// on its view's visibility word (visibility_word.glsl). The range view of one draw orders its
+// triangles by the z it holds, the plane's at the exact pixel centre (range_pixel, draw.glsl),
+// and keeps that z in the word. The shadow view, and views of several draws, order them by the
+// depth of the triangle's plane, affine in the pixel's column and row in an orthographic view:
+// two multiply-adds a pixel, where the plane's z takes a division. That depth decides, in
+// every view, whether the pixel is clipped.
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic, by tiles of at most 8 × 8 pixels, each first as coverage bits, then keeping
@@ -66,6 +68,9 @@ struct Member {
     uint dealt_rows;     // blocks of the workgroups dealt over the stripes, per stripe (main)
     uint place;          // where members share words, its place in the ties order, which tags
                          // its triangles there (above bit MEMBER_SHIFT); else 0
+    uint z_keys;         // 1: its range view's words hold z keys (visibility_word.glsl): a
+                         // view of one draw; 0: depths, for words shared by several draws
+    uint pad0, pad1, pad2;
 };
 layout(set = 0, binding = 0, std140) uniform Coverage {
     DrawData draws[2 * COVERAGE_MEMBERS];
@@ -183,6 +188,9 @@ struct Setup {
     uint stride;            // the view's pixels a row
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
+    bool z_keys;            // its words' keys are z keys (Member): then the plane's z at the
+    vec4 grid;              // pixel decides, from the view's grid (DrawData), a corner and the
+    vec3 corner, normal;    // unit normal, both in the view's frame
     vec2 a, b, c;           // snapped corners (snap)
     ivec2 first, last;
 };
@@ -195,6 +203,10 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) 
     s.tag = constants.place << MEMBER_SHIFT;
     s.stride = view.stride;
     vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
+    s.z_keys = v == 0u && constants.z_keys != 0u;
+    s.grid = d.grid;
+    s.corner = corner;
+    s.normal = normal;
     precise vec3 v0 = window(d, corner);
     precise vec3 v1 = window(d, to_view(d, m.corner[1]));
     precise vec3 v2 = window(d, to_view(d, m.corner[2]));
@@ -206,7 +218,7 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) 
     s.first = max(ivec2(floor(lo - 0.5)), ivec2(view.area.xy));
     s.last = min(ivec2(ceil(hi - 0.5)), ivec2(view.area.xy + view.area.zw) - 1);
     // In an orthographic view the plane's depth is affine in the pixel's column and row.
-    s.depth_first = (d.z_range.y - plane_z(d, corner, normal, vec2(s.first))) / (d.z_range.y - d.z_range.x);
+    s.depth_first = (d.z_range.y - plane_z(d.grid, corner, normal, vec2(s.first))) / (d.z_range.y - d.z_range.x);
     s.depth_step = depth_step(d, normal);
 #ifdef TIES
     s.tie = tie_depth(d, s.depth_step);
@@ -275,7 +287,10 @@ void keep(uint t, Setup s, ivec2 pixel) {
         keep_word(0u, s.view, at, (word & 0xffffffff00000000ul) | tagged);
     }
 #else
-    uint64_t word = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(s.tag | t);
+    // The same z, from the same arithmetic on the same record, as the view's resolve would
+    // work out (range_pixel_of, draw.glsl), which then reads it here.
+    uint key = s.z_keys ? z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel))) : floatBitsToUint(depth);
+    uint64_t word = (uint64_t(key) << 32) | uint64_t(s.tag | t);
     keep_word(s.member, s.view, at, word);
 #endif
 }

@@ -58,7 +58,9 @@ void main() {
 #else
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (word != EMPTY) {
-        range = range_pixel_by_words(d, t, vec2(pixel));
+        // One draw's words hold the z (visibility_word.glsl); several draws', depths.
+        range = SEVERAL_DRAWS != 0u ? range_pixel_by_words(d, t, vec2(pixel))
+                                    : range_pixel_at_z(d, t, z_of_key(uint(word >> 32)), true);
     }
     imageStore(label, pixel, uvec4(range.label));
     imageStore(z, pixel, vec4(range.z));

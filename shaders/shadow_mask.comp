@@ -325,16 +325,18 @@ bool shadowed(ivec2 pixel, RangePixel range) {
 }
 
 #ifdef FROM_WORDS
-// The range view at a pixel from its words, written to its attachments as raster_resolve.comp
-// writes them (zeros where no triangle covers it), its label and gradient only where a later
-// pass reads them: on lavapipe the three stores cost about 0.5 ms of the dense sphere's
-// 7 ms a hypothesis at 256².
+// The range view at a pixel from its words (a view of one draw, whose words hold z keys:
+// visibility_word.glsl), written to its attachments as raster_resolve.comp writes them (zeros
+// where no triangle covers it), its label and gradient only where a later pass reads them: on
+// lavapipe the three stores cost about 0.5 ms of the dense sphere's 7 ms a hypothesis at 256².
+// The gradient is read only where it is written or the depth test needs it.
 RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint at = 2u * word_index(m.range_stride, pixel);
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {
-        range = range_pixel_by_words(d, t, vec2(pixel));
+        bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || (TEST != TEST_LABEL && TEST != TEST_LABEL_SQUARE);
+        range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient);
     }
     imageStore(range_z, pixel, vec4(range.z));
     if (WRITE_LABEL_AND_GRADIENT != 0u) {

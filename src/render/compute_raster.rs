@@ -92,6 +92,11 @@ struct MemberConstants {
     /// Where the members share words (a view of several draws), the member's place in the
     /// ties order; else 0.
     place: u32,
+    /// 1 where the member's range view is its own, of one draw: its words then hold z keys
+    /// (shaders/visibility_word.glsl), from which its resolve reads z; 0 where members share
+    /// words, whose ties passes compare depths.
+    z_keys: u32,
+    _pad: [u32; 3],
 }
 
 const _: () = assert!(size_of::<RasterView>() == 32);
@@ -99,7 +104,8 @@ const _: () = assert!(std::mem::offset_of!(MemberConstants, triangles) == 64);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, cull) == 68);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, dealt_rows) == 72);
 const _: () = assert!(std::mem::offset_of!(MemberConstants, place) == 76);
-const _: () = assert!(size_of::<MemberConstants>() == 80);
+const _: () = assert!(std::mem::offset_of!(MemberConstants, z_keys) == 80);
+const _: () = assert!(size_of::<MemberConstants>() == 96);
 
 /// The coverage passes' uniform block; matches `Coverage` in shaders/raster.comp (std140: the
 /// same offsets, as DrawData and Member keep them and their sizes are multiples of 16). Each
@@ -114,7 +120,7 @@ struct CoverageUniforms {
 
 const _: () = assert!(size_of::<DrawConstants>().is_multiple_of(16) && size_of::<MemberConstants>().is_multiple_of(16));
 const _: () = assert!(std::mem::offset_of!(CoverageUniforms, members) == 1024);
-const _: () = assert!(size_of::<CoverageUniforms>() == 1344);
+const _: () = assert!(size_of::<CoverageUniforms>() == 1408);
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -640,6 +646,8 @@ impl CoverageGroup {
                 cull: cull_sign(member.draw.mesh.solidity),
                 dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
                 place: if self.shared_words { m as u32 } else { 0 },
+                z_keys: u32::from(!self.shared_words),
+                _pad: [0; 3],
             };
             for (slot, view) in [m, COVERAGE_MEMBERS + m].into_iter().zip(member.views.views()) {
                 uniforms.draws[slot] = view.draw_table.entries[member.index as usize];
