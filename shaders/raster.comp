@@ -288,8 +288,14 @@ void keep(uint t, Setup s, ivec2 pixel) {
     }
 #else
     // The same z, from the same arithmetic on the same record, as the view's resolve would
-    // work out (range_pixel_of, draw.glsl), which then reads it here.
-    uint key = s.z_keys ? z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel))) : floatBitsToUint(depth);
+    // work out (range_pixel_of, draw.glsl), which then reads it here. Worked out in every view
+    // and then selected, not branched on: with a branch on z_keys, lavapipe (Mesa 22.3) took
+    // 4–5 times as long a hypothesis, and kept 0.5 MB more memory with each one
+    // (bench_verify's memory table), as if it compiled the shader again at every dispatch. It
+    // can inline into a shader the values of a uniform block that decide a branch, and this
+    // block is written before every dispatch.
+    uint z = z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel)));
+    uint key = s.z_keys ? z : floatBitsToUint(depth);
     uint64_t word = (uint64_t(key) << 32) | uint64_t(s.tag | t);
     keep_word(s.member, s.view, at, word);
 #endif

@@ -6,8 +6,9 @@
 //!   invocation per triangle reads its corners and normal once (reading them is most of a small
 //!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
-//!   the nearest triangle per pixel with a 64-bit atomicMin of (depth bits, triangle; tagged
-//!   with its draw's place in a view of several draws, below) on that view's words, by tiles
+//!   the nearest triangle per pixel with a 64-bit atomicMin of (key, triangle; tagged with its
+//!   draw's place in a view of several draws, below) on that view's words, the key the exact z
+//!   in the range view of one draw and the depth elsewhere (shaders/visibility_word.glsl), by tiles
 //!   of 8 × 8 pixels (one, in a variant without the tiles' code, which a software rasterizer
 //!   would run whatever the boxes, where no triangle's box can be larger: `fits_one_tile`).
 //!   A triangle whose corners lie too far from its box for 32 bits (more than 32 pixels) is
