@@ -57,7 +57,8 @@ layout(local_size_x = COVERAGE_GROUP) in;
 // only to cull: it covers no pixels; member_draw). A uniform block, not a storage buffer: a
 // software rasterizer loads a uniform block's value once for all the invocations it runs
 // together, a storage buffer's invocation by invocation (dense sphere at 256², coverage
-// 4.7–4.8 → 4.45–4.55 ms).
+// 4.7–4.8 → 4.45–4.55 ms). A new branch on one of its values may make lavapipe compile the
+// shader again at every dispatch (keep).
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
 // src/render/compute_raster.rs.
