@@ -177,9 +177,10 @@ RangePixel range_pixel_of(DrawData d, vec3 corner, vec3 normal, uint label, vec2
 // (interpolation error grows with a facet's slope, the plane does not). The plane's normal is
 // the triangle's unit normal, computed once in f64 on the host (src/render/gpu_mesh.rs): a
 // cross product of a sliver's nearly parallel edges here, in f32, would lose most of its
-// digits. The one definition for the graphics path (raster.frag) and the compute rasterizer's
-// resolve (raster_resolve.comp, shadow_mask.comp, through triangle_words.glsl), so that both
-// write the same bits.
+// digits. The one definition for the graphics path (raster.frag) and the compute rasterizer
+// (through triangle_words.glsl), so that both write the same bits: for a view of one draw the
+// coverage pass works z out with plane_z as range_pixel_of does (raster.comp, keep), and the
+// resolve reads it from the word; for several draws the resolve works it out here.
 RangePixel range_pixel(DrawData d, uint t, vec2 pixel) {
     return range_pixel_of(d, mesh_corner(d, t, 0u), mesh_normal(d, t), triangle_label(d, t), pixel);
 }

@@ -8,10 +8,11 @@
 // arithmetic (raster_edges.glsl). Each covered pixel keeps the nearest triangle by atomicMin
 // on its view's visibility word (visibility_word.glsl). The range view of one draw orders its
 // triangles by the z it holds, the plane's at the exact pixel centre (range_pixel, draw.glsl),
-// and keeps that z in the word. The shadow view, and views of several draws, order them by the
-// depth of the triangle's plane, affine in the pixel's column and row in an orthographic view:
-// two multiply-adds a pixel, where the plane's z takes a division. That depth decides, in
-// every view, whether the pixel is clipped.
+// and keeps that z in the word, from which the view is resolved. The shadow view, whose key
+// nothing reads, and views of several draws, whose ties passes compare depths, order them by
+// the depth of the triangle's plane, affine in the pixel's column and row in an orthographic
+// view (two multiply-adds a pixel). That depth decides, in every view, whether the pixel is
+// clipped.
 //
 // Small triangles: one invocation per triangle walks its bounding box in each view, in 32-bit
 // arithmetic, by tiles of at most 8 × 8 pixels, each first as coverage bits, then keeping
@@ -288,15 +289,16 @@ void keep(uint t, Setup s, ivec2 pixel) {
         keep_word(0u, s.view, at, (word & 0xffffffff00000000ul) | tagged);
     }
 #else
-    // The same z, from the same arithmetic on the same record, as the view's resolve would
-    // work out (range_pixel_of, draw.glsl), which then reads it here. Worked out in every view
-    // and then selected, not branched on: with a branch on z_keys, lavapipe (Mesa 22.3) took
-    // 4–5 times as long a hypothesis, and kept 0.5 MB more memory with each one
-    // (bench_verify's memory table), as if it compiled the shader again at every dispatch. It
-    // can inline into a shader the values of a uniform block that decide a branch, and this
-    // block is written before every dispatch.
+    // The same z, from the same arithmetic on the same record, as the view's resolve would work out
+    // (range_pixel_of, draw.glsl), which then reads it here. Worked out in every view and then
+    // selected (an OpSelect of two locals: glslang makes a branch of a ?: whose operands call
+    // functions), not branched on: with a branch on z_keys, lavapipe (Mesa 22.3) took 4–5 times as
+    // long a hypothesis, and kept 0.5 MB more memory with each one (bench_verify's memory table),
+    // as if it compiled the shader again at every dispatch. It can inline into a shader the values
+    // of a uniform block that decide a branch, and this block is written before every dispatch.
     uint z = z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel)));
-    uint key = s.z_keys ? z : floatBitsToUint(depth);
+    uint depth_bits = floatBitsToUint(depth);
+    uint key = s.z_keys ? z : depth_bits;
     uint64_t word = (uint64_t(key) << 32) | uint64_t(s.tag | t);
     keep_word(s.member, s.view, at, word);
 #endif

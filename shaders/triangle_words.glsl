@@ -3,7 +3,8 @@
 // rasterizer loads each word of a read through a device address on its own, invocation by
 // invocation, so a record's twelve floats take six loads here instead of twelve. The bits are
 // those mesh_corner and mesh_normal read, and range_pixel_of does the same arithmetic on them
-// as range_pixel, so both rasterizers still write the same bits.
+// as range_pixel (and raster.comp's keep on the z it keeps in a word), so both rasterizers
+// still write the same bits.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 // A TriangleRecord's 48 bytes as six words of two floats each, the lower float in the low half.
