@@ -57,6 +57,8 @@ layout(push_constant, std430) uniform Mask {
 layout(constant_id = 0) const uint TEST = 0xffffffffu;
 layout(constant_id = 1) const uint TEST_LABEL = 0xffffffffu;
 layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
+// Whether TEST is a label test, which reads labels only; else the depth test.
+const bool LABEL_TEST = TEST == TEST_LABEL || TEST == TEST_LABEL_SQUARE;
 // How an edge link packs the neighbour (src/mesh/adjacency.rs, given by the host).
 layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
@@ -81,7 +83,7 @@ uvec4 shadow_seen(ivec2 q) {
     if (triangle == EMPTY_HALF) {
         return uvec4(0u);
     }
-    uint label = TEST == TEST_LABEL || TEST == TEST_LABEL_SQUARE ? triangle_label(shadow_draw, triangle) : 1u;
+    uint label = LABEL_TEST ? triangle_label(shadow_draw, triangle) : 1u;
     return uvec4(label, m.words_draw, triangle, 0u);
 #else
     return imageLoad(shadow_visibility, q);
@@ -335,7 +337,7 @@ RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (t != EMPTY_HALF) {
-        bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || (TEST != TEST_LABEL && TEST != TEST_LABEL_SQUARE);
+        bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || !LABEL_TEST;
         range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient);
     }
     imageStore(range_z, pixel, vec4(range.z));
@@ -350,7 +352,7 @@ RangePixel resolve_range(DrawData d, ivec2 pixel) {
 // The range view at a pixel, from its attachments; the gradient only for the depth test.
 RangePixel read_range(ivec2 pixel) {
     RangePixel range = RangePixel(imageLoad(range_label, pixel).r, imageLoad(range_z, pixel).r, vec2(0.0));
-    if (TEST != TEST_LABEL && TEST != TEST_LABEL_SQUARE) {
+    if (!LABEL_TEST) {
         range.gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
     }
     return range;

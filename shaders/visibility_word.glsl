@@ -26,16 +26,20 @@ uint word_index(uint stride, ivec2 pixel) {
     return uint(pixel.y) * stride + uint(pixel.x);
 }
 
+// What turns a float's bits into its key (z_key), and a key back into the bits (z_of_key).
+uint z_key_flip(uint bits) {
+    return (bits & 0x80000000u) != 0u ? bits : ~bits & 0x7fffffffu;
+}
+
 // A z's key: smaller for the nearer (larger z), one key a z, every bit of it kept. A float's
 // bits order as its magnitude; a negative one's, reversed. +0 counts as nearer than −0, which
 // matters only to planes exactly coincident at a pixel. (A word is empty by its triangle half,
 // whatever its key.)
 uint z_key(float z) {
-    uint bits = floatBitsToUint(z);
-    return (bits & 0x80000000u) != 0u ? bits : ~bits & 0x7fffffffu;
+    return z_key_flip(floatBitsToUint(z));
 }
 
-// The z whose key z_key gave.
+// The z whose key z_key gave: the flip undoes itself.
 float z_of_key(uint key) {
-    return uintBitsToFloat((key & 0x80000000u) != 0u ? key : ~key & 0x7fffffffu);
+    return uintBitsToFloat(z_key_flip(key));
 }
