@@ -26,16 +26,24 @@ pub enum Error {
     Mesh { name: String, reason: String },
     #[error("invalid scene: {0}")]
     Scene(String),
+    /// A setting (an option, an environment variable) has a value that cannot be used.
+    #[error("{setting}: {reason}")]
+    Setting { setting: String, reason: String },
     #[error("cannot access {}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: {reason}", path.display())]
     File { path: PathBuf, reason: String },
+    /// A dependency's parser panicked on an input (guard_parser); nothing it made was kept.
+    #[error("{input}: {parser} failed on this input ({message}); please report it with the file")]
+    ParserPanic { input: String, parser: &'static str, message: String },
     /// A call would need more memory than its budget allows (limits.rs); nothing was allocated.
+    /// `held` is what the run held already (limits.rs, `Ledger`).
     #[error(
-        "{what} needs about {needed}, more than the memory budget of {budget} \
-         (raise it with --memory-budget or RANGESYNTH_MEMORY_BUDGET)"
+        "{what} needs about {needed}{}, more than the memory budget of {budget} \
+         (raise it with --memory-budget or RANGESYNTH_MEMORY_BUDGET)",
+        held_note(*.held)
     )]
-    TooLarge { what: String, needed: Bytes, budget: Bytes },
+    TooLarge { what: String, needed: Bytes, held: Bytes, budget: Bytes },
 }
 
 impl Error {
@@ -57,6 +65,41 @@ impl Error {
     pub(crate) fn file(path: impl Into<PathBuf>, reason: impl std::fmt::Display) -> Self {
         Error::File { path: path.into(), reason: reason.to_string() }
     }
+
+    /// The same error, naming what it is about (`hypothesis "h7"`, `object 3`) where its
+    /// message is about the input and does not already say which part: a refusal of a
+    /// 5,000-hypothesis file names the one hypothesis that caused it.
+    pub(crate) fn concerning(self, subject: &str) -> Self {
+        match self {
+            Error::Scene(reason) => Error::Scene(format!("{subject}: {reason}")),
+            Error::TooLarge { what, needed, held, budget } => {
+                Error::TooLarge { what: format!("{subject}: {what}"), needed, held, budget }
+            }
+            other => other,
+        }
+    }
+}
+
+fn held_note(held: Bytes) -> String {
+    match held.0 {
+        0 => String::new(),
+        _ => format!(" on top of the {held} the run already holds"),
+    }
+}
+
+/// Runs `parse`, a dependency's parser reading `input`, so that a panic inside it becomes an
+/// error naming the input rather than the end of the process (or of the daemon embedding the
+/// library). The project checks what it gives each such parser; this is the boundary for
+/// what the checks miss. (A build with `panic = "abort"` cannot catch the panic.)
+pub(crate) fn guard_parser<T>(input: &str, parser: &'static str, parse: impl FnOnce() -> Result<T>) -> Result<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)).unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or(panic.downcast_ref::<&str>().copied())
+            .unwrap_or("it panicked");
+        Err(Error::ParserPanic { input: input.to_string(), parser, message: crate::untrusted::escaped(message, 200) })
+    })
 }
 
 /// `.vk("creating the image")` on an `ash` result.

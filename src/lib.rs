@@ -19,6 +19,7 @@ pub mod scene;
 pub mod sensor;
 pub mod shader_contract;
 pub mod shadow;
+pub mod untrusted;
 pub mod verify;
 
 pub use error::{Error, Result};

@@ -6,9 +6,18 @@
 //! the bytes it will take, host and GPU together, and checked against this budget *before*
 //! anything is allocated. A refusal names the figure, so the user can raise the budget
 //! knowingly (`--memory-budget` or `RANGESYNTH_MEMORY_BUDGET`).
+//!
+//! The budget is one per run, not one per file: a [`Ledger`] holds what the run has taken so
+//! far — every input's bytes, every structure parsed from them, every output built in memory —
+//! and refuses the next charge that would take the total past the budget, naming the input
+//! that crossed it. A check for what a step is about to allocate (a render's images, a
+//! batch's buffers) is made on top of what the ledger holds. The ledger also knows every file
+//! the run read, by identity, so that no output replaces one (io/atomic.rs).
 
 use crate::error::{Error, Result};
 use std::fmt;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 /// Environment variable setting the memory budget (bytes, or with a K, M, G or T suffix).
 pub const MEMORY_BUDGET_ENV: &str = "RANGESYNTH_MEMORY_BUDGET";
@@ -41,17 +50,124 @@ impl MemoryBudget {
     /// `RANGESYNTH_MEMORY_BUDGET` when set, else the default.
     pub fn from_env() -> Result<Self> {
         match std::env::var(MEMORY_BUDGET_ENV) {
-            Ok(text) => text.parse().map_err(|e: Error| Error::Scene(format!("{MEMORY_BUDGET_ENV}: {e}"))),
+            Ok(text) => Self::parse_setting(&text, MEMORY_BUDGET_ENV),
             Err(_) => Ok(Self::default()),
         }
+    }
+
+    /// Parses `text` as the value of `setting` (an option or environment variable, named in
+    /// the error).
+    pub fn parse_setting(text: &str, setting: &str) -> Result<Self> {
+        text.parse().map_err(|e| match e {
+            Error::Setting { reason, .. } => Error::Setting { setting: setting.to_string(), reason },
+            other => other,
+        })
     }
 
     /// Refuses `needed` bytes for `what` when they exceed the budget.
     pub fn check(self, what: impl fmt::Display, needed: u64) -> Result<()> {
         if needed > self.bytes {
-            return Err(Error::TooLarge { what: what.to_string(), needed: Bytes(needed), budget: Bytes(self.bytes) });
+            return Err(Error::TooLarge {
+                what: what.to_string(),
+                needed: Bytes(needed),
+                held: Bytes(0),
+                budget: Bytes(self.bytes),
+            });
         }
         Ok(())
+    }
+}
+
+/// A file's identity (device and inode): the same file whatever path, link or spelling names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct FileId {
+    device: u64,
+    inode: u64,
+}
+
+impl FileId {
+    #[cfg(unix)]
+    pub fn of(metadata: &std::fs::Metadata) -> Self {
+        use std::os::unix::fs::MetadataExt;
+        Self { device: metadata.dev(), inode: metadata.ino() }
+    }
+}
+
+/// One run's account against its memory budget: the bytes it holds, and the files it read.
+#[derive(Debug)]
+pub struct Ledger {
+    budget: MemoryBudget,
+    held: AtomicU64,
+    inputs: Mutex<Vec<FileId>>,
+}
+
+impl Default for Ledger {
+    /// A ledger of the default budget, holding nothing.
+    fn default() -> Self {
+        Self::new(MemoryBudget::default())
+    }
+}
+
+impl Ledger {
+    pub fn new(budget: MemoryBudget) -> Self {
+        Self { budget, held: AtomicU64::new(0), inputs: Mutex::new(Vec::new()) }
+    }
+
+    pub fn budget(&self) -> MemoryBudget {
+        self.budget
+    }
+
+    /// Bytes the run holds so far.
+    pub fn held(&self) -> u64 {
+        self.held.load(Ordering::Relaxed)
+    }
+
+    /// Bytes the run may still take.
+    pub fn available(&self) -> u64 {
+        self.budget.bytes().saturating_sub(self.held())
+    }
+
+    /// Refuses `needed` more bytes for `what` when, with what the run holds, they would
+    /// exceed the budget. Takes nothing.
+    pub fn check(&self, what: impl fmt::Display, needed: u64) -> Result<()> {
+        self.refusal(what, needed, self.held()).map_or(Ok(()), Err)
+    }
+
+    /// Takes `bytes` for `what` for the rest of the run, or refuses them as [`Ledger::check`]
+    /// does (then taking nothing).
+    pub fn charge(&self, what: impl fmt::Display, bytes: u64) -> Result<()> {
+        let mut held = self.held();
+        loop {
+            if let Some(refusal) = self.refusal(&what, bytes, held) {
+                return Err(refusal);
+            }
+            match self.held.compare_exchange_weak(held, held + bytes, Ordering::Relaxed, Ordering::Relaxed) {
+                Ok(_) => return Ok(()),
+                Err(now) => held = now,
+            }
+        }
+    }
+
+    fn refusal(&self, what: impl fmt::Display, needed: u64, held: u64) -> Option<Error> {
+        (held.saturating_add(needed) > self.budget.bytes()).then(|| Error::TooLarge {
+            what: what.to_string(),
+            needed: Bytes(needed),
+            held: Bytes(held),
+            budget: Bytes(self.budget.bytes()),
+        })
+    }
+
+    /// Notes that the run read the file `id` (so no output may replace it).
+    pub(crate) fn record_input(&self, id: FileId) {
+        let mut inputs = self.inputs.lock().unwrap_or_else(|p| p.into_inner());
+        if !inputs.contains(&id) {
+            inputs.push(id);
+        }
+    }
+
+    /// Whether the run read the file `id`.
+    pub fn read(&self, id: FileId) -> bool {
+        self.inputs.lock().unwrap_or_else(|p| p.into_inner()).contains(&id)
     }
 }
 
@@ -71,7 +187,7 @@ impl std::str::FromStr for MemoryBudget {
             "M" => 20,
             "G" => 30,
             "T" => 40,
-            _ => return Err(Error::Scene(format!("memory budget {text:?}: unknown unit {unit:?} (use K, M, G or T)"))),
+            _ => return Err(invalid(format!("{text:?} has an unknown unit {unit:?} (use K, M, G or T)"))),
         };
         let value = number
             .trim()
@@ -79,9 +195,13 @@ impl std::str::FromStr for MemoryBudget {
             .ok()
             .map(|v| v * (1u64 << shift) as f64)
             .filter(|v| v.is_finite() && *v >= 1.0 && *v < u64::MAX as f64)
-            .ok_or_else(|| Error::Scene(format!("memory budget {text:?} must be a positive size such as 8G")))?;
+            .ok_or_else(|| invalid(format!("{text:?} is not a positive size such as 8G")))?;
         Ok(Self::new(value as u64))
     }
+}
+
+fn invalid(reason: String) -> Error {
+    Error::Setting { setting: "memory budget".into(), reason }
 }
 
 /// A byte count shown the way people read it (`12.0 GiB`).
@@ -118,6 +238,25 @@ mod tests {
         for bad in ["", "-1G", "0", "nan", "4X", "1e30T"] {
             assert_eq!(parse(bad), None, "{bad:?}");
         }
+    }
+
+    #[test]
+    fn a_run_is_refused_once_its_charges_together_cross_the_budget() {
+        let ledger = Ledger::new(MemoryBudget::new(1000));
+        ledger.charge("the scene", 600).unwrap();
+        ledger.check("a render", 400).unwrap();
+        let e = ledger.charge("the model m.obj", 401).unwrap_err().to_string();
+        assert!(e.starts_with("the model m.obj needs about 401 bytes on top of the 600 bytes the run already holds, more than the memory budget of 1000 bytes"), "{e}");
+        assert_eq!(ledger.held(), 600, "a refused charge takes nothing");
+        ledger.charge("the model m.obj", 400).unwrap();
+        assert_eq!((ledger.held(), ledger.available()), (1000, 0));
+        assert!(ledger.check("one more byte", 1).is_err());
+    }
+
+    #[test]
+    fn a_bad_setting_is_named_once() {
+        let e = MemoryBudget::parse_setting("4X", MEMORY_BUDGET_ENV).unwrap_err().to_string();
+        assert_eq!(e, "RANGESYNTH_MEMORY_BUDGET: \"4X\" has an unknown unit \"X\" (use K, M, G or T)");
     }
 
     #[test]

@@ -16,7 +16,11 @@ fn main() -> ExitCode {
     match cli::run(cli::Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // The messages escape what they quote from inputs; this is the last line of that
+            // defence, so that no input reaches the terminal raw.
+            let message = format!("{e:#}");
+            let lines: Vec<String> = message.lines().map(|line| rangesynth::untrusted::escaped(line, 2000)).collect();
+            eprintln!("error: {}", lines.join("\n"));
             ExitCode::FAILURE
         }
     }

@@ -4,12 +4,13 @@
 
 use crate::effects::Effects;
 use crate::error::{Error, Result};
-use crate::io::read_input_text;
-use crate::limits::MemoryBudget;
+use crate::io::{parse_toml, read_input_text};
+use crate::limits::{FileId, Ledger};
 use crate::mesh::{builtin_mesh, canonical_builtin_name, load_obj, Mesh};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
+use crate::untrusted::quoted;
 use glam::DMat4;
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -61,45 +62,56 @@ fn identity_rows() -> [[f64; 4]; 4] {
     DMat4::IDENTITY.to_cols_array_2d()
 }
 
-/// Bytes of memory parsing takes per byte of TOML text, at most (toml's document tree).
-const TOML_EXPANSION: u64 = 16;
+/// Bytes of memory parsing takes per byte of TOML text, at most: toml's document tree, whose
+/// worst case is an array of one-digit numbers (measured: tests/memory.rs).
+const TOML_EXPANSION: u64 = 200;
 
 impl Scene {
-    /// Reads a scene file; files it names (and it) are loaded within `budget`.
-    pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
-        let text = read_input_text(path, "scene file", budget, TOML_EXPANSION)?;
-        Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")), budget).map_err(|e| match e {
+    /// Reads a scene file; it and the files it names are charged to `ledger`.
+    pub fn from_file(path: &Path, ledger: &Ledger) -> Result<Self> {
+        let text = read_input_text(path, "scene file", ledger, 1)?;
+        Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")), ledger).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,
         })
     }
 
-    /// Parses a scene; model paths are relative to `base_dir`, and model files are loaded
-    /// within `budget`. Each model is loaded once, however many objects name it.
-    pub fn from_toml(text: &str, base_dir: &Path, budget: MemoryBudget) -> Result<Self> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+    /// Parses a scene; model paths are relative to `base_dir`. Model files, the objects and
+    /// their labels are charged to `ledger`. Each model file is loaded once, however many
+    /// objects name it and however they spell its path.
+    pub fn from_toml(text: &str, base_dir: &Path, ledger: &Ledger) -> Result<Self> {
+        ledger.charge("parsing the scene's TOML", text.len() as u64 * TOML_EXPANSION)?;
+        let file: SceneFile = parse_toml(text)?;
         file.sensor.validate()?;
         file.effects.validate()?;
-        let mut loaded: HashMap<String, Arc<Mesh>> = HashMap::new();
+        let mut loaded: HashMap<ModelKey, Arc<Mesh>> = HashMap::new();
         let mut objects = Vec::with_capacity(file.object.len());
+        let mut labels: u64 = 0;
         for entry in file.object {
+            let object = objects.len() + 1;
             let key = model_key(&entry.model, base_dir)?;
             let mesh = match loaded.get(&key) {
                 Some(mesh) => mesh.clone(),
                 None => {
-                    let mesh = Arc::new(load_model(&entry.model, base_dir, budget)?);
+                    let mesh = Arc::new(load_model(&entry.model, base_dir, ledger)?);
                     loaded.insert(key, mesh.clone());
                     mesh
                 }
             };
+            // What an object and its labels take until the run ends: its entry here, and its
+            // labels' entries in the tables of a render and in labels.json's summary.
+            labels += u64::from(mesh.surface_count());
+            ledger.charge(
+                format_args!("object {object} ({}, {labels} labels so far)", quoted(&entry.model)),
+                BYTES_PER_OBJECT + u64::from(mesh.surface_count()) * BYTES_PER_LABEL,
+            )?;
             if let Some(r) = entry.reflectivity.filter(|r| !(0.0..=1.0).contains(r)) {
                 return Err(Error::Scene(format!(
-                    "object {} ({}): reflectivity = {r} is out of range: it must be in [0, 1]",
-                    objects.len() + 1,
-                    entry.model
+                    "object {object} ({}): reflectivity = {r} is out of range: it must be in [0, 1]",
+                    quoted(&entry.model)
                 )));
             }
-            let pose = pose_from_rows(entry.pose, &format!("object {} ({})", objects.len() + 1, entry.model))?;
+            let pose = pose_from_rows(entry.pose, &format!("object {object} ({})", quoted(&entry.model)))?;
             objects.push(SceneObject { model_ref: entry.model, mesh, pose, reflectivity: entry.reflectivity });
         }
         let scene = Scene { sensor: file.sensor, shadow: file.shadow, effects: file.effects, objects };
@@ -137,23 +149,38 @@ impl Scene {
     }
 }
 
-/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`, within
-/// `budget`.
-pub fn load_model(reference: &str, base_dir: &Path, budget: MemoryBudget) -> Result<Mesh> {
+/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`, charged to
+/// `ledger`.
+pub fn load_model(reference: &str, base_dir: &Path, ledger: &Ledger) -> Result<Mesh> {
     if reference.starts_with("builtin:") {
         builtin_mesh(reference)
     } else {
         let path: PathBuf = base_dir.join(reference);
-        load_obj(&path, budget)
+        load_obj(&path, ledger)
     }
 }
 
+/// Bytes an object of a scene holds (its entry, its pose, its draw), and each of its labels
+/// (a render's tables of a word or two a label, and a line of the printed summary's).
+const BYTES_PER_OBJECT: u64 = 512;
+const BYTES_PER_LABEL: u64 = 64;
+
 /// One key per model, for caches: a built-in's canonical name (so `builtin:sphere:032` and
-/// `builtin:sphere:32` are one model), or the file's path.
-pub fn model_key(reference: &str, base_dir: &Path) -> Result<String> {
+/// `builtin:sphere:32` are one model), or the file's identity (so `m.obj`, `./m.obj` and a
+/// link to it are one model).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum ModelKey {
+    Builtin(String),
+    File(FileId),
+}
+
+/// The key of the model `reference` names, relative to `base_dir`; a file that cannot be
+/// found is an error naming it.
+pub fn model_key(reference: &str, base_dir: &Path) -> Result<ModelKey> {
     if reference.starts_with("builtin:") {
-        canonical_builtin_name(reference)
+        canonical_builtin_name(reference).map(ModelKey::Builtin)
     } else {
-        Ok(base_dir.join(reference).display().to_string())
+        let path = base_dir.join(reference);
+        std::fs::metadata(&path).map(|m| ModelKey::File(FileId::of(&m))).map_err(|e| Error::io(path, e))
     }
 }

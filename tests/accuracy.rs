@@ -6,7 +6,7 @@ mod common;
 
 use common::cli::{fresh_dir, rangesynth_command};
 use common::reference::reference_render;
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::Scene;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -99,7 +99,7 @@ fn the_quick_sweep_writes_a_csv_that_parses_and_a_plot() {
     }
     // Depth shadows are exact away from edges here; no shadows at all miss the box's shadow,
     // which the independent reference counts.
-    let scene = Scene::from_toml(SCENE, &d, MemoryBudget::default()).unwrap();
+    let scene = Scene::from_toml(SCENE, &d, &Ledger::default()).unwrap();
     let reference = reference_render(&scene);
     let shadowed = reference.label.iter().zip(&reference.occluded).filter(|(&l, &o)| l != 0 && o).count() as u64;
     assert!(shadowed > 50, "the box casts a shadow: {shadowed} pixels");

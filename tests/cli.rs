@@ -370,7 +370,7 @@ fn bad_hypothesis_files_are_refused_with_a_clear_message() {
     }
     // A sensed image with no sensor header, and no "sensor" in the hypothesis file.
     let bare = d.join("bare.exr");
-    let mut image = rangesynth::io::read_range_image(&exr, Default::default()).unwrap();
+    let mut image = rangesynth::io::read_range_image(&exr, &Default::default()).unwrap();
     image.sensor = None;
     rangesynth::io::write_range_image(&bare, &image).unwrap();
     let hyps = d.join("ok.json");
@@ -404,7 +404,7 @@ fn verify_takes_the_effects_from_the_sensed_header_and_refuses_a_mismatch() {
     assert!(stdout.contains("effects: dropout, noise") && stdout.contains("pixels lost: shadow"), "{stdout}");
     assert!(stdout.contains("dropout") && stdout.contains(", noise "), "{stdout}");
     let exr = d.join("sensed/range.exr");
-    let image = rangesynth::io::read_range_image(&exr, Default::default()).unwrap();
+    let image = rangesynth::io::read_range_image(&exr, &Default::default()).unwrap();
     let header = image.effects.expect("the header records the effects");
     assert_eq!(header.noise.map(|n| (n.sigma, n.seed)), Some((0.003, 8)));
     let dropped = image.reason.expect("a reason channel").iter().filter(|&&r| r == 7).count();

@@ -8,6 +8,7 @@ use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::effects::Reason;
 use rangesynth::io::RangeImage;
+use rangesynth::limits::Ledger;
 use rangesynth::scene::Scene;
 use rangesynth::sensor::Sensor;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
@@ -370,7 +371,7 @@ fn verification_reads_each_models_material_reflectivity_at_its_place_in_the_batc
          [[object]]\nmodel = \"squares.obj\"\n",
         sensor.origin
     );
-    let sensed_scene = Scene::from_toml(&text, &dir, Default::default()).unwrap();
+    let sensed_scene = Scene::from_toml(&text, &dir, &Ledger::default()).unwrap();
     let out = render(&sensed_scene);
     let dark_lost = out.pixels_lost_to(Reason::Dark);
     assert!(dark_lost > 500 && out.label.iter().all(|&l| l != 1), "the dark square is lost: {dark_lost}");

@@ -9,7 +9,7 @@ use glam::DMat4;
 use rangesynth::io::{
     read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage,
 };
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -53,7 +53,7 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
     let dir = temp_dir("files_round_trip");
     let path = dir.join("range.exr");
     write_range_image(&path, &image).unwrap();
-    let back = read_range_image(&path, MemoryBudget::default()).unwrap();
+    let back = read_range_image(&path, &Ledger::default()).unwrap();
     let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&back.x), bits(&image.x));
     assert_eq!(bits(&back.y), bits(&image.y));
@@ -66,7 +66,7 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
 
     let label_path = dir.join("label.exr");
     write_label_image(&label_path, w, h, &labels).unwrap();
-    assert_eq!(read_label_image(&label_path, MemoryBudget::default()).unwrap(), (w, h, labels));
+    assert_eq!(read_label_image(&label_path, &Ledger::default()).unwrap(), (w, h, labels));
 
     // The same image gives the same bytes, whatever order the exr crate's HashMap of
     // attributes iterates in this time (each map is seeded afresh).
@@ -86,7 +86,7 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
     let dir = temp_dir("files_render_dir");
     let written = write_render_directory(&dir, &sc, &out).unwrap();
     assert_eq!(written.len(), 6);
-    let back = read_range_image(&dir.join("range.exr"), MemoryBudget::default()).unwrap();
+    let back = read_range_image(&dir.join("range.exr"), &Ledger::default()).unwrap();
     assert_eq!(back.label, out.label);
     for i in 0..out.label.len() {
         match out.point(i) {
@@ -97,7 +97,7 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
         }
     }
     assert_eq!(back.sensor, Some(s));
-    let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr"), MemoryBudget::default()).unwrap();
+    let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr"), &Ledger::default()).unwrap();
     assert_eq!(unshadowed, out.label_unshadowed);
     let map: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();

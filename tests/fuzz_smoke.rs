@@ -49,6 +49,18 @@ const TOKENS: &[&[u8]] = &[
     b"\nv 1e30 -1e30 0\n",
     b"\ng \n",
     b"\nmtllib /dev/zero\n",
+    b"\nl 1 2 3\n",
+    b"\np 1\n",
+    b"\xef\xbb\xbf",
+    b"\r\n",
+    b"\r",
+    b"\nnewmtl m\n",
+    b"\nKd 0.5\n",
+    b"\nKs 1 1\n",
+    b"\nKa spectral x.rfl\n",
+    b"\nKd xyz 1\n",
+    b"\nd\n",
+    b"\nillum\n",
     b"#",
 ];
 
@@ -166,6 +178,11 @@ fn fuzz_smoke_hypothesis_json() {
 #[test]
 fn fuzz_smoke_obj() {
     smoke("obj", "fuzz_smoke_obj");
+}
+
+#[test]
+fn fuzz_smoke_mtl() {
+    smoke("mtl", "fuzz_smoke_mtl");
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Models: OBJ surfaces from groups, coplanar merging for ungrouped files, built-ins, and the
 //! validation every model goes through. CPU only.
 
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::mesh::{builtin_mesh, load_obj};
 use rangesynth::Error;
 use std::path::PathBuf;
@@ -23,7 +23,7 @@ fn groups_are_surfaces_in_file_order() {
     for (i, f) in CUBE_FACES.iter().enumerate() {
         text += &format!("g face_{i}\n{f}\n");
     }
-    let mesh = load_obj(&obj("grouped.obj", &text), MemoryBudget::default()).unwrap();
+    let mesh = load_obj(&obj("grouped.obj", &text), &Ledger::default()).unwrap();
     assert_eq!(mesh.surface_names, (0..6).map(|i| format!("face_{i}")).collect::<Vec<_>>());
     assert_eq!(mesh.triangles.len(), 12);
     // Quads are triangulated; both halves keep their group's surface.
@@ -38,7 +38,7 @@ fn an_ungrouped_cube_gets_six_coplanar_surfaces() {
         let v: Vec<&str> = f.split_whitespace().skip(1).collect();
         text += &format!("f {} {} {}\nf {} {} {}\n", v[0], v[1], v[2], v[0], v[2], v[3]);
     }
-    let mesh = load_obj(&obj("ungrouped.obj", &text), MemoryBudget::default()).unwrap();
+    let mesh = load_obj(&obj("ungrouped.obj", &text), &Ledger::default()).unwrap();
     assert_eq!(mesh.surface_names.len(), 6);
     for pair in mesh.triangle_surfaces.chunks(2) {
         assert_eq!(pair[0], pair[1], "both halves of a face are one surface");
@@ -53,7 +53,7 @@ fn an_ungrouped_tilted_quad_pair_is_two_surfaces() {
     // Two triangles sharing an edge with a 1° fold: not coplanar.
     let fold = 1f64.to_radians();
     let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 {}\nf 1 2 3\nf 1 3 4\n", fold.tan());
-    let mesh = load_obj(&obj("folded.obj", &text), MemoryBudget::default()).unwrap();
+    let mesh = load_obj(&obj("folded.obj", &text), &Ledger::default()).unwrap();
     assert_eq!(mesh.surface_names.len(), 2);
 }
 
@@ -73,7 +73,7 @@ fn builtins_have_their_documented_surfaces() {
 }
 
 fn mesh_error(name: &str, text: &str) -> String {
-    match load_obj(&obj(name, text), MemoryBudget::default()) {
+    match load_obj(&obj(name, text), &Ledger::default()) {
         Err(e @ Error::Mesh { .. }) => e.to_string(),
         other => panic!("{name}: expected a mesh error, got {other:?}"),
     }
@@ -89,7 +89,7 @@ fn bad_models_are_refused_with_the_reason() {
     assert!(mesh_error("points.obj", "v 0 0 0\nv 1 0 0\n").contains("no"));
     assert!(mesh_error("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").contains("no (non-degenerate) triangles"));
     assert!(matches!(
-        load_obj(std::path::Path::new("/nonexistent/model.obj"), MemoryBudget::default()),
+        load_obj(std::path::Path::new("/nonexistent/model.obj"), &Ledger::default()),
         Err(Error::Io { .. })
     ));
     for bad in ["builtin:teapot", "builtin:cylinder:2", "builtin:sphere:x", "builtin:plane:-1", "builtin:box:3"] {
@@ -100,7 +100,7 @@ fn bad_models_are_refused_with_the_reason() {
 #[test]
 fn degenerate_triangles_are_dropped_and_counted() {
     let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 1 1 3\n";
-    let mesh = load_obj(&obj("degenerate.obj", text), MemoryBudget::default()).unwrap();
+    let mesh = load_obj(&obj("degenerate.obj", text), &Ledger::default()).unwrap();
     assert_eq!(mesh.triangles.len(), 1);
     assert_eq!(mesh.dropped_degenerate, 2);
 }

@@ -28,7 +28,7 @@ use glam::{DMat4, DVec3};
 use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::RangeImage;
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::scene::Scene;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
@@ -42,7 +42,7 @@ const SENSED: &str = include_str!("../docs/example/sensed.toml");
 fn main() -> anyhow::Result<()> {
     let quick = std::env::args().any(|a| a == "--quick");
     let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Graphics))?;
-    let scene = Scene::from_toml(SENSED, Path::new("."), MemoryBudget::default())?;
+    let scene = Scene::from_toml(SENSED, Path::new("."), &Ledger::default())?;
     let image = RangeImage::from(&verifier.renderer().render(&scene)?);
     let sensed = SensedImage::new(&image, &scene.sensor)?;
     println!("device: {}", verifier.renderer().context().device_name());

@@ -6,7 +6,7 @@
 use super::settings::retessellated;
 use crate::effects::Effects;
 use crate::error::{Error, Result};
-use crate::limits::MemoryBudget;
+use crate::limits::Ledger;
 use crate::mesh::builtin_mesh;
 use crate::scene::{Scene, SceneObject};
 use crate::sensor::Sensor;
@@ -32,8 +32,8 @@ pub struct SweepScene {
 impl SweepScene {
     /// A scene file, named by its file name without extension; its effects are left out. Its
     /// first object is the part whose correct hypothesis is scored, so it needs one.
-    pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
-        let scene = Scene { effects: Effects::default(), ..Scene::from_file(path, budget)? };
+    pub fn from_file(path: &Path, ledger: &Ledger) -> Result<Self> {
+        let scene = Scene { effects: Effects::default(), ..Scene::from_file(path, ledger)? };
         if scene.objects.is_empty() {
             return Err(Error::file(path, "the accuracy sweep scores the scene's first object, and it has none"));
         }

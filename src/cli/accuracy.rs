@@ -9,12 +9,13 @@ use rangesynth::accuracy::{
 };
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{refuse_overwriting_inputs, StagedSet};
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::render::Raster;
 use rangesynth::verify::Verifier;
 use rangesynth::Renderer;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct AccuracyArgs {
@@ -32,9 +33,8 @@ pub struct AccuracyArgs {
 
 const FILES: [&str; 2] = ["accuracy.csv", "accuracy.png"];
 
-pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) -> Result<()> {
+pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -> Result<()> {
     let outputs = FILES.map(|name| args.out.join(name));
-    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), args.scenes.iter().map(PathBuf::as_path))?;
     let (size, dense, sweep_options) = match args.quick {
         true => (128, 160, SweepOptions { poses: 8, runs: 2, reference_tessellation: 512 }),
         false => {
@@ -43,15 +43,16 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, args: &AccuracyArgs) 
     };
     let mut scenes = standard_scenes(size, dense)?;
     for path in &args.scenes {
-        scenes.push(SweepScene::from_file(path, budget)?);
+        scenes.push(SweepScene::from_file(path, &ledger)?);
     }
+    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), &ledger)?;
     let renderer =
-        Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(Raster::Graphics);
+        Renderer::new(options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(Raster::Graphics);
     let ctx = renderer.context().clone();
     let graphics = Verifier::new(renderer)?;
     let compute = match ctx.supports_compute_raster() {
         true => Some(Verifier::new(
-            Renderer::with_context(ctx.clone())?.with_memory_budget(budget).with_raster(Raster::Compute),
+            Renderer::with_context(ctx.clone())?.with_ledger(ledger.clone()).with_raster(Raster::Compute),
         )?),
         false => None,
     };

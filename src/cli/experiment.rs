@@ -5,12 +5,13 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::experiment::{run_experiment, ExperimentConfig};
 use rangesynth::gpu::ContextOptions;
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::render::Raster;
 use rangesynth::verify::Verifier;
 use rangesynth::Renderer;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct ExperimentArgs {
@@ -27,9 +28,9 @@ pub struct ExperimentArgs {
     seed: u64,
 }
 
-pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args: &ExperimentArgs) -> Result<()> {
+pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: &ExperimentArgs) -> Result<()> {
     let config = if args.quick { ExperimentConfig::quick(args.seed) } else { ExperimentConfig::full(args.seed) };
-    let renderer = Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(raster);
+    let renderer = Renderer::new(options).context("starting Vulkan")?.with_ledger(ledger).with_raster(raster);
     let verifier = Verifier::new(renderer).context("starting Vulkan")?;
     let bar = match std::io::stderr().is_terminal() {
         true => ProgressBar::new((config.models * config.views_per_model) as u64),

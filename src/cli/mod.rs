@@ -12,12 +12,14 @@ use clap::{Parser, Subcommand};
 use rangesynth::effects::Reason;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::shadow::ShadowMode;
+use rangesynth::untrusted::escaped;
 use rangesynth::{RenderOutput, Renderer, Scene};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The embedded default scene of `rangesynth demo`.
 pub const DEMO_SCENE: &str = include_str!("demo_scene.toml");
@@ -77,29 +79,26 @@ pub fn run(cli: Cli) -> Result<()> {
         options.device = cli.device;
     }
     let budget = match &cli.memory_budget {
-        Some(text) => text.parse().context("--memory-budget")?,
+        Some(text) => MemoryBudget::parse_setting(text, "--memory-budget")?,
         None => MemoryBudget::from_env()?,
     };
-    let (scene, out_dir, inputs) = match cli.command {
-        Command::Render { scene: path, out } => {
-            let scene = Scene::from_file(&path, budget)?;
-            let base_dir = path.parent().unwrap_or(Path::new("."));
-            let mut inputs = model_files(scene.objects.iter().map(|o| o.model_ref.as_str()), base_dir);
-            inputs.push(path);
-            (scene, out, inputs)
-        }
-        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), budget)?, out, Vec::new()),
-        Command::Verify(args) => return verify::run(&options, budget, cli.raster, &args),
-        Command::Accuracy(args) => return accuracy::run(&options, budget, &args),
-        Command::Experiment(args) => return experiment::run(&options, budget, cli.raster, &args),
+    // One account for the whole run: its inputs, what is parsed from them, and each step's
+    // plan on top.
+    let ledger = Arc::new(Ledger::new(budget));
+    let (scene, out_dir) = match cli.command {
+        Command::Render { scene: path, out } => (Scene::from_file(&path, &ledger)?, out),
+        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), &ledger)?, out),
+        Command::Verify(args) => return verify::run(&options, ledger, cli.raster, &args),
+        Command::Accuracy(args) => return accuracy::run(&options, ledger, &args),
+        Command::Experiment(args) => return experiment::run(&options, ledger, cli.raster, &args),
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
-    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
+    refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), &ledger)?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
     let renderer =
-        Renderer::new(&options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(cli.raster);
+        Renderer::new(&options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(cli.raster);
     let output = renderer.render(&scene)?;
     let written = write_render_directory(&out_dir, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
@@ -107,15 +106,10 @@ pub fn run(cli: Cli) -> Result<()> {
     check_validation(&renderer)
 }
 
-/// The files behind model references (built-ins have none), relative to `base_dir`.
-fn model_files<'a>(references: impl Iterator<Item = &'a str>, base_dir: &Path) -> Vec<PathBuf> {
-    references.filter(|r| !r.starts_with("builtin:")).map(|r| base_dir.join(r)).collect()
-}
-
 /// Tells the user about triangles the model lost (they are dropped, not rendered).
 fn warn_degenerate(mesh: &Mesh) {
     if mesh.dropped_degenerate > 0 {
-        eprintln!("warning: {}: dropped {} degenerate triangle(s)", mesh.name, mesh.dropped_degenerate);
+        eprintln!("warning: {}: dropped {} degenerate triangle(s)", escaped(&mesh.name, 200), mesh.dropped_degenerate);
     }
 }
 
@@ -173,9 +167,10 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     for entry in labels {
         let [valid, shadowed, lost] = populations[entry.label as usize];
         if valid + shadowed + lost > 0 {
-            let model = format!("{} {}", entry.object, entry.model);
+            let model = format!("{} {}", entry.object, escaped(&entry.model, 26));
             let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
-            println!("{:>6}  {:<28} {:<12} {valid:>8} {shadowed:>9}{lost}", entry.label, model, entry.surface_name);
+            let surface = escaped(&entry.surface_name, 40);
+            println!("{:>6}  {:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}", entry.label, model);
         }
     }
     if with_effects {

@@ -14,9 +14,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::effects::Effects;
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
-use rangesynth::limits::MemoryBudget;
+use rangesynth::limits::Ledger;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
+use rangesynth::untrusted::quoted;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
     MAX_CHUNKS_IN_FLIGHT,
@@ -24,6 +25,7 @@ use rangesynth::verify::{
 use rangesynth::Renderer;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct VerifyArgs {
@@ -72,9 +74,9 @@ pub struct VerifyArgs {
     top: usize,
 }
 
-pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args: &VerifyArgs) -> Result<()> {
-    let file = HypothesisFile::from_file(&args.hypotheses, budget)?;
-    let image = read_range_image(&args.scene, budget)?;
+pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: &VerifyArgs) -> Result<()> {
+    let file = HypothesisFile::from_file(&args.hypotheses, &ledger)?;
+    let image = read_range_image(&args.scene, &ledger)?;
     let sensor = match (file.sensor, image.sensor) {
         (Some(given), Some(header)) if given != header && !args.override_sensor => anyhow::bail!(
             "{} gives a sensor that differs from the one in {}'s header: {}; fix one of them, or pass \
@@ -105,14 +107,14 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     };
     // The range image as read (X, Y, Z, label) is held while the sensed image is built from it.
     let pixels = u64::from(image.width) * u64::from(image.height);
-    budget.check(
+    ledger.charge(
         format_args!("preparing the {}×{} sensed image {}", image.width, image.height, args.scene.display()),
         (16 + SensedImage::HOST_BYTES_PER_PIXEL) * pixels,
     )?;
     let sensed = SensedImage::new(&image, &sensor).with_context(|| format!("sensed image {}", args.scene.display()))?;
     drop(image);
     let mut renderer =
-        Renderer::new(options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(raster);
+        Renderer::new(options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(raster);
     if let Some(n) = args.hypotheses_per_dispatch {
         renderer = renderer.with_hypotheses_per_dispatch(n as usize);
     }
@@ -125,16 +127,14 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
     }
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
-    let mut inputs = vec![args.hypotheses.clone(), args.scene.clone()];
     let tolerance = file.tolerance;
     let hypotheses = file
         .hypotheses
         .into_iter()
         .map(|h| {
-            let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {:?}", h.id))?;
+            let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {}", quoted(&h.id)))?;
             if warned.insert(h.model.clone()) {
                 warn_degenerate(&model.mesh);
-                inputs.extend(super::model_files(std::iter::once(h.model.as_str()), base_dir));
             }
             Ok(Hypothesis { id: h.id, model, pose: h.pose, bindings: h.bindings })
         })
@@ -148,7 +148,7 @@ pub fn run(options: &ContextOptions, budget: MemoryBudget, raster: Raster, args:
         chunk_size: args.chunk_size,
     };
     verifier.check(&sensed, &settings, &hypotheses)?;
-    refuse_overwriting_inputs([args.out.as_path()], inputs.iter().map(PathBuf::as_path))?;
+    refuse_overwriting_inputs([args.out.as_path()], &ledger)?;
 
     let bar = if std::io::stderr().is_terminal() && hypotheses.len() > 1 {
         let bar = ProgressBar::new(hypotheses.len() as u64);

@@ -23,7 +23,7 @@ pub use stats::{auc, summarise, table_markdown, write_plot, ClassSummary, Flips,
 use crate::effects::{Edges, Effects, Grazing, Noise, WorkingVolume};
 use crate::error::{Error, Result};
 use crate::io::{read_range_image, write_atomically, write_range_image, RangeImage};
-use crate::limits::MemoryBudget;
+use crate::limits::{Ledger, MemoryBudget};
 use crate::mesh::{builtin_mesh, load_obj, Mesh};
 use crate::pose::pose_rows;
 use crate::scene::{Scene, SceneObject};
@@ -81,7 +81,7 @@ struct Model {
 }
 
 /// Built-ins and generated parts interleaved, so a smaller experiment still mixes both.
-fn model_order(out: &Path, budget: MemoryBudget) -> Result<Vec<Model>> {
+fn model_order(out: &Path, ledger: &Ledger) -> Result<Vec<Model>> {
     let models_dir = out.join("models");
     std::fs::create_dir_all(&models_dir).map_err(|e| Error::io(&models_dir, e))?;
     let mut generated = Vec::new();
@@ -89,7 +89,7 @@ fn model_order(out: &Path, budget: MemoryBudget) -> Result<Vec<Model>> {
         let path = models_dir.join(format!("{name}.obj"));
         write_obj(&path, &mesh)?;
         // Rendered and verified as `verify` will read it.
-        let mesh = Arc::new(load_obj(&path, budget)?);
+        let mesh = Arc::new(load_obj(&path, ledger)?);
         generated.push(Model { reference: format!("../../models/{name}.obj"), name, mesh });
     }
     let builtins: Vec<Model> = BUILTIN_PARTS
@@ -153,8 +153,7 @@ pub fn run_experiment(
     out: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<ExperimentOutput> {
-    let budget = verifier.renderer().memory_budget();
-    let mut models = model_order(out, budget)?;
+    let mut models = model_order(out, verifier.renderer().ledger())?;
     if !(2..=models.len()).contains(&config.models) || config.views_per_model == 0 {
         return Err(Error::Scene(format!(
             "an experiment needs 2 to {} models and at least one view of each",
@@ -199,7 +198,9 @@ pub fn run_experiment(
         let range_path = dir.join("range.exr");
         write_range_image(&range_path, &RangeImage { effects: None, ..RangeImage::from(&rendered) })?;
 
-        let image = read_range_image(&range_path, budget)?;
+        // What a view reads back, it holds only for the view, on top of what the run holds.
+        let view_ledger = Ledger::new(MemoryBudget::new(verifier.renderer().ledger().available()));
+        let image = read_range_image(&range_path, &view_ledger)?;
         let header_sensor = image.sensor.ok_or_else(|| Error::file(&range_path, "has no sensor header"))?;
         let sensed = SensedImage::new(&image, &header_sensor)?;
         let surfaces = model.mesh.surface_count();
@@ -230,7 +231,7 @@ pub fn run_experiment(
         })?;
 
         // As `rangesynth verify hypotheses.json --scene range.exr --compare-shadow` does it.
-        let file = HypothesisFile::from_file(&hypotheses_path, budget)?;
+        let file = HypothesisFile::from_file(&hypotheses_path, &view_ledger)?;
         let hypotheses: Vec<Hypothesis> = file
             .hypotheses
             .into_iter()

@@ -14,6 +14,7 @@
 //! themselves, a few renames long, can still leave a mixture.)
 
 use crate::error::{Error, Result};
+use crate::limits::{FileId, Ledger};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -111,30 +112,16 @@ impl StagedSet {
     }
 }
 
-/// Refuses an output that is one of the inputs (the same file, by device and inode, so links
-/// and other spellings of a path count too): writing it would destroy what was read.
-pub fn refuse_overwriting_inputs<'a>(
-    outputs: impl IntoIterator<Item = &'a Path>,
-    inputs: impl IntoIterator<Item = &'a Path> + Clone,
-) -> Result<()> {
+/// Refuses an output that is one of the files the run read (the same file, by device and
+/// inode, so links and other spellings of a path count too, and so do the files an input
+/// names, such as a model's material libraries): writing it would destroy what was read.
+pub fn refuse_overwriting_inputs<'a>(outputs: impl IntoIterator<Item = &'a Path>, ledger: &Ledger) -> Result<()> {
     for output in outputs {
-        let Ok(out) = std::fs::metadata(output) else { continue };
-        for input in inputs.clone() {
-            if std::fs::metadata(input).is_ok_and(|i| same_file(&i, &out)) {
-                return Err(Error::file(
-                    output,
-                    format!("this output is the input {}; refusing to overwrite it", input.display()),
-                ));
-            }
+        if std::fs::metadata(output).is_ok_and(|out| ledger.read(FileId::of(&out))) {
+            return Err(Error::file(output, "this output is one of the run's inputs; refusing to overwrite it"));
         }
     }
     Ok(())
-}
-
-#[cfg(unix)]
-fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    (a.dev(), a.ino()) == (b.dev(), b.ino())
 }
 
 #[cfg(test)]
@@ -172,9 +159,13 @@ mod tests {
         let input = dir.join("in.json");
         std::fs::write(&input, "{}").unwrap();
         std::os::unix::fs::symlink(&input, dir.join("link.json")).unwrap();
+        std::fs::write(dir.join("other.json"), "{}").unwrap();
+        let ledger = Ledger::default();
+        crate::io::read_input_file(&input, "hypothesis file", &ledger, 1).unwrap();
         let link = dir.join("link.json");
-        let e = refuse_overwriting_inputs([link.as_path()], [input.as_path()]).unwrap_err().to_string();
+        let e = refuse_overwriting_inputs([link.as_path()], &ledger).unwrap_err().to_string();
         assert!(e.contains("refusing to overwrite"), "{e}");
-        assert!(refuse_overwriting_inputs([dir.join("new.jsonl").as_path()], [input.as_path()]).is_ok());
+        assert!(refuse_overwriting_inputs([dir.join("new.jsonl").as_path()], &ledger).is_ok());
+        assert!(refuse_overwriting_inputs([dir.join("other.json").as_path()], &ledger).is_ok());
     }
 }

@@ -13,10 +13,10 @@
 //! [`MAX_IMAGE_SIDE`], the decoded bytes against the memory budget and against what the
 //! file's own size can hold at its compression's best ratio — before the pixels are decoded.
 
-use super::{read_input_file, write_atomically, RangeImage};
+use super::{parse_toml, read_input_file, write_atomically, RangeImage};
 use crate::effects::{Effects, Reason};
-use crate::error::{Error, Result};
-use crate::limits::{Bytes, MemoryBudget};
+use crate::error::{guard_parser, Error, Result};
+use crate::limits::{Bytes, Ledger};
 use crate::sensor::{Sensor, MAX_IMAGE_SIDE};
 use crate::shadow::ShadowSettings;
 use exr::prelude::*;
@@ -121,14 +121,14 @@ fn header_attributes(file: &[u8]) -> Option<Vec<(&[u8], &[u8])>> {
     Some(attributes)
 }
 
-/// Reads a range image (`range.exr` as `render` writes it) within `budget`.
-pub fn read_range_image(path: &Path, budget: MemoryBudget) -> Result<RangeImage> {
-    parse_range_image(&read_input_file(path, "range image", budget, 1)?, path, budget)
+/// Reads a range image (`range.exr` as `render` writes it), charged to `ledger`.
+pub fn read_range_image(path: &Path, ledger: &Ledger) -> Result<RangeImage> {
+    parse_range_image(&read_input_file(path, "range image", ledger, 1)?, path, ledger)
 }
 
 /// Decodes a range image from a file's bytes; `path` names it in messages.
-pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<RangeImage> {
-    let (width, height, mut channels, attributes) = decode_layer(bytes, path, budget)?;
+pub fn parse_range_image(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<RangeImage> {
+    let (width, height, mut channels, attributes) = decode_layer(bytes, path, ledger)?;
     let mut take_f32 = |name: &str| match channels.iter().position(|c| c.name.eq(name)) {
         Some(i) => match channels.swap_remove(i).sample_data {
             FlatSamples::F32(v) => Ok(v),
@@ -153,15 +153,15 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Res
         _ => None,
     };
     let sensor: Option<Sensor> = setting(SENSOR_ATTRIBUTE)
-        .map(|t| toml::from_str(&t))
+        .map(|t| parse_toml(&t))
         .transpose()
         .map_err(|e| Error::file(path, format!("its sensor attribute is unreadable: {e}")))?;
     let shadow: Option<ShadowSettings> = setting(SHADOW_ATTRIBUTE)
-        .map(|t| toml::from_str(&t))
+        .map(|t| parse_toml(&t))
         .transpose()
         .map_err(|e| Error::file(path, format!("its shadow attribute is unreadable: {e}")))?;
     let effects: Option<Effects> = setting(EFFECTS_ATTRIBUTE)
-        .map(|t| toml::from_str(&t))
+        .map(|t| parse_toml(&t))
         .transpose()
         .map_err(|e| Error::file(path, format!("its effects attribute is unreadable: {e}")))?;
     if let Some(e) = &effects {
@@ -178,10 +178,11 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Res
     Ok(RangeImage { width, height, x, y, z, label, reason, sensor, shadow, effects })
 }
 
-/// Reads a label-only image (`label_unshadowed.exr`) within `budget`: width, height, labels.
-pub fn read_label_image(path: &Path, budget: MemoryBudget) -> Result<(u32, u32, Vec<u32>)> {
-    let bytes = read_input_file(path, "label image", budget, 1)?;
-    let (width, height, mut channels, _) = decode_layer(&bytes, path, budget)?;
+/// Reads a label-only image (`label_unshadowed.exr`), charged to `ledger`: width, height,
+/// labels.
+pub fn read_label_image(path: &Path, ledger: &Ledger) -> Result<(u32, u32, Vec<u32>)> {
+    let bytes = read_input_file(path, "label image", ledger, 1)?;
+    let (width, height, mut channels, _) = decode_layer(&bytes, path, ledger)?;
     Ok((width, height, take_labels(path, &mut channels)?))
 }
 
@@ -197,16 +198,18 @@ fn take_labels(path: &Path, channels: &mut Vec<AnyChannel<FlatSamples>>) -> Resu
 
 type LayerParts = (u32, u32, Vec<AnyChannel<FlatSamples>>, LayerAttributes);
 
-fn decode_layer(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<LayerParts> {
-    check_claimed_sizes(bytes, path, budget)?;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| exr_error(path, e))?;
+fn decode_layer(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<LayerParts> {
+    let image = guard_parser(&path.display().to_string(), "the exr decoder", || {
+        check_claimed_sizes(bytes, path, ledger)?;
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(Cursor::new(bytes))
+            .map_err(|e| exr_error(path, e))
+    })?;
     let layer = image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());
     let to_u32 = |v: usize| u32::try_from(v).map_err(|_| Error::file(path, "image is too large"));
@@ -214,7 +217,7 @@ fn decode_layer(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<Layer
 }
 
 /// Checks what every header of the file claims before anything is allocated for it.
-fn check_claimed_sizes(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Result<()> {
+fn check_claimed_sizes(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<()> {
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| exr_error(path, e))?;
     for header in meta.headers.iter() {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
@@ -248,7 +251,7 @@ fn check_claimed_sizes(bytes: &[u8], path: &Path, budget: MemoryBudget) -> Resul
                 ),
             ));
         }
-        budget.check(format_args!("decoding {} ({w}×{h})", path.display()), decoded)?;
+        ledger.charge(format_args!("decoding {} ({w}×{h})", path.display()), decoded)?;
     }
     Ok(())
 }

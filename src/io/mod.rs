@@ -10,15 +10,17 @@ mod labels;
 mod preview;
 mod range_image;
 mod render_dir;
+mod text_formats;
 
 pub use atomic::{refuse_overwriting_inputs, write_atomically, PendingFile, StagedSet};
 pub use exr_file::{parse_range_image, read_label_image, read_range_image, write_label_image, write_range_image};
-pub use input_file::{read_input_file, read_input_text};
+pub use input_file::{read_identified_file, read_input_file, read_input_text};
 pub use labels::{label_map, write_label_map, LabelEntry};
 pub(crate) use preview::write_rgb;
 pub use preview::{reason_colour, write_label_preview, write_range_preview, SHADOW_COLOUR};
 pub use range_image::RangeImage;
 pub use render_dir::{write_render_directory, RENDER_FILES};
+pub use text_formats::{parse_json, parse_toml};
 
 /// A fresh, empty directory for one unit test's files.
 #[cfg(test)]

@@ -10,6 +10,7 @@
 
 mod adjacency;
 mod builtin;
+mod mtl;
 mod obj;
 mod solid;
 mod surfaces;
@@ -123,6 +124,12 @@ impl Mesh {
         let radius = (0..self.positions.len() as u32).map(|i| self.vertex(i).distance(centre)).fold(0.0, f64::max);
         (centre, radius)
     }
+}
+
+/// The lines of a text model, whichever line ends it uses: `\n`, `\r\n`, or `\r` alone (a
+/// file saved with classic Mac line ends would otherwise be one long line).
+pub(super) fn text_lines(text: &str) -> impl Iterator<Item = &str> {
+    text.split('\n').flat_map(|line| line.strip_suffix('\r').unwrap_or(line).split('\r'))
 }
 
 /// A triangle whose area is zero in f64 (repeated vertex or collinear corners) covers no

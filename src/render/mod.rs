@@ -36,7 +36,7 @@ use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
 use crate::exact::{self, render_scene_exact};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
-use crate::limits::MemoryBudget;
+use crate::limits::{Ledger, MemoryBudget};
 use crate::pose::check_rigid;
 use crate::scene::Scene;
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
@@ -56,7 +56,9 @@ pub struct Renderer {
     // Dropped in this order: the pipelines before the context they belong to.
     pipelines: Pipelines,
     ctx: Arc<GpuContext>,
-    budget: MemoryBudget,
+    /// The run's account against its memory budget (limits.rs): what the run's inputs hold,
+    /// on top of which every plan is checked.
+    ledger: Arc<Ledger>,
     meshes: MeshCache,
     targets: TargetPool,
     raster: Raster,
@@ -192,7 +194,7 @@ impl Renderer {
             pipelines: Pipelines::new(&ctx)?,
             hypotheses_per_dispatch: default_hypotheses_per_dispatch(&ctx),
             ctx,
-            budget: MemoryBudget::default(),
+            ledger: Arc::default(),
             meshes: MeshCache::default(),
             targets: TargetPool::default(),
             raster: Raster::default(),
@@ -285,11 +287,21 @@ impl Renderer {
 
     /// The same renderer, refusing calls that would need more than `budget`.
     pub fn with_memory_budget(self, budget: MemoryBudget) -> Self {
-        Self { budget, ..self }
+        self.with_ledger(Arc::new(Ledger::new(budget)))
+    }
+
+    /// The same renderer, its calls charged to `ledger`: the account of a run whose inputs
+    /// (loaded with the same ledger) count against the same budget.
+    pub fn with_ledger(self, ledger: Arc<Ledger>) -> Self {
+        Self { ledger, ..self }
     }
 
     pub fn memory_budget(&self) -> MemoryBudget {
-        self.budget
+        self.ledger.budget()
+    }
+
+    pub fn ledger(&self) -> &Arc<Ledger> {
+        &self.ledger
     }
 
     pub fn context(&self) -> &Arc<GpuContext> {
@@ -380,7 +392,7 @@ impl Renderer {
         let compute = exact_triangles.is_none()
             && self.computes(draws.len(), (triangles, largest), (footprint, reach), view_pixels);
         let queued = queued_triangles(draws.len(), largest);
-        self.budget.check(
+        self.ledger.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             render_memory(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;

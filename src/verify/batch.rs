@@ -132,13 +132,13 @@ pub(crate) fn slot_memory(
     sensor: &Sensor,
     shadow: &ShadowSettings,
     effects: &Effects,
-    posed_spheres: impl Iterator<Item = (glam::DVec3, f64)>,
+    posed_spheres: impl Iterator<Item = (String, (glam::DVec3, f64))>,
     max_triangles: u64,
 ) -> Result<u64> {
     let max_side = renderer.context().max_view_side();
     let mut shadow_width = 0;
-    for sphere in posed_spheres {
-        let views = plan_views(sensor, shadow, &[sphere], max_side)?;
+    for (subject, sphere) in posed_spheres {
+        let views = plan_views(sensor, shadow, &[sphere], max_side).map_err(|e| e.concerning(&subject))?;
         shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
     }
     let rows = u64::from(sensor.height);

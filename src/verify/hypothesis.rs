@@ -3,19 +3,21 @@
 
 use crate::effects::Effects;
 use crate::error::{Error, Result};
-use crate::io::read_input_text;
-use crate::limits::MemoryBudget;
+use crate::io::{parse_json, read_input_text};
+use crate::limits::Ledger;
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
+use crate::untrusted::quoted;
 use glam::DMat4;
 use serde::Deserialize;
 use std::collections::HashSet;
 use std::path::Path;
 
-/// Bytes of memory parsing takes per byte of JSON, at most (each hypothesis' strings, pose
-/// and bindings, as parsed and as checked).
-const JSON_EXPANSION: u64 = 4;
+/// Bytes of memory parsing takes per byte of JSON, at most: each hypothesis' strings, pose and
+/// bindings, as parsed and as checked, and its entry in the batch a verification builds; the
+/// worst case is a file of short hypotheses (measured: tests/memory.rs).
+const JSON_EXPANSION: u64 = 12;
 
 /// Default depth tolerance τ, model units (the paper's 0.1 inch).
 pub const DEFAULT_TOLERANCE: f64 = 0.1;
@@ -68,17 +70,19 @@ fn default_tolerance() -> f64 {
 }
 
 impl HypothesisFile {
-    /// Reads a hypothesis file within `budget`.
-    pub fn from_file(path: &Path, budget: MemoryBudget) -> Result<Self> {
-        let text = read_input_text(path, "hypothesis file", budget, JSON_EXPANSION)?;
-        Self::from_json(&text).map_err(|e| match e {
+    /// Reads a hypothesis file, charged to `ledger`.
+    pub fn from_file(path: &Path, ledger: &Ledger) -> Result<Self> {
+        let text = read_input_text(path, "hypothesis file", ledger, 1)?;
+        Self::from_json(&text, ledger).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,
         })
     }
 
-    pub fn from_json(text: &str) -> Result<Self> {
-        let raw: RawFile = serde_json::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+    /// Parses a hypothesis file's text, charging what parsing takes to `ledger`.
+    pub fn from_json(text: &str, ledger: &Ledger) -> Result<Self> {
+        ledger.charge("parsing the hypothesis file", text.len() as u64 * JSON_EXPANSION)?;
+        let raw: RawFile = parse_json(text)?;
         if !(raw.tolerance.is_finite() && raw.tolerance >= 0.0) {
             return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", raw.tolerance)));
         }
@@ -91,17 +95,20 @@ impl HypothesisFile {
         // Each output line is known by its id alone.
         let mut ids = HashSet::with_capacity(raw.hypotheses.len());
         if let Some(h) = raw.hypotheses.iter().find(|h| !ids.insert(h.id.as_str())) {
-            return Err(Error::Scene(format!("hypothesis id {:?} is used more than once; ids must be unique", h.id)));
+            return Err(Error::Scene(format!(
+                "hypothesis id {} is used more than once; ids must be unique",
+                quoted(&h.id)
+            )));
         }
         let hypotheses = raw
             .hypotheses
             .into_iter()
             .map(|h| {
-                let pose = pose_from_rows(h.pose, &format!("hypothesis {:?}", h.id))?;
+                let pose = pose_from_rows(h.pose, &format!("hypothesis {}", quoted(&h.id)))?;
                 if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0) {
                     return Err(Error::Scene(format!(
-                        "hypothesis {:?}: binding ({scene}, {surface}) uses label 0, which means \"no data\"",
-                        h.id
+                        "hypothesis {}: binding ({scene}, {surface}) uses label 0, which means \"no data\"",
+                        quoted(&h.id)
                     )));
                 }
                 Ok(HypothesisEntry { id: h.id, model: h.model, pose, bindings: h.bindings })

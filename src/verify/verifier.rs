@@ -28,9 +28,10 @@ use crate::mesh::Mesh;
 use crate::pose::check_rigid;
 use crate::render::HostView;
 use crate::render::{GpuMesh, Raster, Renderer, MAX_SLOTS};
-use crate::scene::{load_model, model_key};
+use crate::scene::{load_model, model_key, ModelKey};
 use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
+use crate::untrusted::quoted;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -118,7 +119,7 @@ pub struct Verifier {
     // Dropped before the renderer, whose context it was made on (it holds the context too).
     score_pass: ScorePass,
     renderer: Renderer,
-    models: Mutex<HashMap<String, Arc<Model>>>,
+    models: Mutex<HashMap<ModelKey, Arc<Model>>>,
     /// Most render-target slots a batch keeps (with_slots).
     slots: usize,
     /// Most chunks in flight at once (with_chunks_in_flight).
@@ -203,7 +204,7 @@ impl Verifier {
         if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(model.clone());
         }
-        let mesh = Arc::new(load_model(reference, base_dir, self.renderer.memory_budget())?);
+        let mesh = Arc::new(load_model(reference, base_dir, self.renderer.ledger())?);
         let model = Arc::new(Model {
             gpu: GpuMesh::upload(self.renderer.context(), &mesh)?,
             sphere: mesh.bounding_sphere(),
@@ -242,12 +243,13 @@ impl Verifier {
             return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", settings.tolerance)));
         }
         for h in hypotheses {
-            check_rigid(&h.pose, &format!("hypothesis {:?}", h.id))?;
+            check_rigid(&h.pose, &format!("hypothesis {}", quoted(&h.id)))?;
             let surfaces = h.model.mesh.surface_count();
             if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0 || m > surfaces) {
                 return Err(Error::Scene(format!(
-                    "hypothesis {:?}: binding ({scene}, {surface}) names no surface of {} (surfaces 1..={surfaces})",
-                    h.id, h.model.mesh.name
+                    "hypothesis {}: binding ({scene}, {surface}) names no surface of {} (surfaces 1..={surfaces})",
+                    quoted(&h.id),
+                    h.model.mesh.name
                 )));
             }
         }
@@ -263,15 +265,17 @@ impl Verifier {
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
             return Err(Error::Scene(format!(
-                "hypothesis {:?}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
-                h.id,
+                "hypothesis {}: counting {} segments against {} surfaces needs {} MiB, more than the {} MiB a batch may use",
+                quoted(&h.id),
                 sensed.segments.len(),
                 h.model.mesh.surface_count(),
                 per_hypothesis(h) >> 20,
                 counts_budget >> 20
             )));
         }
-        let posed = hypotheses.iter().map(|h| (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1));
+        let posed = hypotheses.iter().map(|h| {
+            (format!("hypothesis {}", quoted(&h.id)), (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1))
+        });
         let max_triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
         let per_slot = slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, max_triangles)?;
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
@@ -292,15 +296,16 @@ impl Verifier {
         let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
         let chunk_bytes = 2 * counts + exact_bytes;
-        let budget = self.renderer.memory_budget();
-        let holds = budget.bytes().saturating_sub(sensed_bytes + chunk_bytes) / per_slot.max(1);
+        let ledger = self.renderer.ledger();
+        let available = ledger.available();
+        let holds = available.saturating_sub(sensed_bytes + chunk_bytes) / per_slot.max(1);
         plan.slots = plan.slots.min(usize::try_from(holds).unwrap_or(usize::MAX)).max(1);
         let in_flight = chunk_bytes + per_slot * plan.slots as u64;
         let what = format_args!("verifying against a {}×{} image", sensor.width, sensor.height);
-        budget.check(what, sensed_bytes + in_flight)?;
+        ledger.check(what, sensed_bytes + in_flight)?;
         plan.lanes = (1..=self.chunks_in_flight)
             .rev()
-            .find(|&lanes| sensed_bytes + lanes as u64 * in_flight <= budget.bytes())
+            .find(|&lanes| sensed_bytes + lanes as u64 * in_flight <= available)
             .unwrap_or(1);
         Ok(plan)
     }

@@ -1,0 +1,87 @@
+//! Material libraries (MTL), read for one thing: each material's diffuse colour `Kd`, whose
+//! mean is a surface's reflectivity (`[effects.reflectivity]`).
+//!
+//! tobj's MTL parser panics on colours the format allows (`Kd 0.5`: the green and blue
+//! components are optional and equal red when left out), so it is only given text this file
+//! has checked: each `newmtl` line, and each `Kd` line rewritten with its three components.
+//! Colours given as a spectral file (`Kd spectral …`) or in CIE XYZ (`Kd xyz …`), and every
+//! other statement, are left out: they do not change a reflectivity the product reads.
+
+use super::text_lines;
+use crate::error::{guard_parser, Result};
+
+/// The `newmtl` and `Kd` statements of MTL text, normalised for tobj.
+pub(super) fn checked_library(text: &str) -> String {
+    let mut checked = String::new();
+    for line in text_lines(text.trim_start_matches('\u{feff}')) {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let mut words = line.splitn(2, char::is_whitespace);
+        match (words.next(), words.next().map(str::trim).filter(|rest| !rest.is_empty())) {
+            (Some("newmtl"), Some(name)) => {
+                checked.push_str("newmtl ");
+                checked.push_str(name);
+                checked.push('\n');
+            }
+            (Some("Kd"), Some(rest)) => {
+                if let Some([r, g, b]) = rgb(rest) {
+                    checked.push_str(&format!("Kd {r:?} {g:?} {b:?}\n"));
+                }
+            }
+            _ => {}
+        }
+    }
+    checked
+}
+
+/// `r [g [b]]` as three finite components, the missing ones equal to r (the MTL format).
+fn rgb(text: &str) -> Option<[f32; 3]> {
+    let values: Vec<f32> = text.split_whitespace().map(str::parse).collect::<Result<_, _>>().ok()?;
+    match values[..] {
+        [r] => Some([r, r, r]),
+        [r, g] => Some([r, g, r]),
+        [r, g, b] => Some([r, g, b]),
+        _ => None,
+    }
+    .filter(|c| c.iter().all(|v| v.is_finite()))
+}
+
+/// The materials of checked library text (see [`checked_library`]), through tobj; `name`
+/// names the library in messages.
+pub(super) fn parse_checked_library(checked: &str, name: &str) -> Result<tobj::MTLLoadResult> {
+    guard_parser(name, "tobj's MTL parser", || Ok(tobj::load_mtl_buf(&mut checked.as_bytes())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn optional_colour_components_take_red_and_other_forms_are_left_out() {
+        let text = "\u{feff}newmtl grey\r\nKd 0.5\r\nKs 1 1\nnewmtl two\nKd 0.2 0.4 # comment\n\
+                    newmtl full\nKd 0.1 0.2 0.3\nnewmtl odd\nKd spectral grey.rfl\nKd xyz 1 1 1\nKd nan 0 0\n\
+                    newmtl\nKd 1 2 3 4\n";
+        let checked = checked_library(text);
+        assert_eq!(
+            checked,
+            "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl two\nKd 0.2 0.4 0.2\nnewmtl full\nKd 0.1 0.2 0.3\nnewmtl odd\n"
+        );
+        let (materials, _) = parse_checked_library(&checked, "t.mtl").unwrap().unwrap();
+        let diffuse: Vec<_> = materials.iter().map(|m| (m.name.as_str(), m.diffuse)).collect();
+        assert_eq!(
+            diffuse,
+            [
+                ("grey", Some([0.5, 0.5, 0.5])),
+                ("two", Some([0.2, 0.4, 0.2])),
+                ("full", Some([0.1, 0.2, 0.3])),
+                ("odd", None)
+            ]
+        );
+    }
+
+    #[test]
+    fn tobj_alone_panics_on_a_grey_kd() {
+        // The reason for checked_library: if tobj stops panicking here, the rewrite can go.
+        let outcome = std::panic::catch_unwind(|| tobj::load_mtl_buf(&mut "newmtl g\nKd 0.5\n".as_bytes()));
+        assert!(outcome.is_err());
+    }
+}

@@ -1,0 +1,156 @@
+//! The expansion factors the memory budget charges are measured, not assumed: each input
+//! below is made of one kind of element alone (the worst case for that element's factor), and
+//! a counting allocator measures the most memory its parse held at once, which must not
+//! exceed what the parse charged to its ledger. A factor set too low fails here, naming the
+//! input; docs/limits.md gives the factors and these measurements.
+
+use rangesynth::limits::{Ledger, MemoryBudget};
+use rangesynth::mesh::parse_obj;
+use rangesynth::verify::HypothesisFile;
+use rangesynth::Scene;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::Path;
+
+/// Counts this thread's live bytes and their peak (each test thread its own).
+struct Counting;
+
+thread_local! {
+    static LIVE: Cell<usize> = const { Cell::new(0) };
+    static PEAK: Cell<usize> = const { Cell::new(0) };
+}
+
+fn note(delta: isize) {
+    let _ = LIVE.try_with(|live| {
+        let now = live.get().wrapping_add_signed(delta);
+        live.set(now);
+        let _ = PEAK.try_with(|peak| peak.set(peak.get().max(now)));
+    });
+}
+
+// SAFETY: every call is passed on to the system allocator unchanged; the counting only reads
+// the sizes.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note(layout.size() as isize);
+        // SAFETY: the caller's contract is the system allocator's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        note(-(layout.size() as isize));
+        // SAFETY: as above.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // Counted as the allocation of the new block before the old one is freed.
+        note(new_size as isize);
+        note(-(layout.size() as isize));
+        // SAFETY: as above.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// The most bytes `parse` held at once beyond what was live before it, and what it charged
+/// to its ledger (the input text itself, held by the caller, is charged but not counted).
+fn measure(input_bytes: usize, parse: impl FnOnce(&Ledger)) -> (usize, u64) {
+    let ledger = Ledger::new(MemoryBudget::new(64 << 30));
+    let before = LIVE.with(Cell::get);
+    PEAK.with(|peak| peak.set(before));
+    parse(&ledger);
+    let peak = PEAK.with(Cell::get) - before;
+    (peak + input_bytes, ledger.held())
+}
+
+fn assert_charged(what: &str, input: &str, parse: impl FnOnce(&Ledger)) {
+    let (peak, charged) = measure(input.len(), parse);
+    println!(
+        "{what}: {} bytes of text, {peak} bytes at most ({:.1}× the text), {charged} charged ({:.1}×)",
+        input.len(),
+        peak as f64 / input.len() as f64,
+        charged as f64 / input.len() as f64
+    );
+    assert!(peak as u64 <= charged, "{what}: parsing held {peak} bytes but charged only {charged}");
+}
+
+fn obj(what: &str, text: &str) {
+    assert_charged(what, text, |ledger| {
+        let _ = parse_obj(text.as_bytes(), what, ledger).expect(what);
+    });
+}
+
+const N: usize = 100_000;
+
+#[test]
+fn obj_parsing_holds_no_more_than_it_charges() {
+    let grid = |n: usize| {
+        let mut text = String::new();
+        for i in 0..=n {
+            for j in 0..=n {
+                text += &format!("v {i} {j} 0\n");
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let a = i * (n + 1) + j + 1;
+                text += &format!("f {a} {} {}\nf {} {} {a}\n", a + 1, a + n + 2, a + n + 2, a + n + 1);
+            }
+        }
+        text
+    };
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    obj(
+        "vertices",
+        &format!("{}f 1 2 3\n", "v 0 0 0\n".repeat(N) + triangle)
+            .replace("f 1 2 3", &format!("f {} {} {}", N + 1, N + 2, N + 3)),
+    );
+    obj("triangles", &format!("{triangle}{}", "f 1 2 3\n".repeat(N)));
+    obj(
+        "polygons",
+        &format!(
+            "v 0 0 0\n{}{}",
+            "v 1 0 0\nv 0 1 0\n".repeat(50),
+            format!("f 1 {}\n", (2..=101).map(|i| i.to_string()).collect::<Vec<_>>().join(" ")).repeat(N / 50)
+        ),
+    );
+    obj("empty groups", &format!("{triangle}f 1 2 3\n{}", "g\n".repeat(N)));
+    obj("named groups", &format!("{triangle}f 1 2 3\n{}", "g a\n".repeat(N)));
+    obj("a face a group", &format!("{triangle}{}", "g\nf 1 2 3\n".repeat(N)));
+    obj("a material a face", &format!("{triangle}g a\n{}", "usemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n".repeat(N / 2)));
+    obj("one surface, merged", &grid(150));
+}
+
+#[test]
+fn scene_and_hypothesis_parsing_hold_no_more_than_they_charge() {
+    const SENSOR: &str =
+        "[sensor]\nkind = \"orthographic\"\nwidth = 8\nheight = 8\npitch = [0.1, 0.1]\norigin = [0, 0]\ntheta_deg = 0\n";
+    let scene = |what: &str, text: String| {
+        assert_charged(what, &text, |ledger| {
+            let _ = Scene::from_toml(&text, Path::new("."), ledger);
+        })
+    };
+    scene("an array under an unknown key", format!("{SENSOR}x = [{}1]\n", "1,".repeat(N)));
+    scene("a nested array under an unknown key", format!("{SENSOR}x = [{}[]]\n", "[],".repeat(N)));
+    scene(
+        "a table of one-letter keys",
+        format!("{SENSOR}[x]\n{}", (0..N).map(|i| format!("k{i}=1\n")).collect::<String>()),
+    );
+    scene("objects", format!("{SENSOR}{}", "[[object]]\nmodel=\"builtin:box\"\n".repeat(N / 10)));
+
+    let json = |what: &str, text: String| {
+        assert_charged(what, &text, |ledger| {
+            let _ = HypothesisFile::from_json(&text, ledger);
+        })
+    };
+    let pose = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+    let hypothesis = |i: usize| format!("{{\"id\":\"{i}\",\"model\":\"m\",\"pose\":{pose}}}");
+    json("hypotheses", format!("{{\"hypotheses\":[{}]}}", (0..N / 10).map(hypothesis).collect::<Vec<_>>().join(",")));
+    let bindings = "[1,1],".repeat(N);
+    json(
+        "bindings",
+        format!("{{\"hypotheses\":[{{\"id\":\"a\",\"model\":\"m\",\"pose\":{pose},\"bindings\":[{bindings}[1,1]]}}]}}"),
+    );
+    json("an array under an unknown key", format!("{{\"x\":[{}1],\"hypotheses\":[]}}", "1,".repeat(N)));
+}
