@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::effects::Reason;
 use rangesynth::gpu::ContextOptions;
-use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
+use rangesynth::io::{refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
@@ -152,8 +152,9 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     println!("{:>6}  {:<28} {:<12} {:>8} {:>9}{effects_column}", "label", "model", "surface", "valid", "shadowed");
     // One pass over the pixels and one over the labels: [valid, shadowed, lost to an effect]
     // per label.
-    let labels = label_map(scene)?;
-    let mut populations = vec![[0u64; 3]; labels.len() + 1];
+    let bases = scene.label_bases()?;
+    let labels: usize = scene.objects.iter().map(|o| o.mesh.surface_names.len()).sum();
+    let mut populations = vec![[0u64; 3]; labels + 1];
     for (&surface, &reason) in out.label_unshadowed.iter().zip(&out.reason) {
         let which = match reason {
             Reason::Valid => 0,
@@ -164,13 +165,17 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
             p[which] += 1;
         }
     }
-    for entry in labels {
-        let [valid, shadowed, lost] = populations[entry.label as usize];
-        if valid + shadowed + lost > 0 {
-            let model = format!("{} {}", entry.object, escaped(&entry.model, 26));
-            let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
-            let surface = escaped(&entry.surface_name, 40);
-            println!("{:>6}  {:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}", entry.label, model);
+    // Only the labels with pixels, read in place (a scene can have millions of labels).
+    for (object, (o, base)) in scene.objects.iter().zip(bases).enumerate() {
+        for (s, name) in o.mesh.surface_names.iter().enumerate() {
+            let label = base as usize + s + 1;
+            let [valid, shadowed, lost] = populations[label];
+            if valid + shadowed + lost > 0 {
+                let model = format!("{object} {}", escaped(&o.model_ref, 26));
+                let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
+                let surface = escaped(name, 40);
+                println!("{label:>6}  {model:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}");
+            }
         }
     }
     if with_effects {
