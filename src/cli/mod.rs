@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::effects::Reason;
 use rangesynth::gpu::ContextOptions;
-use rangesynth::io::{label_map, refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
+use rangesynth::io::{label_map, refuse_overwriting_inputs, render_set, write_render_set, RENDER_FILES};
 use rangesynth::limits::MemoryBudget;
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
@@ -95,13 +95,14 @@ pub fn run(cli: Cli) -> Result<()> {
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), inputs.iter().map(PathBuf::as_path))?;
+    let set = render_set(&out_dir)?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
     let renderer =
         Renderer::new(&options).context("starting Vulkan")?.with_memory_budget(budget).with_raster(cli.raster);
     let output = renderer.render(&scene)?;
-    let written = write_render_directory(&out_dir, &scene, &output)?;
+    let written = write_render_set(set, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     check_validation(&renderer)
