@@ -1,5 +1,6 @@
 //! `rangesynth accuracy`: the sweep of src/accuracy/ with a progress bar; writes
-//! `DIR/accuracy.csv` and `DIR/accuracy.png` together and prints the table. The rasterizer is
+//! `DIR/accuracy.csv` and `DIR/accuracy.png` as one set that replaces DIR whole (io/atomic.rs)
+//! and prints the table. The rasterizer is
 //! one of the sweep's settings, so the global `--raster` does not apply.
 
 use anyhow::{Context, Result};
@@ -35,6 +36,8 @@ const FILES: [&str; 2] = ["accuracy.csv", "accuracy.png"];
 
 pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -> Result<()> {
     let outputs = FILES.map(|name| args.out.join(name));
+    // Before the sweep, so an output that would be refused is refused at once.
+    let staged = StagedSet::new(&args.out, &FILES, &[])?;
     let (size, dense, sweep_options) = match args.quick {
         true => (128, 160, SweepOptions { poses: 8, runs: 2, reference_tessellation: 512 }),
         false => {
@@ -72,10 +75,9 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -
     })?;
     bar.finish_and_clear();
 
-    let staged = StagedSet::new(&args.out)?;
     accuracy::write_csv(&staged.staged(FILES[0]), &rows)?;
     accuracy::write_plot(&staged.staged(FILES[1]), &rows)?;
-    let written = staged.commit(&FILES)?;
+    let written = staged.commit()?;
     println!("device: {}", ctx.device_name());
     print!("{}", Table(&rows));
     print!("{}", Summary(&rows));

@@ -16,7 +16,8 @@ use std::sync::Arc;
 #[derive(clap::Args)]
 pub struct ExperimentArgs {
     /// Write models/, views/<view>/ (range.exr, hypotheses.json, scores.jsonl), table.md,
-    /// summary.json and scores.png into this directory.
+    /// summary.json and scores.png into this directory, which is replaced whole (an earlier
+    /// run's files do not stay beside the new ones; other files in it are kept).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Seven models in one view each at 160² (a few seconds on lavapipe) instead of fourteen

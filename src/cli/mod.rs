@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::effects::Reason;
 use rangesynth::gpu::ContextOptions;
-use rangesynth::io::{refuse_overwriting_inputs, write_render_directory, RENDER_FILES};
+use rangesynth::io::{refuse_overwriting_inputs, render_set, write_render_set, RENDER_FILES};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
@@ -94,13 +94,14 @@ pub fn run(cli: Cli) -> Result<()> {
     };
     let outputs = RENDER_FILES.map(|name| out_dir.join(name));
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), &ledger)?;
+    let set = render_set(&out_dir)?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
     let renderer =
         Renderer::new(&options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(cli.raster);
     let output = renderer.render(&scene)?;
-    let written = write_render_directory(&out_dir, &scene, &output)?;
+    let written = write_render_set(set, &scene, &output)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     check_validation(&renderer)

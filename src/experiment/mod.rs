@@ -11,6 +11,11 @@
 //! verified exactly as `rangesynth verify hypotheses.json --scene range.exr --compare-shadow`
 //! verifies them: both files are read back from disk, and the lines of `scores.jsonl` are the
 //! command's. The figures (stats.rs) go to `table.md`, `summary.json` and `scores.png`.
+//!
+//! The directory is one set (io/atomic.rs): the run writes it whole beside `out`, every file
+//! read back from there, and swaps it in at the end, so `out` holds one run's files, never
+//! views of two runs (or of a larger earlier run) beside another's summary. A failed or killed
+//! run leaves the previous set as it was.
 
 mod hypotheses;
 mod parts;
@@ -22,7 +27,7 @@ pub use stats::{auc, summarise, table_markdown, write_plot, ClassSummary, Flips,
 
 use crate::effects::{Edges, Effects, Grazing, Noise, WorkingVolume};
 use crate::error::{Error, Result};
-use crate::io::{read_range_image, write_atomically, write_range_image, RangeImage};
+use crate::io::{read_range_image, write_atomically, write_range_image, RangeImage, StagedSet};
 use crate::limits::{Ledger, MemoryBudget};
 use crate::mesh::{builtin_mesh, load_obj, Mesh};
 use crate::pose::pose_rows;
@@ -80,10 +85,14 @@ struct Model {
     mesh: Arc<Mesh>,
 }
 
-/// Built-ins and generated parts interleaved, so a smaller experiment still mixes both.
-fn model_order(out: &Path, ledger: &Ledger) -> Result<Vec<Model>> {
-    let models_dir = out.join("models");
-    std::fs::create_dir_all(&models_dir).map_err(|e| Error::io(&models_dir, e))?;
+/// The files and directories of an experiment's set.
+const SET_FILES: [&str; 3] = ["table.md", "summary.json", "scores.png"];
+const SET_DIRS: [&str; 2] = ["models", "views"];
+
+/// Built-ins and generated parts interleaved, so a smaller experiment still mixes both; the
+/// generated ones written into `models_dir`.
+fn model_order(models_dir: &Path, ledger: &Ledger) -> Result<Vec<Model>> {
+    std::fs::create_dir_all(models_dir).map_err(|e| Error::io(models_dir, e))?;
     let mut generated = Vec::new();
     for (name, mesh) in generated_parts()? {
         let path = models_dir.join(format!("{name}.obj"));
@@ -146,14 +155,16 @@ struct HypothesisOut<'a> {
     bindings: &'a [(u32, u32)],
 }
 
-/// Runs the experiment into `out`; `progress` is told how many views are done.
+/// Runs the experiment into `out`, replacing what an earlier run left there; `progress` is
+/// told how many views are done.
 pub fn run_experiment(
     verifier: &Verifier,
     config: &ExperimentConfig,
     out: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<ExperimentOutput> {
-    let mut models = model_order(out, verifier.renderer().ledger())?;
+    let set = StagedSet::new(out, &SET_FILES, &SET_DIRS)?;
+    let mut models = model_order(&set.staged("models"), verifier.renderer().ledger())?;
     if !(2..=models.len()).contains(&config.models) || config.views_per_model == 0 {
         return Err(Error::Scene(format!(
             "an experiment needs 2 to {} models and at least one view of each",
@@ -173,7 +184,7 @@ pub fn run_experiment(
     {
         let model = &models[truth];
         let name = format!("{}-{}", model.name, view + 1);
-        let dir = out.join("views").join(&name);
+        let dir = set.staged("views").join(&name);
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let mut rng = ChaCha8Rng::seed_from_u64(config.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index as u64);
         // A random turn about z, the bounding sphere's centre moved near the image's centre.
@@ -268,16 +279,15 @@ pub fn run_experiment(
 
     let summary = summarise(&scored);
     let text = table_markdown(&scored);
+    let [table_path, summary_path, plot_path] = SET_FILES.map(|name| set.staged(name));
     let outputs: [(PathBuf, Vec<u8>); 2] = [
-        (out.join("table.md"), text.into_bytes()),
-        (
-            out.join("summary.json"),
-            serde_json::to_vec_pretty(&summary).map_err(|e| Error::file(out.join("summary.json"), e))?,
-        ),
+        (table_path, text.into_bytes()),
+        (summary_path.clone(), serde_json::to_vec_pretty(&summary).map_err(|e| Error::file(summary_path, e))?),
     ];
     for (path, bytes) in &outputs {
         write_atomically(path, |f| f.write_all(bytes).map_err(|e| Error::io(path, e)))?;
     }
-    write_plot(&out.join("scores.png"), &scored)?;
+    write_plot(&plot_path, &scored)?;
+    set.commit()?;
     Ok(ExperimentOutput { scored, summary, views: total })
 }

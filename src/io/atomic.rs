@@ -1,4 +1,4 @@
-//! Outputs that are never seen half-written.
+//! Outputs that are never seen half-written, and that only ever replace what an output was.
 //!
 //! Every output file is written to a temporary file in its own directory (so the final
 //! rename stays on one file system, where it is atomic) and renamed over the target only once
@@ -7,16 +7,39 @@
 //! is removed when its writer fails or is dropped; a killed process can leave one behind,
 //! named `.NAME.*.tmp`, beside the target.
 //!
-//! A set of files (a render's directory) is written whole into a staging directory first,
-//! then moved in under an exclusive lock on the directory: a render that fails leaves the
-//! previous complete set, and two renders into one directory at once each leave a complete
-//! set of their own, the later one winning whole, never a mixture. (A kill during the moves
-//! themselves, a few renames long, can still leave a mixture.)
+//! Only a regular file is ever replaced. An output path that names a device, a FIFO, a socket,
+//! a directory or a symbolic link to one is refused (checked when the output is started, and
+//! again just before the rename): a rename would put a regular file in place of `/dev/null` or
+//! of a link a user made, which is never what was asked. A symbolic link to a regular file is
+//! replaced itself, as `rename` does: the new file takes the link's place, and the file it
+//! named is left as it was.
+//!
+//! A set of files that belong together (a render's directory, an experiment's) is a directory
+//! replaced whole. It is written into a hidden staging directory beside the target
+//! (`.NAME.*.staging`, on the same file system), then, under an exclusive lock on the parent
+//! directory (which the swap leaves in place, unlike the set's own), swapped with the target
+//! by one `renameat2(RENAME_EXCHANGE)`, or renamed into place when there is no target yet; the
+//! old set is removed after. A failure anywhere, or a kill at any point, leaves the target
+//! either the previous set whole or the new one whole, and two sets written into one
+//! directory at once each land whole, the later one winning. A killed process can leave its
+//! staging directory behind. A file system that cannot exchange directories (`EINVAL`,
+//! `ENOSYS` or `EOPNOTSUPP` from `renameat2`) gets an error, and the previous set stays: there
+//! is no fallback of two renames, which a kill between them would leave with no set at all.
+//!
+//! What a user left in the target directory besides the set is carried into the new set
+//! before the swap: regular files by hard link, symbolic links as links naming the same path.
+//! Anything else there (a directory, a device, a FIFO, a socket) is refused before anything is
+//! written, as is an entry under one of the set's names that is not what the set puts there.
+//! The target is named by its canonical path (`--out .` is the working directory itself; a
+//! link to a directory stands for the directory it names); the root directory cannot be a set.
 
 use crate::error::{Error, Result};
 use crate::limits::{FileId, Ledger};
-use std::fs::File;
-use std::io::Write;
+use std::ffi::{CString, OsString};
+use std::fs::{File, FileType};
+use std::io::{ErrorKind, Write};
+use std::os::unix::ffi::OsStrExt;
+use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 
 /// An output being written; nothing appears at `path` until [`PendingFile::commit`].
@@ -26,8 +49,10 @@ pub struct PendingFile {
 }
 
 impl PendingFile {
-    /// Starts writing `path`: a temporary file beside it.
+    /// Starts writing `path`: a temporary file beside it. Refuses a `path` that is anything
+    /// but a regular file (or a link to one) or nothing.
     pub fn new(path: &Path) -> Result<Self> {
+        refuse_unless_regular(path)?;
         let dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -37,7 +62,6 @@ impl PendingFile {
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
         // Like a file created in place (tempfile's default is private, 0600).
-        #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
         let temp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
         Ok(Self { temp, path: path.to_path_buf() })
@@ -56,6 +80,8 @@ impl PendingFile {
             .flush()
             .and_then(|()| self.temp.as_file().sync_all())
             .map_err(|e| Error::io(&path, e))?;
+        // What `path` is may have changed while the file was written.
+        refuse_unless_regular(&path)?;
         self.temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
         Ok(())
     }
@@ -68,49 +94,252 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&mut File) -> Result<()>
     pending.commit()
 }
 
-/// A set of files that belong together (a render's directory), written into a hidden
-/// staging directory inside the target directory and moved into it together.
+/// Refuses `path` unless it is nothing (a dangling link counts as nothing: the link is
+/// replaced) or a regular file, through links.
+fn refuse_unless_regular(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) => Err(not_replaceable(path, meta.file_type(), "a regular file", "an output")),
+        Err(e) if e.kind() == ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io(path, e)),
+    }
+}
+
+/// The refusal of `path`, which is a `found` where an output needs `wanted`.
+fn not_replaceable(path: &Path, found: FileType, wanted: &str, output: &str) -> Error {
+    let link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    let through = if link && !found.is_symlink() { " (through a symbolic link)" } else { "" };
+    Error::file(path, format!("is {}{through}, not {wanted}; refusing to replace it with {output}", kind(found)))
+}
+
+/// What a file type is, in words.
+fn kind(t: FileType) -> &'static str {
+    if t.is_file() {
+        "a regular file"
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "of an unknown file type"
+    }
+}
+
+/// A set of files and directories that belong together (a render's directory, an
+/// experiment's), written into a hidden staging directory beside the target directory and
+/// swapped with it whole (module docs).
 pub struct StagedSet {
+    /// Holds the new set until the commit, the old one after it; removed when dropped.
     staging: tempfile::TempDir,
+    /// The target as given, for the paths [`StagedSet::commit`] returns.
+    given: PathBuf,
+    /// The target's canonical path, whose parent is a directory.
     target: PathBuf,
+    files: Vec<OsString>,
+    dirs: Vec<OsString>,
+}
+
+/// An entry of the target directory that is not the set's, as it is carried into the new one.
+enum Carried {
+    /// A regular file, linked.
+    File,
+    /// A symbolic link, made again naming this path.
+    Link(PathBuf),
 }
 
 impl StagedSet {
-    /// Creates `target` if needed, and a staging directory in it.
-    pub fn new(target: &Path) -> Result<Self> {
-        std::fs::create_dir_all(target).map_err(|e| Error::io(target, e))?;
-        let staging =
-            tempfile::Builder::new().prefix(".staging.").tempdir_in(target).map_err(|e| Error::io(target, e))?;
-        Ok(Self { staging, target: target.to_path_buf() })
+    /// Starts the set `files` and `dirs` (names in the directory) that will replace `target`:
+    /// creates `target`'s parent if needed and a staging directory in it. Refuses at once what
+    /// the commit would refuse.
+    pub fn new(target: &Path, files: &[&str], dirs: &[&str]) -> Result<Self> {
+        let resolved = resolve(target)?;
+        let (parent, name) = match (resolved.parent(), resolved.file_name()) {
+            (Some(parent), Some(name)) => (parent, name),
+            _ => return Err(Error::file(target, "is the root directory, which a set cannot replace")),
+        };
+        let prefix = format!(".{}.", name.to_string_lossy());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".staging");
+        // Like a directory created in place (tempfile's default is private, 0700).
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o777));
+        let staging = builder.tempdir_in(parent).map_err(|e| Error::io(parent, e))?;
+        let set = Self {
+            staging,
+            given: target.to_path_buf(),
+            target: resolved,
+            files: files.iter().map(OsString::from).collect(),
+            dirs: dirs.iter().map(OsString::from).collect(),
+        };
+        set.to_carry()?;
+        Ok(set)
     }
 
-    /// Where to write the set's file `name` before the commit.
+    /// Where to write the set's file or directory `name` before the commit.
     pub fn staged(&self, name: &str) -> PathBuf {
         self.staging.path().join(name)
     }
 
-    /// Moves the staged files `names` into the target directory, each by an atomic rename,
-    /// all under an exclusive lock on the directory, so concurrent sets take turns. Returns
-    /// their final paths. A set not committed leaves the target directory as it was.
-    pub fn commit(self, names: &[&str]) -> Result<Vec<PathBuf>> {
-        let lock = File::open(&self.target).map_err(|e| Error::io(&self.target, e))?;
-        lock.lock().map_err(|e| Error::io(&self.target, e))?;
-        // A rename onto a directory is the one that can fail here; find it before moving any.
-        if let Some(path) = names.iter().map(|name| self.target.join(name)).find(|p| p.is_dir()) {
-            return Err(Error::file(path, "is a directory; the render's files were not written"));
+    /// Carries what else the target directory holds into the staged set and swaps it in,
+    /// under an exclusive lock on the parent directory, so concurrent sets take turns; the
+    /// old set is removed. Returns the paths of the set's files, under the target as given.
+    pub fn commit(self) -> Result<Vec<PathBuf>> {
+        let parent = self.target.parent().unwrap_or(Path::new("/"));
+        let lock = File::open(parent).map_err(|e| Error::io(parent, e))?;
+        lock.lock().map_err(|e| Error::io(parent, e))?;
+        let replace = self.exists()?;
+        if replace {
+            for (name, carried) in self.to_carry()? {
+                let (from, to) = (self.target.join(&name), self.staging.path().join(&name));
+                match carried {
+                    Carried::File => std::fs::hard_link(&from, &to),
+                    Carried::Link(names) => std::os::unix::fs::symlink(names, &to),
+                }
+                .map_err(|e| Error::io(&from, e))?;
+            }
+            // The directory keeps its permissions.
+            let permissions = std::fs::metadata(&self.target).map_err(|e| Error::io(&self.target, e))?.permissions();
+            std::fs::set_permissions(self.staging.path(), permissions).map_err(|e| Error::io(&self.target, e))?;
         }
-        names
-            .iter()
-            .map(|name| {
-                let path = self.target.join(name);
-                std::fs::rename(self.staged(name), &path).map_err(|e| Error::io(&path, e))?;
-                Ok(path)
-            })
-            .collect()
-        // The lock is released when `lock` is closed, the staging directory removed when
-        // `self.staging` is dropped.
+        stop_for_test("stop-before");
+        match replace {
+            true => exchange(self.staging.path(), &self.target)?,
+            false => std::fs::rename(self.staging.path(), &self.target).map_err(|e| Error::io(&self.target, e))?,
+        }
+        stop_for_test("stop-after");
+        Ok(self.files.iter().map(|name| self.given.join(name)).collect())
+        // Dropping `self.staging` removes the old set (after a plain rename there is nothing
+        // there), and closing `lock` releases the lock.
+    }
+
+    /// Whether the target exists; refuses one that is not a directory.
+    fn exists(&self) -> Result<bool> {
+        match std::fs::symlink_metadata(&self.target) {
+            Ok(meta) if meta.is_dir() => Ok(true),
+            Ok(meta) => Err(not_replaceable(&self.target, meta.file_type(), "a directory", "a set of outputs")),
+            Err(e) if e.kind() == ErrorKind::NotFound => Ok(false),
+            Err(e) => Err(Error::io(&self.target, e)),
+        }
+    }
+
+    /// The target directory's entries that are not the set's, to carry into the new set;
+    /// refuses an entry under a set name that is not what the set puts there, and an entry
+    /// that cannot be carried.
+    fn to_carry(&self) -> Result<Vec<(OsString, Carried)>> {
+        if !self.exists()? {
+            return Ok(Vec::new());
+        }
+        let mut carried = Vec::new();
+        for entry in std::fs::read_dir(&self.target).map_err(|e| Error::io(&self.target, e))? {
+            let entry = entry.map_err(|e| Error::io(&self.target, e))?;
+            let (name, path) = (entry.file_name(), entry.path());
+            // The set's own entries are replaced, if they are what the set puts there.
+            if self.files.contains(&name) || self.dirs.contains(&name) {
+                let wanted = if self.dirs.contains(&name) { "a directory" } else { "a regular file" };
+                match std::fs::metadata(&path) {
+                    Ok(meta) if kind(meta.file_type()) != wanted => {
+                        return Err(not_replaceable(&path, meta.file_type(), wanted, "an output"))
+                    }
+                    Err(e) if e.kind() != ErrorKind::NotFound => return Err(Error::io(&path, e)),
+                    _ => continue,
+                }
+            }
+            let file_type = entry.file_type().map_err(|e| Error::io(&path, e))?;
+            if file_type.is_file() {
+                carried.push((name, Carried::File));
+            } else if file_type.is_symlink() {
+                carried.push((name, Carried::Link(std::fs::read_link(&path).map_err(|e| Error::io(&path, e))?)));
+            } else {
+                return Err(Error::file(
+                    &path,
+                    format!(
+                        "is {} beside the outputs in {}, which are replaced as a whole directory: only regular \
+                         files and symbolic links are carried over, so nothing was written (move it out)",
+                        kind(file_type),
+                        self.given.display()
+                    ),
+                ));
+            }
+        }
+        Ok(carried)
     }
 }
+
+/// `target` by its canonical path, its parent created if need be.
+fn resolve(target: &Path) -> Result<PathBuf> {
+    match std::fs::canonicalize(target) {
+        Ok(path) => Ok(path),
+        Err(e) if e.kind() == ErrorKind::NotFound => {
+            let name = target.file_name().ok_or_else(|| Error::file(target, "names no directory"))?;
+            let parent = match target.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+            Ok(std::fs::canonicalize(parent).map_err(|e| Error::io(parent, e))?.join(name))
+        }
+        Err(e) => Err(Error::io(target, e)),
+    }
+}
+
+/// Swaps the directories `staging` and `target` in one step.
+fn exchange(staging: &Path, target: &Path) -> Result<()> {
+    let c_path = |p: &Path| CString::new(p.as_os_str().as_bytes()).map_err(|e| Error::io(p, e.into()));
+    let (from, to) = (c_path(staging)?, c_path(target)?);
+    let result = if fail_for_test() {
+        Err(std::io::Error::from_raw_os_error(libc::EINVAL))
+    } else {
+        // SAFETY: both paths are NUL-terminated C strings that outlive the call, which only
+        // reads them; AT_FDCWD makes them relative to the working directory (they are absolute).
+        match unsafe {
+            libc::renameat2(libc::AT_FDCWD, from.as_ptr(), libc::AT_FDCWD, to.as_ptr(), libc::RENAME_EXCHANGE)
+        } {
+            0 => Ok(()),
+            _ => Err(std::io::Error::last_os_error()),
+        }
+    };
+    let Err(error) = result else { return Ok(()) };
+    match error.raw_os_error() {
+        Some(libc::EINVAL | libc::ENOSYS | libc::EOPNOTSUPP) => Err(Error::file(
+            target,
+            format!(
+                "this file system cannot swap two directories at once (renameat2 with RENAME_EXCHANGE: {error}), \
+                 so the outputs were not written and the previous ones are as they were; remove the directory \
+                 or write to a new one"
+            ),
+        )),
+        _ => Err(Error::io(target, error)),
+    }
+}
+
+/// The hook of tests/outputs.rs, `RANGESYNTH_TEST_COMMIT`: `fail` fails the swap as a file
+/// system without it would.
+fn fail_for_test() -> bool {
+    std::env::var_os(TEST_HOOK).is_some_and(|v| v == "fail")
+}
+
+/// The hook of tests/outputs.rs, `RANGESYNTH_TEST_COMMIT=POINT:MARKER`: at `point` of a
+/// commit (`stop-before` or `stop-after` the swap), creates the file MARKER and waits there
+/// for the test to kill the process.
+fn stop_for_test(point: &str) {
+    let Some(hook) = std::env::var_os(TEST_HOOK) else { return };
+    let hook = hook.to_string_lossy();
+    if let Some(marker) = hook.strip_prefix(point).and_then(|rest| rest.strip_prefix(':')) {
+        let _ = File::create(marker);
+        loop {
+            std::thread::sleep(std::time::Duration::from_secs(60));
+        }
+    }
+}
+
+const TEST_HOOK: &str = "RANGESYNTH_TEST_COMMIT";
 
 /// Refuses an output that is one of the files the run read (the same file, by device and
 /// inode, so links and other spellings of a path count too, and so do the files an input
@@ -151,6 +380,108 @@ mod tests {
             m
         };
         assert_eq!(mode & 0o777, 0o666 & !umask as u32);
+    }
+
+    fn fifo(path: &Path) {
+        let c = CString::new(path.as_os_str().as_bytes()).unwrap();
+        // SAFETY: a valid NUL-terminated path; mkfifo only creates the node.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o666) }, 0);
+    }
+
+    fn write(path: &Path, text: &str) -> Result<()> {
+        write_atomically(path, |f| f.write_all(text.as_bytes()).map_err(|e| Error::io(path, e)))
+    }
+
+    #[test]
+    fn only_a_regular_file_or_nothing_is_replaced() {
+        let dir = crate::io::scratch_dir("atomic-kinds");
+        let (node, link, socket, sub) = (dir.join("fifo"), dir.join("link"), dir.join("socket"), dir.join("sub"));
+        fifo(&node);
+        std::os::unix::fs::symlink(&node, &link).unwrap();
+        drop(std::os::unix::net::UnixListener::bind(&socket).unwrap());
+        std::fs::create_dir(&sub).unwrap();
+        for (path, says) in [
+            (&node, "is a FIFO, not a regular file"),
+            (&link, "is a FIFO (through a symbolic link)"),
+            (&socket, "is a socket"),
+            (&sub, "is a directory"),
+        ] {
+            let e = write(path, "new").unwrap_err().to_string();
+            assert!(e.contains(&path.display().to_string()) && e.contains(says), "{e}");
+        }
+        assert!(std::fs::symlink_metadata(&node).unwrap().file_type().is_fifo());
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 4, "a temporary file was left behind");
+        // A link to a regular file, or to nothing, is replaced itself.
+        let (kept, to_kept, dangling) = (dir.join("kept"), dir.join("to_kept"), dir.join("dangling"));
+        std::fs::write(&kept, "mine").unwrap();
+        std::os::unix::fs::symlink(&kept, &to_kept).unwrap();
+        std::os::unix::fs::symlink(dir.join("nothing"), &dangling).unwrap();
+        for path in [&to_kept, &dangling] {
+            write(path, "new").unwrap();
+            assert!(std::fs::symlink_metadata(path).unwrap().is_file());
+            assert_eq!(std::fs::read_to_string(path).unwrap(), "new");
+        }
+        assert_eq!(std::fs::read_to_string(&kept).unwrap(), "mine");
+    }
+
+    /// The entries of `dir`, sorted.
+    fn names(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_set_replaces_its_directory_whole_and_carries_what_else_was_there() {
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        let parent = crate::io::scratch_dir("atomic-set");
+        let target = parent.join("set");
+        // A first set into no directory: renamed into place.
+        let set = StagedSet::new(&target, &["a.txt", "b.txt"], &["views"]).unwrap();
+        assert!(!target.exists(), "the target was made before the commit");
+        for name in ["a.txt", "b.txt"] {
+            write(&set.staged(name), "old").unwrap();
+        }
+        std::fs::create_dir_all(set.staged("views").join("old-1")).unwrap();
+        assert_eq!(set.commit().unwrap(), [target.join("a.txt"), target.join("b.txt")]);
+        // The user's file, link and permissions.
+        std::fs::write(target.join("notes.txt"), "mine").unwrap();
+        std::os::unix::fs::symlink("a.txt", target.join("link")).unwrap();
+        std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o750)).unwrap();
+        let notes = std::fs::metadata(target.join("notes.txt")).unwrap().ino();
+
+        let set = StagedSet::new(&target, &["a.txt", "b.txt"], &["views"]).unwrap();
+        write(&set.staged("a.txt"), "new").unwrap();
+        std::fs::create_dir_all(set.staged("views").join("new-1")).unwrap();
+        set.commit().unwrap();
+        assert_eq!(names(&target), ["a.txt", "link", "notes.txt", "views"], "b.txt of the old set stayed");
+        assert_eq!(names(&target.join("views")), ["new-1"]);
+        assert_eq!(std::fs::read_to_string(target.join("link")).unwrap(), "new");
+        assert_eq!(std::fs::metadata(target.join("notes.txt")).unwrap().ino(), notes);
+        assert_eq!(std::fs::metadata(&target).unwrap().permissions().mode() & 0o777, 0o750);
+        assert_eq!(names(&parent), ["set"], "the old set or a staging directory was left");
+
+        // What cannot be carried, or is not what the set puts under its name, is refused at once.
+        for (name, is_dir, says) in
+            [("sub", true, "is a directory beside the outputs"), ("views", false, "is a regular file, not a directory")]
+        {
+            let path = target.join(name);
+            let _ = std::fs::remove_dir_all(&path);
+            match is_dir {
+                true => std::fs::create_dir(&path).unwrap(),
+                false => std::fs::write(&path, "").unwrap(),
+            }
+            let e = StagedSet::new(&target, &["a.txt"], &["views"]).err().unwrap().to_string();
+            assert!(e.contains(&path.display().to_string()) && e.contains(says), "{e}");
+            assert_eq!(names(&parent), ["set"]);
+        }
+        fifo(&parent.join("fifo"));
+        let e = StagedSet::new(&parent.join("fifo"), &["a.txt"], &[]).err().unwrap().to_string();
+        assert!(e.contains("is a FIFO, not a directory"), "{e}");
+        let e = StagedSet::new(Path::new("/"), &["a.txt"], &[]).err().unwrap().to_string();
+        assert!(e.contains("root directory"), "{e}");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Files: range images as OpenEXR (f32 points, u32 labels, the sensor settings in the
 //! header), PNG previews, and the label map `labels.json`. Inputs are read only from regular
-//! files within the memory budget (input_file.rs); outputs are written atomically
-//! (atomic.rs).
+//! files within the memory budget (input_file.rs); outputs are written atomically,
+//! only over regular files, and sets of them replace their directory whole (atomic.rs).
 
 mod atomic;
 mod exr_file;
@@ -19,7 +19,7 @@ pub use labels::{label_map, write_label_map, LabelEntry};
 pub(crate) use preview::write_rgb;
 pub use preview::{reason_colour, write_label_preview, write_range_preview, SHADOW_COLOUR};
 pub use range_image::RangeImage;
-pub use render_dir::{write_render_directory, RENDER_FILES};
+pub use render_dir::{render_set, write_render_directory, write_render_set, RENDER_FILES};
 pub use text_formats::{parse_json, parse_toml};
 
 /// A fresh, empty directory for one unit test's files.
