@@ -50,7 +50,7 @@ const BYTES_PER_MATERIAL: u64 = 512;
 pub fn load_obj(path: &Path, ledger: &Ledger) -> Result<Mesh> {
     let (bytes, _) = read_identified_file(path, "model", ledger, 1)?;
     let name = path.display().to_string();
-    let checked = Checked::new(&bytes, &name)?;
+    let checked = Checked::new(&bytes, &name, ledger)?;
     drop(bytes);
     checked.charge(&name, ledger)?;
     // Each library file once (by identity), however many lines or spellings name it.
@@ -84,7 +84,7 @@ pub fn load_obj(path: &Path, ledger: &Ledger) -> Result<Mesh> {
 /// Parses OBJ text; `name` is the mesh's name in messages. Material libraries are not read.
 /// What parsing takes is charged to `ledger`.
 pub fn parse_obj(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
-    let checked = Checked::new(bytes, name)?;
+    let checked = Checked::new(bytes, name, ledger)?;
     checked.charge(name, ledger)?;
     parse(&checked, name, &vec![None; checked.libraries.len()])
 }
@@ -105,8 +105,14 @@ struct Checked {
     corners: u64,
 }
 
+/// How much the estimate may grow between two checks against the budget while the text is
+/// checked (the checked text and the group names are the check's own allocations).
+const CHECK_EVERY_BYTES: u64 = 1 << 20;
+
 impl Checked {
-    fn new(bytes: &[u8], name: &str) -> Result<Self> {
+    /// Checks `bytes`, refusing as soon as what parsing them would take exceeds what `ledger`
+    /// has left, without charging it (see [`Checked::charge`]).
+    fn new(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Self> {
         let text = String::from_utf8_lossy(bytes);
         let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         let mut checked = Self {
@@ -119,11 +125,16 @@ impl Checked {
             corners: 0,
         };
         checked.text.push_str("g 0\n");
+        let mut next_check = CHECK_EVERY_BYTES;
         for (number, line) in text_lines(text).enumerate() {
             checked.add(line).map_err(|reason| Error::Mesh {
                 name: name.to_string(),
                 reason: format!("line {}: {reason}", number + 1),
             })?;
+            if checked.bytes() > next_check {
+                ledger.check(checked.describe(name), checked.bytes())?;
+                next_check = checked.bytes() + CHECK_EVERY_BYTES;
+            }
         }
         Ok(checked)
     }
@@ -198,23 +209,23 @@ impl Checked {
         }
     }
 
-    /// Charges what parsing will take to `ledger`.
-    fn charge(&self, name: &str, ledger: &Ledger) -> Result<()> {
-        let statements = self.statement_names.len() as u64;
-        let bytes = self.text_bytes * BYTES_PER_TEXT_BYTE
+    /// What parsing the text checked so far takes.
+    fn bytes(&self) -> u64 {
+        self.text_bytes * BYTES_PER_TEXT_BYTE
             + self.vertices * BYTES_PER_VERTEX
             + self.corners * BYTES_PER_CORNER
             + self.faces * BYTES_PER_FACE
-            + statements * BYTES_PER_STATEMENT;
-        ledger.charge(
-            format_args!(
-                "parsing the model {name} ({} vertices, {} faces, {} groups)",
-                self.vertices,
-                self.faces,
-                statements - 1
-            ),
-            bytes,
-        )
+            + self.statement_names.len() as u64 * BYTES_PER_STATEMENT
+    }
+
+    fn describe(&self, name: &str) -> String {
+        let groups = self.statement_names.len() - 1;
+        format!("parsing the model {name} ({} vertices, {} faces, {groups} groups)", self.vertices, self.faces)
+    }
+
+    /// Charges what parsing will take to `ledger`.
+    fn charge(&self, name: &str, ledger: &Ledger) -> Result<()> {
+        ledger.charge(self.describe(name), self.bytes())
     }
 }
 
@@ -391,6 +402,18 @@ mod tests {
             "the library was charged more than once: {} bytes held",
             ledger.held()
         );
+    }
+
+    #[test]
+    fn a_model_over_the_budget_is_refused_while_it_is_checked_not_after() {
+        // 2 MB of empty groups would take about 320 MB to parse: refused once its estimate
+        // passes the 16 MiB left, long before the end of the text.
+        let text = format!("{SQUARE}f 1 2 3\n{}", "g\n".repeat(1_000_000));
+        let ledger = Ledger::new(crate::limits::MemoryBudget::new(16 << 20));
+        let e = parse_obj(text.as_bytes(), "t", &ledger).unwrap_err().to_string();
+        let groups: usize = e.split(" groups)").next().and_then(|s| s.rsplit(' ').next()).unwrap().parse().unwrap();
+        assert!(groups < 100_000, "refused only after {groups} groups: {e}");
+        assert_eq!(ledger.held(), 0, "nothing charged for a refused model");
     }
 
     #[test]
