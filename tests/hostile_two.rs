@@ -52,6 +52,11 @@ fn render(scene: &Path, out: &Path, budget: Option<&str>) -> Output {
     run(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], budget)
 }
 
+fn verify(hyps: &Path, exr: &Path, out: &Path) -> Output {
+    let args = ["verify", hyps.to_str().unwrap(), "--scene", exr.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    run(&args, None)
+}
+
 fn scene_of(d: &Path, models: &[&str]) -> PathBuf {
     let objects: String = models.iter().map(|m| format!("[[object]]\nmodel = \"{m}\"\n")).collect();
     write(d.join("scene.toml"), format!("{SENSOR}{objects}"))
@@ -167,17 +172,7 @@ fn verify_never_writes_over_any_file_it_read_material_libraries_included() {
     let exr = d.join("sensed/range.exr");
     for target in ["m.mtl", "m.obj", "h.json", "sensed/range.exr"] {
         let before = std::fs::read(d.join(target)).unwrap();
-        let out = run(
-            &[
-                "verify",
-                hyps.to_str().unwrap(),
-                "--scene",
-                exr.to_str().unwrap(),
-                "--out",
-                d.join(target).to_str().unwrap(),
-            ],
-            None,
-        );
+        let out = verify(&hyps, &exr, &d.join(target));
         refused(&out, target, "this output is one of the run's inputs");
         assert_eq!(std::fs::read(d.join(target)).unwrap(), before, "{target} changed");
     }
@@ -232,17 +227,7 @@ fn errors_name_the_hypothesis_and_escape_what_they_quote() {
         .collect();
     list[3120] = serde_json::json!({"id": "far\u{1b}[2J\naway", "model": "builtin:box", "pose": pose(1e30)});
     let hyps = write(d.join("h.json"), serde_json::json!({"hypotheses": list}).to_string());
-    let out = run(
-        &[
-            "verify",
-            hyps.to_str().unwrap(),
-            "--scene",
-            exr.to_str().unwrap(),
-            "--out",
-            d.join("s.jsonl").to_str().unwrap(),
-        ],
-        None,
-    );
+    let out = verify(&hyps, &exr, &d.join("s.jsonl"));
     let e = refused(&out, "far hypothesis", "hypothesis \"far\\u{1b}[2J\\naway\": ");
     assert!(!e.contains('\u{1b}') && e.trim_end().lines().count() == 1, "raw input reached the terminal: {e:?}");
     // A bad budget setting is named once, as the setting it is.
