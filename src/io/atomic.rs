@@ -33,13 +33,13 @@
 //! The target is named by its canonical path (`--out .` is the working directory itself; a
 //! link to a directory stands for the directory it names); the root directory cannot be a set.
 
+use super::file_kind;
 use crate::error::{Error, Result};
 use crate::limits::{FileId, Ledger};
 use std::ffi::{CString, OsString};
 use std::fs::{File, FileType};
 use std::io::{ErrorKind, Write};
 use std::os::unix::ffi::OsStrExt;
-use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 
 /// An output being written; nothing appears at `path` until [`PendingFile::commit`].
@@ -109,28 +109,7 @@ fn refuse_unless_regular(path: &Path) -> Result<()> {
 fn not_replaceable(path: &Path, found: FileType, wanted: &str, output: &str) -> Error {
     let link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
     let through = if link && !found.is_symlink() { " (through a symbolic link)" } else { "" };
-    Error::file(path, format!("is {}{through}, not {wanted}; refusing to replace it with {output}", kind(found)))
-}
-
-/// What a file type is, in words.
-fn kind(t: FileType) -> &'static str {
-    if t.is_file() {
-        "a regular file"
-    } else if t.is_dir() {
-        "a directory"
-    } else if t.is_symlink() {
-        "a symbolic link"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "of an unknown file type"
-    }
+    Error::file(path, format!("is {}{through}, not {wanted}; refusing to replace it with {output}", file_kind(found)))
 }
 
 /// A set of files and directories that belong together (a render's directory, an
@@ -244,7 +223,7 @@ impl StagedSet {
             if self.files.contains(&name) || self.dirs.contains(&name) {
                 let wanted = if self.dirs.contains(&name) { "a directory" } else { "a regular file" };
                 match std::fs::metadata(&path) {
-                    Ok(meta) if kind(meta.file_type()) != wanted => {
+                    Ok(meta) if file_kind(meta.file_type()) != wanted => {
                         return Err(not_replaceable(&path, meta.file_type(), wanted, "an output"))
                     }
                     Err(e) if e.kind() != ErrorKind::NotFound => return Err(Error::io(&path, e)),
@@ -262,7 +241,7 @@ impl StagedSet {
                     format!(
                         "is {} beside the outputs in {}, which are replaced as a whole directory: only regular \
                          files and symbolic links are carried over, so nothing was written (move it out)",
-                        kind(file_type),
+                        file_kind(file_type),
                         self.given.display()
                     ),
                 ));
@@ -409,7 +388,7 @@ mod tests {
             let e = write(path, "new").unwrap_err().to_string();
             assert!(e.contains(&path.display().to_string()) && e.contains(says), "{e}");
         }
-        assert!(std::fs::symlink_metadata(&node).unwrap().file_type().is_fifo());
+        assert!(std::os::unix::fs::FileTypeExt::is_fifo(&std::fs::symlink_metadata(&node).unwrap().file_type()));
         assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 4, "a temporary file was left behind");
         // A link to a regular file, or to nothing, is replaced itself.

@@ -34,7 +34,10 @@ pub fn read_identified_file(path: &Path, what: &str, ledger: &Ledger, expansion:
     if !metadata.is_file() {
         return Err(Error::file(
             path,
-            format!("the {what} is not a regular file ({}); only regular files are read", kind_of(&metadata)),
+            format!(
+                "the {what} is not a regular file ({}); only regular files are read",
+                super::file_kind(metadata.file_type())
+            ),
         ));
     }
     let id = FileId::of(&metadata);
@@ -56,28 +59,6 @@ pub fn read_input_text(path: &Path, what: &str, ledger: &Ledger, expansion: u64)
         .map_err(|e| Error::file(path, format!("the {what} is not UTF-8 text ({e})")))
 }
 
-fn kind_of(metadata: &std::fs::Metadata) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        let t = metadata.file_type();
-        if t.is_fifo() {
-            return "a FIFO";
-        }
-        if t.is_char_device() || t.is_block_device() {
-            return "a device";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if metadata.is_dir() {
-        "a directory"
-    } else {
-        "not a plain file"
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,7 +71,9 @@ mod tests {
         let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
         // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-        for (path, kind) in [(Path::new("/dev/zero"), "a device"), (dir.as_path(), "a directory"), (&fifo, "a FIFO")] {
+        for (path, kind) in
+            [(Path::new("/dev/zero"), "a character device"), (dir.as_path(), "a directory"), (&fifo, "a FIFO")]
+        {
             let e = read_input_file(path, "model", &Ledger::default(), 1).unwrap_err().to_string();
             assert!(e.contains(kind) && e.contains("only regular files"), "{e}");
         }

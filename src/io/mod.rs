@@ -22,6 +22,28 @@ pub use range_image::RangeImage;
 pub use render_dir::{render_set, write_render_directory, write_render_set, RENDER_FILES};
 pub use text_formats::{parse_json, parse_toml};
 
+/// What a file type is, in words: how a refused input or output is described.
+pub(crate) fn file_kind(t: std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if t.is_file() {
+        "a regular file"
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "of an unknown file type"
+    }
+}
+
 /// A fresh, empty directory for one unit test's files.
 #[cfg(test)]
 pub(crate) fn scratch_dir(name: &str) -> std::path::PathBuf {
