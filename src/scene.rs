@@ -69,7 +69,7 @@ const TOML_EXPANSION: u64 = 200;
 impl Scene {
     /// Reads a scene file; it and the files it names are charged to `ledger`.
     pub fn from_file(path: &Path, ledger: &Ledger) -> Result<Self> {
-        let text = read_input_text(path, "scene file", ledger, 1)?;
+        let text = read_input_text(path, "scene file", ledger)?;
         Self::from_toml(&text, path.parent().unwrap_or(Path::new(".")), ledger).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,

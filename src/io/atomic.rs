@@ -471,7 +471,7 @@ mod tests {
         std::os::unix::fs::symlink(&input, dir.join("link.json")).unwrap();
         std::fs::write(dir.join("other.json"), "{}").unwrap();
         let ledger = Ledger::default();
-        crate::io::read_input_file(&input, "hypothesis file", &ledger, 1).unwrap();
+        crate::io::read_input_file(&input, "hypothesis file", &ledger).unwrap();
         let link = dir.join("link.json");
         let e = refuse_overwriting_inputs([link.as_path()], &ledger).unwrap_err().to_string();
         assert!(e.contains("refusing to overwrite"), "{e}");

@@ -123,7 +123,7 @@ fn header_attributes(file: &[u8]) -> Option<Vec<(&[u8], &[u8])>> {
 
 /// Reads a range image (`range.exr` as `render` writes it), charged to `ledger`.
 pub fn read_range_image(path: &Path, ledger: &Ledger) -> Result<RangeImage> {
-    parse_range_image(&read_input_file(path, "range image", ledger, 1)?, path, ledger)
+    parse_range_image(&read_input_file(path, "range image", ledger)?, path, ledger)
 }
 
 /// Decodes a range image from a file's bytes; `path` names it in messages.
@@ -181,7 +181,7 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<R
 /// Reads a label-only image (`label_unshadowed.exr`), charged to `ledger`: width, height,
 /// labels.
 pub fn read_label_image(path: &Path, ledger: &Ledger) -> Result<(u32, u32, Vec<u32>)> {
-    let bytes = read_input_file(path, "label image", ledger, 1)?;
+    let bytes = read_input_file(path, "label image", ledger)?;
     let (width, height, mut channels, _) = decode_layer(&bytes, path, ledger)?;
     Ok((width, height, take_labels(path, &mut channels)?))
 }

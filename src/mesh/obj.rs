@@ -28,7 +28,7 @@
 use super::mtl::{checked_library, parse_checked_library};
 use super::{is_degenerate, merge_coplanar_surfaces, text_lines, Mesh};
 use crate::error::{guard_parser, Error, Result};
-use crate::io::read_identified_file;
+use crate::io::{read_identified_file, read_input_file};
 use crate::limits::{FileId, Ledger};
 use crate::untrusted::quoted;
 use std::path::Path;
@@ -48,7 +48,7 @@ const BYTES_PER_STATEMENT: u64 = 320;
 const BYTES_PER_MATERIAL: u64 = 512;
 
 pub fn load_obj(path: &Path, ledger: &Ledger) -> Result<Mesh> {
-    let (bytes, _) = read_identified_file(path, "model", ledger, 1)?;
+    let bytes = read_input_file(path, "model", ledger)?;
     let name = path.display().to_string();
     let checked = Checked::new(&bytes, &name, ledger)?;
     drop(bytes);
@@ -66,7 +66,7 @@ pub fn load_obj(path: &Path, ledger: &Ledger) -> Result<Mesh> {
             continue;
         }
         let what = format!("material library {}", quoted(library));
-        match read_identified_file(&library_path, &what, ledger, 1) {
+        match read_identified_file(&library_path, &what, ledger) {
             Ok((bytes, id)) => {
                 seen.push(id);
                 let text = checked_library(&String::from_utf8_lossy(&bytes));

@@ -72,7 +72,7 @@ fn default_tolerance() -> f64 {
 impl HypothesisFile {
     /// Reads a hypothesis file, charged to `ledger`.
     pub fn from_file(path: &Path, ledger: &Ledger) -> Result<Self> {
-        let text = read_input_text(path, "hypothesis file", ledger, 1)?;
+        let text = read_input_text(path, "hypothesis file", ledger)?;
         Self::from_json(&text, ledger).map_err(|e| match e {
             Error::Scene(reason) => Error::file(path, reason),
             other => other,
