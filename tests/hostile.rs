@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command};
+use common::cli::{fresh_dir, rangesynth_command, refused};
 use glam::DMat4;
 use rangesynth::io::{parse_range_image, read_range_image};
 use rangesynth::limits::Ledger;
@@ -52,15 +52,6 @@ fn dir(name: &str) -> PathBuf {
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
-}
-
-/// Asserts a clean refusal and returns stderr.
-fn refused(out: &Output, what: &str, expected: &str) -> String {
-    let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{what}: expected exit code 1, got {:?}:\n{stderr}", out.status);
-    assert!(stderr.starts_with("error: ") && !stderr.contains("panicked"), "{what}: {stderr}");
-    assert!(stderr.contains(expected), "{what}: expected {expected:?} in:\n{stderr}");
-    stderr
 }
 
 const SENSOR: &str = "[sensor]\nkind = \"orthographic\"\nwidth = 32\nheight = 24\npitch = [0.1, 0.1]\norigin = [-1.5, 1.1]\ntheta_deg = 30.0\n[shadow]\nmode = \"depth\"\n";

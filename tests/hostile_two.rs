@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command};
+use common::cli::{fresh_dir, rangesynth_command, refused};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::Scene;
 use std::path::{Path, PathBuf};
@@ -32,15 +32,6 @@ fn stderr(out: &Output) -> String {
 
 fn succeeded(out: &Output, what: &str) {
     assert!(out.status.success(), "{what}: {:?}\n{}", out.status, stderr(out));
-}
-
-/// Asserts a clean refusal (exit 1, no panic) whose message holds `expected`; returns it.
-fn refused(out: &Output, what: &str, expected: &str) -> String {
-    let e = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "{what}: {e}");
-    assert!(e.starts_with("error: ") && !e.contains("panicked"), "{what}: {e}");
-    assert!(e.contains(expected), "{what}: expected {expected:?} in:\n{e}");
-    e
 }
 
 fn write(path: PathBuf, text: impl AsRef<[u8]>) -> PathBuf {

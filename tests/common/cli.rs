@@ -2,7 +2,7 @@
 //! any message fails the command) and one place for each test's files.
 
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Command, Output};
 
 /// The rangesynth binary, with Vulkan validation on.
 pub fn rangesynth_command() -> Command {
@@ -18,4 +18,14 @@ pub fn fresh_dir(suite: &str, name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// Asserts a clean refusal — exit code 1, an `error: ` message, no panic — whose message holds
+/// `expected`; returns the message.
+pub fn refused(out: &Output, what: &str, expected: &str) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(1), "{what}: expected exit code 1, got {:?}:\n{stderr}", out.status);
+    assert!(stderr.starts_with("error: ") && !stderr.contains("panicked"), "{what}: {stderr}");
+    assert!(stderr.contains(expected), "{what}: expected {expected:?} in:\n{stderr}");
+    stderr
 }
