@@ -6,7 +6,7 @@ use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::{parse_toml, read_input_text};
 use crate::limits::{FileId, Ledger};
-use crate::mesh::{builtin_mesh, canonical_builtin_name, load_obj, Mesh};
+use crate::mesh::{builtin_bytes, builtin_mesh, canonical_builtin_name, load_obj, Mesh};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -153,6 +153,7 @@ impl Scene {
 /// `ledger`.
 pub fn load_model(reference: &str, base_dir: &Path, ledger: &Ledger) -> Result<Mesh> {
     if reference.starts_with("builtin:") {
+        ledger.charge(format_args!("building {}", quoted(reference)), builtin_bytes(reference)?)?;
         builtin_mesh(reference)
     } else {
         let path: PathBuf = base_dir.join(reference);
@@ -167,11 +168,12 @@ const BYTES_PER_LABEL: u64 = 64;
 
 /// One key per model, for caches: a built-in's canonical name (so `builtin:sphere:032` and
 /// `builtin:sphere:32` are one model), or the file's identity (so `m.obj`, `./m.obj` and a
-/// link to it are one model).
+/// link to it are one model) with its length and modification time, so that a file rewritten
+/// in place is read anew by a long-lived cache (a `Verifier`'s), not served as it was.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub enum ModelKey {
     Builtin(String),
-    File(FileId),
+    File { id: FileId, length: u64, modified: Option<std::time::SystemTime> },
 }
 
 /// The key of the model `reference` names, relative to `base_dir`; a file that cannot be
@@ -181,6 +183,8 @@ pub fn model_key(reference: &str, base_dir: &Path) -> Result<ModelKey> {
         canonical_builtin_name(reference).map(ModelKey::Builtin)
     } else {
         let path = base_dir.join(reference);
-        std::fs::metadata(&path).map(|m| ModelKey::File(FileId::of(&m))).map_err(|e| Error::io(path, e))
+        let file =
+            |m: std::fs::Metadata| ModelKey::File { id: FileId::of(&m), length: m.len(), modified: m.modified().ok() };
+        std::fs::metadata(&path).map(file).map_err(|e| Error::io(path, e))
     }
 }

@@ -63,12 +63,58 @@ impl Sensor {
         if !self.origin.iter().all(|o| o.is_finite()) {
             return bad(format!("origin {:?} must be finite", self.origin));
         }
+        self.check_in_f32()?;
         if !(self.theta_deg.is_finite() && self.theta_deg.abs() <= MAX_THETA_DEG) {
             return bad(format!(
                 "theta_deg = {} must lie between -{MAX_THETA_DEG} and {MAX_THETA_DEG}: steeper angles graze every \
                  surface and are not rendered exactly",
                 self.theta_deg
             ));
+        }
+        Ok(())
+    }
+
+    /// The grid as the GPU and the files hold it, in f32 (shaders/draw.glsl's grid,
+    /// range.exr's X and Y, the score's areas in src/verify/area.rs): each pitch a normal f32,
+    /// a pixel's squared area (dx·dy)² too (the area of a block divides by it), and every pixel
+    /// centre a finite f32 at most a pitch from its neighbours' values, so that no two columns
+    /// or rows share a coordinate and the local origins the GPU measures from
+    /// (`ViewGrid::local_origin`) stay exact.
+    fn check_in_f32(&self) -> Result<()> {
+        let [dx, dy] = self.pitch.map(|p| p as f32);
+        let squared_area = (dx * dy) * (dx * dy);
+        if !(dx.is_normal() && dy.is_normal() && squared_area.is_normal()) {
+            return Err(Error::Scene(format!(
+                "pitch {:?} is outside what the GPU's f32 arithmetic holds: each pitch must be a normal f32 \
+                 (at least {:e}) and a pixel's area dx·dy lie between about 1.1e-19 and 1.8e19, as its \
+                 square must be a normal f32 too",
+                self.pitch,
+                f32::MIN_POSITIVE
+            )));
+        }
+        let sides = [
+            (self.origin[0], self.pitch[0], self.width, "column"),
+            (self.origin[1], -self.pitch[1], self.height, "row"),
+        ];
+        for (first, step, count, what) in sides {
+            let last = first + f64::from(count - 1) * step;
+            let farthest = (first.abs().max(last.abs()) + step.abs()) as f32;
+            let spacing = f32::from_bits(farthest.to_bits().saturating_add(1)) - farthest;
+            if !farthest.is_finite() {
+                return Err(Error::Scene(format!(
+                    "origin {:?} and pitch {:?} put the image's last {what} beyond f32's range (the GPU's, \
+                     range.exr's X and Y)",
+                    self.origin, self.pitch
+                )));
+            }
+            if f64::from(spacing) > step.abs() {
+                return Err(Error::Scene(format!(
+                    "origin {:?} lies too far from the range frame's origin for pitch {:?}: f32 coordinates (the \
+                     GPU's, range.exr's X and Y) are {spacing:e} apart out there, more than a {what}'s pitch, \
+                     so pixels would share coordinates; move the range frame nearer the scene",
+                    self.origin, self.pitch
+                )));
+            }
         }
         Ok(())
     }
@@ -252,6 +298,33 @@ mod tests {
 
     fn grid() -> ViewGrid {
         ViewGrid { origin: [0.0, 0.0], pitch: [0.1, 0.1], width: 100, height: 50, z_range: (-1.0, 1.0) }
+    }
+
+    /// The bounds worked out from f32's range: a pixel's squared area must lie in
+    /// [2^-126, 3.4e38], so dx·dy in [1.08e-19, 1.84e19]; at 1e6 f32 values are 2^-4 apart.
+    #[test]
+    fn a_grid_is_accepted_exactly_where_f32_holds_it() {
+        let with = |pitch: [f64; 2], origin: [f64; 2]| Sensor { pitch, origin, ..Sensor::square(16, 1.0, 0.0) };
+        for (pitch, origin, accepted) in [
+            ([3.3e-10, 3.3e-10], [0.0, 0.0], true),
+            ([3.2e-10, 3.2e-10], [0.0, 0.0], false),
+            ([4.2e9, 4.2e9], [0.0, 0.0], true),
+            ([4.3e9, 4.3e9], [0.0, 0.0], false),
+            ([1e-20, 1e2], [0.0, 0.0], true),
+            ([1e-39, 1e20], [0.0, 0.0], false),
+            ([0.0625, 0.0625], [1e6, 0.0], true),
+            ([0.06, 0.06], [1e6, 0.0], false),
+            ([0.0625, 0.0625], [0.0, -1e6], true),
+            ([0.06, 0.06], [0.0, -1e6], false),
+            ([1.0, 1.0], [3.4e38, 0.0], false),
+        ] {
+            let result = with(pitch, origin).validate();
+            assert_eq!(result.is_ok(), accepted, "pitch {pitch:?}, origin {origin:?}: {result:?}");
+            if let Err(e) = result {
+                let message = e.to_string();
+                assert!(message.contains("pitch") || message.contains("origin"), "{message}");
+            }
+        }
     }
 
     #[test]

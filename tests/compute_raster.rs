@@ -18,7 +18,7 @@ use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::effects::{Effects, Reason};
 use rangesynth::mesh::{builtin_mesh, Mesh, Solidity};
-use rangesynth::render::Raster;
+use rangesynth::render::{Raster, MAX_REACH_PIXELS, MAX_SEEN_REACH_PIXELS};
 use rangesynth::scene::{Scene, SceneObject};
 use rangesynth::sensor::MAX_IMAGE_SIDE;
 use rangesynth::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
@@ -389,15 +389,18 @@ fn spikes_from_the_edge_of_the_compute_rasterizers_reach_render_as_the_graphics_
     assert_renders_as(&render_compute(&sc), &graphics);
 }
 
-/// A plane reaching 25 million pixels past a 64² view in every direction: beyond the compute
-/// rasterizer's reach its edge functions overflowed, and it rendered nothing (every pixel
-/// empty); such a draw is left to the graphics pipeline, which renders the plane everywhere.
+/// A plane reaching 7 million pixels past a 64² view in every direction: beyond the compute
+/// rasterizer's reach its edge functions overflowed (at 25 million pixels it rendered
+/// nothing, every pixel empty); such a draw is left to the graphics pipeline, which renders
+/// the plane everywhere. (A model reaching farther than MAX_SEEN_REACH_PIXELS from a view it
+/// shows in is refused: tests/f32_boundaries.rs.)
 #[test]
 fn a_model_reaching_beyond_the_compute_rasterizers_reach_stays_on_the_graphics_path() {
     let s = centred_sensor(64, 64, 0.02, [0.0, 0.0], 0.0);
-    let sc = scene(s, ShadowMode::None, &[("builtin:plane:1000000", DMat4::from_rotation_z(0.14))]);
+    let sc = scene(s, ShadowMode::None, &[("builtin:plane:200000", DMat4::from_rotation_z(0.14))]);
     let (centre, radius) = sc.objects[0].mesh.bounding_sphere();
-    assert!((centre.x.abs() + radius) / 0.02 > 20_000_000.0, "25 million pixels");
+    let reach = (centre.x.abs() + radius) / 0.02;
+    assert!(reach > 3.0 * MAX_REACH_PIXELS && reach < MAX_SEEN_REACH_PIXELS, "7 million pixels: {reach}");
     let out = render_compute(&sc);
     assert!(out.label.iter().all(|&l| l == 1), "the plane everywhere");
     assert_eq!(out.label, render(&sc).label);

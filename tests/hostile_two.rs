@@ -9,6 +9,7 @@ mod common;
 use common::cli::{fresh_dir, rangesynth_command, refused};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::Scene;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -92,6 +93,20 @@ fn one_model_under_many_spellings_is_loaded_and_charged_once() {
     assert_eq!(parsed.objects.len(), 40);
     assert!(parsed.objects.iter().all(|o| std::sync::Arc::ptr_eq(&o.mesh, &parsed.objects[0].mesh)), "one model");
     succeeded(&render(&scene, &d.join("out"), Some("300M")), "40 spellings under 300M");
+}
+
+/// A long-lived verifier keeps the models it loaded, by file identity; a model rewritten in
+/// place (same inode, as `cp new.obj m.obj` leaves it) is read anew, not served as it was.
+#[test]
+fn a_model_rewritten_in_place_is_read_anew_by_a_long_lived_verifier() {
+    let d = fresh_dir("hostile_two", "rewritten_model");
+    let path = write(d.join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let first = common::VERIFIER.model("m.obj", &d).unwrap();
+    assert_eq!(first.mesh.triangles.len(), 1);
+    std::fs::OpenOptions::new().append(true).open(&path).unwrap().write_all(b"v 1 1 0\nf 2 4 3\n").unwrap();
+    let again = common::VERIFIER.model("m.obj", &d).unwrap();
+    assert_eq!(again.mesh.triangles.len(), 2, "the model as the file holds it now");
+    assert!(std::sync::Arc::ptr_eq(&again, &common::VERIFIER.model("./m.obj", &d).unwrap()), "and kept");
 }
 
 #[test]

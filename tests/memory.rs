@@ -6,6 +6,7 @@
 
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::parse_obj;
+use rangesynth::scene::load_model;
 use rangesynth::verify::HypothesisFile;
 use rangesynth::Scene;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -153,4 +154,17 @@ fn scene_and_hypothesis_parsing_hold_no_more_than_they_charge() {
         format!("{{\"hypotheses\":[{{\"id\":\"a\",\"model\":\"m\",\"pose\":{pose},\"bindings\":[{bindings}[1,1]]}}]}}"),
     );
     json("an array under an unknown key", format!("{{\"x\":[{}1],\"hypotheses\":[]}}", "1,".repeat(N)));
+}
+
+/// A built-in model is charged before it is built, per triangle (the largest sphere, a million
+/// triangles, and a cylinder), as a model file's parse is.
+#[test]
+fn building_a_builtin_model_holds_no_more_than_it_charges() {
+    for name in ["builtin:sphere:1024", "builtin:cylinder:4096"] {
+        let (peak, charged) = measure(0, |ledger| {
+            let _ = load_model(name, Path::new("."), ledger).expect(name);
+        });
+        println!("{name}: {peak} bytes at most, {charged} charged");
+        assert!(peak as u64 <= charged, "{name}: building held {peak} bytes but charged only {charged}");
+    }
 }

@@ -525,10 +525,11 @@ fn a_batch_keeps_the_slots_the_memory_budget_holds() {
     };
     let (barriers_all, counted_all) = verifier_within(DEFAULT_MEMORY_BUDGET);
     let counted_all = counted_all.expect("verification in 16 slots runs");
-    // What one slot takes, beside the sensed image and the counts: the figure a budget too
-    // small for any refuses with (one slot, the fewest a batch keeps).
+    // What one slot takes, beside the sensed image and the counts, on top of what the run
+    // holds (the model): the figures a budget too small for any refuses with (one slot, the
+    // fewest a batch keeps).
     let one_slot = match verifier_within(1 << 20).1 {
-        Err(rangesynth::Error::TooLarge { needed, .. }) => needed.0,
+        Err(rangesynth::Error::TooLarge { needed, held, .. }) => needed.0 + held.0,
         other => panic!("a 1 MiB budget holds no slot of a 128² verification: {:?}", other.map(|v| v.len())),
     };
     let (barriers_one, counted_one) = verifier_within(one_slot);
@@ -536,6 +537,7 @@ fn a_batch_keeps_the_slots_the_memory_budget_holds() {
     // At least the three stages of a run (raster, mask, score) for each of 15 runs more.
     let more = barriers_one.saturating_sub(barriers_all);
     assert!(more >= 3 * (SLOTS as u64 - 1), "{barriers_one} barriers in one slot, {barriers_all} in 16");
+    assert_eq!(counted_one.len(), counted_all.len());
     for (one, all) in counted_one.iter().zip(&counted_all) {
         assert_eq!(one.counts, all.counts, "{}", one.id);
     }

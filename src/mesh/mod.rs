@@ -17,7 +17,7 @@ mod surfaces;
 
 pub use adjacency::NO_NEIGHBOUR;
 pub(crate) use adjacency::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY, MAX_LINKED_TRIANGLES};
-pub use builtin::{builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
+pub use builtin::{builtin_bytes, builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
 pub use obj::{load_obj, parse_obj};
 pub use solid::Solidity;
 pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
@@ -43,6 +43,10 @@ pub struct Mesh {
     pub dropped_degenerate: usize,
 }
 
+/// The largest |coordinate| a model's vertex may have: a rotation's sum of three products
+/// (shaders/draw.glsl, `to_view`) stays finite in f32 far beyond it.
+pub const MAX_COORDINATE: f32 = 1e30;
+
 impl Mesh {
     /// Validates and builds a mesh. Degenerate (zero-area) triangles are dropped and
     /// counted in [`Mesh::dropped_degenerate`]; surfaces left without triangles keep their
@@ -58,6 +62,13 @@ impl Mesh {
         let invalid = |reason: String| Error::Mesh { name: name.clone(), reason };
         if let Some(i) = positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
             return Err(invalid(format!("vertex {i} has a non-finite coordinate {:?}", positions[i])));
+        }
+        if let Some(i) = positions.iter().position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE)) {
+            return Err(invalid(format!(
+                "vertex {i} has the coordinates {:?}: each must lie within ±{MAX_COORDINATE:e} (the GPU rotates them \
+                 in f32, which overflows beyond)",
+                positions[i]
+            )));
         }
         if triangles.len() != triangle_surfaces.len() {
             return Err(invalid("each triangle needs exactly one surface id".into()));

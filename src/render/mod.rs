@@ -9,6 +9,7 @@
 mod compute_raster;
 mod draw;
 mod effect_pass;
+mod gpu_arithmetic;
 mod gpu_mesh;
 mod host_view;
 mod mesh_cache;
@@ -25,6 +26,7 @@ use compute_raster::{ComputeViews, CoverageGroup};
 pub use compute_raster::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
+pub use gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use host_view::HostView;
 pub use passes::MAX_SLOTS;
@@ -68,7 +70,9 @@ pub struct Renderer {
 
 /// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
 /// `none` or θ = 0, the shadow grid (sensor.rs) for bounding spheres (centre, radius) given in
-/// the range frame.
+/// the range frame, `name(i)` naming sphere i's model in errors. The plan is refused where the
+/// GPU's f32 arithmetic would not hold it: its grids, each model's reach, and the effects that
+/// change z over its depth range (gpu_arithmetic.rs).
 ///
 /// Only what a view can show sizes it: an object whose footprint misses the range image
 /// cannot put a point into it, so it neither widens the range view's depth range nor the
@@ -79,7 +83,9 @@ pub struct Renderer {
 pub(crate) fn plan_views(
     sensor: &Sensor,
     shadow: &ShadowSettings,
+    effects: &Effects,
     spheres: &[(DVec3, f64)],
+    name: &dyn Fn(usize) -> String,
     max_side: u32,
 ) -> Result<Views> {
     let full_range = sensor.range_grid((0.0, 0.0));
@@ -111,7 +117,24 @@ pub(crate) fn plan_views(
             )));
         }
     }
-    Ok(Views { origin, range, shadow: shadow_grid })
+    let views = Views { origin, range, shadow: shadow_grid };
+    let to_shadow = sensor.to_shadow_frame();
+    let shadow_view = views.shadow.as_ref().map(|grid| (grid, to_shadow.transform_point3(origin)));
+    gpu_arithmetic::check_grid(&views.range, "range", origin)?;
+    if let Some((grid, local)) = shadow_view {
+        gpu_arithmetic::check_grid(grid, "shadow", local)?;
+    }
+    for (i, &(centre, radius)) in spheres.iter().enumerate() {
+        let in_range = (centre, radius);
+        let seen_in_range = seen(&views.range, in_range);
+        gpu_arithmetic::check_reach(&views.range, "range", origin, in_range, seen_in_range, &name(i))?;
+        if let Some((grid, local)) = shadow_view {
+            let in_shadow = (to_shadow.transform_point3(centre), radius);
+            gpu_arithmetic::check_reach(grid, "shadow", local, in_shadow, seen(grid, in_shadow), &name(i))?;
+        }
+    }
+    gpu_arithmetic::check_effects(effects, &views)?;
+    Ok(views)
 }
 
 /// Triangles a queue of large triangles has room for, in each view, for `draws` draws of up to
@@ -372,7 +395,9 @@ impl Renderer {
                 (o.pose.transform_point3(centre), radius)
             })
             .collect();
-        let views = plan_views(&scene.sensor, &scene.shadow, &spheres, self.ctx.max_view_side())?;
+        let name = |i: usize| format!("object {} ({})", i + 1, scene.objects[i].model_ref);
+        let views =
+            plan_views(&scene.sensor, &scene.shadow, &scene.effects, &spheres, &name, self.ctx.max_view_side())?;
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
         let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
         let exact_triangles = (scene.shadow.mode == ShadowMode::Exact).then_some(triangles);

@@ -138,7 +138,8 @@ pub(crate) fn slot_memory(
     let max_side = renderer.context().max_view_side();
     let mut shadow_width = 0;
     for (subject, sphere) in posed_spheres {
-        let views = plan_views(sensor, shadow, &[sphere], max_side).map_err(|e| e.concerning(&subject))?;
+        let views = plan_views(sensor, shadow, effects, &[sphere], &|_| "its model".into(), max_side)
+            .map_err(|e| e.concerning(&subject))?;
         shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
     }
     let rows = u64::from(sensor.height);
@@ -179,7 +180,8 @@ pub(crate) fn count_batch(
         .iter()
         .map(|item| {
             let (centre, radius) = item.sphere;
-            plan_views(sensor, &settings.shadow, &[(item.pose.transform_point3(centre), radius)], max_side)
+            let posed = [(item.pose.transform_point3(centre), radius)];
+            plan_views(sensor, &settings.shadow, settings.effects, &posed, &|_| "its model".into(), max_side)
         })
         .collect::<Result<_>>()?;
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
