@@ -2,8 +2,8 @@
 //! embedding daemon can recover (recreate the renderer, or split a batch); every other
 //! failure names what was wrong with which input.
 
-use crate::limits::Bytes;
 use ash::vk;
+use std::fmt;
 use std::path::PathBuf;
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
@@ -120,6 +120,27 @@ impl From<gpu_allocator::AllocationError> for Error {
             other => {
                 Error::Vulkan { context: format!("allocating GPU memory ({other})"), result: vk::Result::ERROR_UNKNOWN }
             }
+        }
+    }
+}
+
+/// A byte count shown the way people read it (`12.0 GiB`), in errors about the memory
+/// budget and sizes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Bytes(pub u64);
+
+impl fmt::Display for Bytes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+        let mut value = self.0 as f64;
+        let mut unit = 0;
+        while value >= 1024.0 && unit + 1 < UNITS.len() {
+            value /= 1024.0;
+            unit += 1;
+        }
+        match unit {
+            0 => write!(f, "{} bytes", self.0),
+            _ => write!(f, "{value:.1} {}", UNITS[unit]),
         }
     }
 }

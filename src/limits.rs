@@ -14,6 +14,7 @@
 //! batch's buffers) is made on top of what the ledger holds. The ledger also knows every file
 //! the run read, by identity, so that no output replaces one (io/atomic.rs).
 
+pub use crate::error::Bytes;
 use crate::error::{Error, Result};
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -202,26 +203,6 @@ impl std::str::FromStr for MemoryBudget {
 
 fn invalid(reason: String) -> Error {
     Error::Setting { setting: "memory budget".into(), reason }
-}
-
-/// A byte count shown the way people read it (`12.0 GiB`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Bytes(pub u64);
-
-impl fmt::Display for Bytes {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-        let mut value = self.0 as f64;
-        let mut unit = 0;
-        while value >= 1024.0 && unit + 1 < UNITS.len() {
-            value /= 1024.0;
-            unit += 1;
-        }
-        match unit {
-            0 => write!(f, "{} bytes", self.0),
-            _ => write!(f, "{value:.1} {}", UNITS[unit]),
-        }
-    }
 }
 
 #[cfg(test)]

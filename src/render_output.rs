@@ -16,7 +16,7 @@ pub struct RenderOutput {
     /// mode `exact` cast the shadow rays.
     pub shadow_pass: bool,
     /// The rasterizer that rendered the views.
-    pub raster: crate::render::Raster,
+    pub raster: crate::raster_choice::Raster,
     /// Row-major labels after shadowing and the effects; 0 = no data.
     pub label: Vec<u32>,
     /// Row-major labels of the range view alone.

@@ -30,7 +30,7 @@ use std::sync::{Arc, LazyLock};
 /// A second renderer, with the compute rasterizer, beside the tests' graphics one.
 static COMPUTE: LazyLock<Verifier> = LazyLock::new(|| {
     let renderer = test_renderer(None);
-    assert!(renderer.context().supports_compute_raster(), "lavapipe has 64-bit buffer atomics");
+    assert!(renderer.supports_compute_raster(), "lavapipe has 64-bit buffer atomics");
     Verifier::new(renderer.with_raster(Raster::Compute)).expect("verifier")
 });
 

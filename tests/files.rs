@@ -6,10 +6,9 @@ mod common;
 
 use common::*;
 use glam::DMat4;
-use rangesynth::io::{
-    read_label_image, read_range_image, write_label_image, write_range_image, write_render_directory, RangeImage,
-};
+use rangesynth::io::{read_label_image, read_range_image, write_label_image, write_range_image, RangeImage};
 use rangesynth::limits::Ledger;
+use rangesynth::render_set::write_render_directory;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {

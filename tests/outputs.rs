@@ -270,7 +270,7 @@ fn a_render_whose_swap_fails_leaves_the_previous_set_byte_identical() {
     let after = snapshot(&out);
     assert_eq!(after.keys().collect::<Vec<_>>(), before.keys().collect::<Vec<_>>());
     assert_eq!(after[Path::new("notes.txt")], b"mine");
-    assert!(rangesynth::io::RENDER_FILES.iter().all(|f| after[Path::new(f)] != before[Path::new(f)]));
+    assert!(rangesynth::render_set::RENDER_FILES.iter().all(|f| after[Path::new(f)] != before[Path::new(f)]));
     assert_eq!(names(&d), ["box.toml", "out", "step.toml"], "the old set was left behind");
 }
 
@@ -344,7 +344,7 @@ fn a_render_into_the_working_directory_replaces_it_and_keeps_its_other_files() {
         let out = rangesynth().args(["render", "box.toml", "--out", "."]).current_dir(&work).output().unwrap();
         succeeded(&out, &format!("round {round}"));
         assert!(text(&out.stdout).contains("wrote ./range.exr"), "{}", text(&out.stdout));
-        let mut expected: Vec<&str> = rangesynth::io::RENDER_FILES.to_vec();
+        let mut expected: Vec<&str> = rangesynth::render_set::RENDER_FILES.to_vec();
         expected.push("box.toml");
         expected.sort();
         assert_eq!(names(&work), expected, "round {round}");

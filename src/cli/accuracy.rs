@@ -52,8 +52,9 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -
     let renderer =
         Renderer::new(options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(Raster::Graphics);
     let ctx = renderer.context().clone();
+    let supports_compute = renderer.supports_compute_raster();
     let graphics = Verifier::new(renderer)?;
-    let compute = match ctx.supports_compute_raster() {
+    let compute = match supports_compute {
         true => Some(Verifier::new(
             Renderer::with_context(ctx.clone())?.with_ledger(ledger.clone()).with_raster(Raster::Compute),
         )?),

@@ -240,11 +240,15 @@ impl GpuContext {
         }))
     }
 
-    /// Whether the device can run the compute rasterizer: 64-bit integers and buffer atomics,
-    /// and as many storage buffers a shader stage as its coverage pass binds.
-    pub fn supports_compute_raster(&self) -> bool {
-        let storage_buffers = self.limits.max_per_stage_descriptor_storage_buffers as usize;
-        self.int64_atomics && storage_buffers >= crate::render::COVERAGE_STORAGE_BUFFERS
+    /// Whether the device has 64-bit integers and 64-bit buffer atomics in shaders (enabled
+    /// where it has them).
+    pub fn has_int64_atomics(&self) -> bool {
+        self.int64_atomics
+    }
+
+    /// The most storage buffers one shader stage may bind.
+    pub fn max_storage_buffers_per_stage(&self) -> usize {
+        self.limits.max_per_stage_descriptor_storage_buffers as usize
     }
 
     /// The most bytes the device binds as one storage buffer (maxStorageBufferRange): it bounds

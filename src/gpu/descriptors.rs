@@ -1,8 +1,8 @@
 //! An owned descriptor set of storage images (GENERAL layout), then uniform buffers, then
 //! storage buffers, bound in that order from binding 0, with its own pool so dropping it frees
-//! everything; and the one way compute passes are recorded with it.
+//! everything. Compute passes are recorded with it in compute.rs.
 
-use super::{Buffer, ComputePipeline, GpuContext, Image};
+use super::{Buffer, GpuContext, Image};
 use crate::error::{Result, VkResultExt};
 use ash::vk;
 use std::sync::Arc;
@@ -40,7 +40,7 @@ impl SetShape {
 }
 
 pub struct StorageSet {
-    ctx: Arc<GpuContext>,
+    pub(super) ctx: Arc<GpuContext>,
     pool: vk::DescriptorPool,
     pub(crate) set: vk::DescriptorSet,
 }
@@ -104,57 +104,6 @@ impl StorageSet {
         // SAFETY: the set, views and buffers are alive.
         unsafe { d.update_descriptor_sets(&writes, &[]) };
         Ok(owned)
-    }
-}
-
-impl StorageSet {
-    /// Records a compute dispatch of `groups` workgroups with this set bound as set 0 and
-    /// `constants` pushed at offset 0 (none where empty). The set's resources must already be
-    /// in GENERAL layout.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8], groups: [u32; 2]) {
-        self.dispatch_slices(cmd, pipeline, constants, groups, 1);
-    }
-
-    /// As [`StorageSet::dispatch`], `slices` times over: `groups` workgroups for each z.
-    pub fn dispatch_slices(
-        &self,
-        cmd: vk::CommandBuffer,
-        pipeline: &ComputePipeline,
-        constants: &[u8],
-        groups: [u32; 2],
-        slices: u32,
-    ) {
-        self.bind(cmd, pipeline, constants);
-        // SAFETY: cmd is recording with the pipeline and set bound.
-        unsafe { self.ctx.device.cmd_dispatch(cmd, groups[0], groups[1], slices) };
-    }
-
-    /// As [`StorageSet::dispatch`], with the workgroup counts read from `args` (a
-    /// `VkDispatchIndirectCommand` at offset 0) when the dispatch runs.
-    pub fn dispatch_indirect(
-        &self,
-        cmd: vk::CommandBuffer,
-        pipeline: &ComputePipeline,
-        constants: &[u8],
-        args: &Buffer,
-    ) {
-        self.bind(cmd, pipeline, constants);
-        // SAFETY: cmd is recording with the pipeline and set bound; args holds the command.
-        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, args.raw, 0) };
-    }
-
-    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8]) {
-        let (layout, pipeline) = (pipeline.layout, pipeline.pipeline);
-        let d = &self.ctx.device;
-        // SAFETY: cmd is recording; pipeline and layout match the set's layout; the set's
-        // resources outlive the submission.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, layout, 0, &[self.set], &[]);
-            if !constants.is_empty() {
-                d.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, constants);
-            }
-        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! allocation and handle in `Drop`, so nothing can be destroyed twice or outlive the device.
 //! Every object and allocation carries a name for validation messages.
 
-use super::{barrier, Access, BufferTransition, GpuContext};
+use super::GpuContext;
 use crate::error::{Error, Result, VkResultExt};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -93,35 +93,6 @@ impl Buffer {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let mut buffer = Self::new(ctx, BufferDesc::upload(bytes.len() as u64, usage), name)?;
         buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
-        Ok(buffer)
-    }
-
-    /// A device-local buffer holding `data`, copied in through a staging buffer once, so
-    /// that shaders reading it per fragment or per pixel do not read across the bus on a
-    /// discrete GPU. Ready for vertex, index and shader-storage reads when this returns.
-    pub fn device_local_with_data<T: bytemuck::Pod>(
-        ctx: &Arc<GpuContext>,
-        usage: vk::BufferUsageFlags,
-        data: &[T],
-        name: &str,
-    ) -> Result<Self> {
-        let staging = Self::with_data(ctx, vk::BufferUsageFlags::TRANSFER_SRC, data, &format!("{name} (staging)"))?;
-        let size = staging.size;
-        let desc = BufferDesc {
-            size,
-            usage: usage | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            location: MemoryLocation::GpuOnly,
-        };
-        let buffer = Self::new(ctx, desc, name)?;
-        ctx.submit_and_wait(&format!("uploading {name}"), |cmd| {
-            let region = [vk::BufferCopy::default().size(size.max(4))];
-            // SAFETY: both buffers hold at least `size` bytes (rounded up to 4 at creation).
-            unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
-            let ready =
-                BufferTransition { buffer: &buffer, from: Access::TransferWrite, to: Access::DrawAndComputeRead };
-            barrier(ctx, cmd, &[], &[ready]);
-            Ok(())
-        })?;
         Ok(buffer)
     }
 

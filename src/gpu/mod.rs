@@ -9,6 +9,7 @@ mod encoder;
 mod memory;
 pub(crate) mod shaders;
 mod timing;
+mod upload;
 
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
 pub use compute::ComputePipeline;

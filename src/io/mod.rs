@@ -1,25 +1,21 @@
 //! Files: range images as OpenEXR (f32 points, u32 labels, the sensor settings in the
-//! header), PNG previews, and the label map `labels.json`. Inputs are read only from regular
+//! header), PNG previews, and the text formats' parsers. Inputs are read only from regular
 //! files within the memory budget (input_file.rs); outputs are written atomically,
 //! only over regular files, and sets of them replace their directory whole (atomic.rs).
 
 mod atomic;
 mod exr_file;
 mod input_file;
-mod labels;
 mod preview;
 mod range_image;
-mod render_dir;
 mod text_formats;
 
 pub use atomic::{refuse_overwriting_inputs, write_atomically, PendingFile, StagedSet};
 pub use exr_file::{parse_range_image, read_label_image, read_range_image, write_label_image, write_range_image};
 pub use input_file::{read_identified_file, read_input_file, read_input_text};
-pub use labels::{label_map, write_label_map, LabelEntry};
 pub(crate) use preview::write_rgb;
 pub use preview::{reason_colour, write_label_preview, write_range_preview, SHADOW_COLOUR};
 pub use range_image::RangeImage;
-pub use render_dir::{render_set, write_render_directory, write_render_set, RENDER_FILES};
 pub use text_formats::{parse_json, parse_toml};
 
 /// What a file type is, in words: how a refused input or output is described.

@@ -57,12 +57,10 @@
 //! Whether a view takes it is decided in raster_choice.rs ([`Raster`](super::Raster),
 //! [`Crossover`](super::Crossover)).
 
-use super::draw::DrawConstants;
-use super::passes::DrawTable;
-use super::pipelines::built_once;
+use super::built_once::built_once;
+use super::draw::{Draw, DrawConstants, DrawTable};
 use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
-use super::Draw;
 use crate::error::Result;
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
@@ -182,6 +180,12 @@ const _: () = assert!(
 /// large triangles and its dispatch arguments (a device binding fewer a stage cannot run the
 /// compute rasterizer; Vulkan guarantees 4, the GPUs it targets bind thousands).
 pub const COVERAGE_STORAGE_BUFFERS: usize = 2 * COVERAGE_MEMBERS + 2;
+
+/// Whether `ctx`'s device can run the compute rasterizer: 64-bit integers and buffer atomics,
+/// and as many storage buffers a shader stage as its coverage pass binds.
+pub fn device_supports(ctx: &GpuContext) -> bool {
+    ctx.has_int64_atomics() && ctx.max_storage_buffers_per_stage() >= COVERAGE_STORAGE_BUFFERS
+}
 
 /// The coverage passes' pipelines for dispatches of `members` jobs, or (`Ties`) the passes
 /// after them that decide the ties between draws sharing words.

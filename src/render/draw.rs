@@ -3,13 +3,15 @@
 //! and what the fragment shader writes.
 
 use super::gpu_mesh::GpuMesh;
-use super::pipelines::ViewPipelines;
-use super::targets::ViewTargets;
-use crate::gpu::GpuContext;
+use super::plan::Views;
+use super::targets::{ViewKind, ViewTargets};
+use crate::error::Result;
+use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::Solidity;
-use crate::sensor::{PixelRect, ViewGrid};
+use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use ash::vk;
 use glam::{DMat4, DVec3};
+use std::sync::Arc;
 
 /// One draw as the shaders see it (`DrawData` in `shaders/draw.glsl`, std430): the raster
 /// shaders' push constants, and an entry of the shadow view's draw table, which the shadow
@@ -45,6 +47,16 @@ const _: () = {
     assert!(offset_of!(DrawConstants, surface_ids) == 96 && offset_of!(DrawConstants, label_base) == 112);
     assert!(offset_of!(DrawConstants, draw_index) == 116 && offset_of!(DrawConstants, links) == 120);
 };
+
+/// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
+/// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
+/// objects go to the lower label whatever the order of the draws (pipelines.rs, `Depth`).
+#[derive(Default)]
+pub struct ViewPipelines {
+    pub nearest: vk::Pipeline,
+    pub depth_only: vk::Pipeline,
+    pub ties: vk::Pipeline,
+}
 
 /// One posed mesh in a view.
 pub struct Draw<'a> {
@@ -238,6 +250,55 @@ fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws
             d.cmd_bind_vertex_buffers(cmd, 0, &[draw.mesh.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, draw.mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, draw.mesh.index_count, 1, 0, 0, 0);
+        }
+    }
+}
+
+/// A view's draw table: for each group of draws seen on planned views, in order, each draw's
+/// constants in that view, numbered consecutively from 0 (a job's `first_draw_index` is the
+/// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
+/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer's passes read
+/// both, its coverage passes from a uniform block the host writes with their entries (one
+/// command a coverage dispatch, not a copy a view: compute_raster.rs), so the entries are kept
+/// on the host too.
+pub(crate) struct DrawTable {
+    pub buffer: Buffer,
+    pub entries: Vec<DrawConstants>,
+}
+
+/// A view's [`DrawTable`]; `None` for the shadow view where there is none (mode `none` or
+/// θ = 0, which every job of a submission shares).
+pub(crate) fn draw_table<'a>(
+    ctx: &Arc<GpuContext>,
+    kind: ViewKind,
+    sensor: &Sensor,
+    groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
+) -> Result<Option<DrawTable>> {
+    let view_from_range = match kind {
+        ViewKind::Range => DMat4::IDENTITY,
+        ViewKind::Shadow => sensor.to_shadow_frame(),
+    };
+    let half_side = ctx.viewport_half_side();
+    let mut entries = Vec::new();
+    for (views, draws) in groups {
+        let grid = match kind {
+            ViewKind::Range => &views.range,
+            ViewKind::Shadow => match &views.shadow {
+                Some(grid) => grid,
+                None => return Ok(None),
+            },
+        };
+        for draw in draws {
+            let index = entries.len() as u32;
+            entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index, half_side));
+        }
+    }
+    let name = format!("{kind:?} view draw table");
+    match entries.is_empty() {
+        true => Ok(None),
+        false => {
+            let buffer = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, &name)?;
+            Ok(Some(DrawTable { buffer, entries }))
         }
     }
 }

@@ -8,7 +8,6 @@
 //! extremes of what a view can hold (its depth range, the farthest point of a bounding
 //! sphere), with a margin for a GPU's operations, which may err by a few ulps.
 
-use super::Views;
 use crate::effects::{Effects, MAX_NOISE_INCIDENCE_DEG};
 use crate::error::{Error, Result};
 use crate::mesh::MAX_COORDINATE;
@@ -104,11 +103,12 @@ pub(super) fn check_reach(
 
 /// Checks that the effects that change z keep every valid pixel's z finite, as the effect
 /// shaders compute it (shaders/effect_noise.comp, effect_quantize.comp), for any z the range
-/// view can hold (its depth range, measured from the local origin as the GPU adds it back).
-pub(super) fn check_effects(effects: &Effects, views: &Views) -> Result<()> {
-    let z_origin = views.origin.z as f32;
-    let rendered = |z: f64| (z - views.origin.z) as f32 + z_origin;
-    let (near, far) = views.range.z_range;
+/// view (`range`) can hold: its depth range, measured from the local origin `local` as the GPU
+/// adds it back.
+pub(super) fn check_effects(effects: &Effects, range: &ViewGrid, local: DVec3) -> Result<()> {
+    let z_origin = local.z as f32;
+    let rendered = |z: f64| (z - local.z) as f32 + z_origin;
+    let (near, far) = range.z_range;
     let depths = format!("z from {near:.6e} to {far:.6e}");
     // The lowest and the highest z a pass may see.
     let mut ends = [rendered(near), rendered(far)];

@@ -6,6 +6,7 @@
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
+mod built_once;
 mod compute_raster;
 mod draw;
 mod effect_pass;
@@ -15,23 +16,25 @@ mod host_view;
 mod mesh_cache;
 mod passes;
 mod pipelines;
-mod raster_choice;
+mod plan;
 mod shadow_pass;
 mod target_pool;
 mod targets;
 
+pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
 pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use compute_raster::{ComputeViews, CoverageGroup};
 pub use compute_raster::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
+pub(crate) use draw::draw_table;
 pub use draw::Draw;
 pub(crate) use effect_pass::EffectShape;
 pub use gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use host_view::HostView;
-pub use passes::MAX_SLOTS;
-pub(crate) use passes::{draw_table, Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
-pub use raster_choice::{Crossover, Raster};
+pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
+pub(crate) use plan::{plan_views, Views};
+pub use target_pool::{MAX_CHUNKS_IN_FLIGHT, MAX_SLOTS};
 pub(crate) use targets::ViewKind;
 
 use crate::effects::{Effects, Reason};
@@ -41,9 +44,8 @@ use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timest
 use crate::limits::{Ledger, MemoryBudget};
 use crate::pose::check_rigid;
 use crate::scene::Scene;
-use crate::sensor::{depth_bounds, Sensor, ViewGrid};
+use crate::sensor::{Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
-use glam::DVec3;
 use mesh_cache::MeshCache;
 use pipelines::Pipelines;
 use std::sync::Arc;
@@ -66,75 +68,6 @@ pub struct Renderer {
     raster: Raster,
     /// Jobs the compute rasterizer covers in one dispatch (1 to COVERAGE_MEMBERS).
     hypotheses_per_dispatch: usize,
-}
-
-/// Plans the views of a render: the range grid over the scene's depth bounds and, unless mode
-/// `none` or θ = 0, the shadow grid (sensor.rs) for bounding spheres (centre, radius) given in
-/// the range frame, `name(i)` naming sphere i's model in errors. The plan is refused where the
-/// GPU's f32 arithmetic would not hold it: its grids, each model's reach, and the effects that
-/// change z over its depth range (gpu_arithmetic.rs).
-///
-/// Only what a view can show sizes it: an object whose footprint misses the range image
-/// cannot put a point into it, so it neither widens the range view's depth range nor the
-/// shadow view's columns (which cover every point the range view can see); and one whose
-/// footprint misses the shadow grid cannot shadow any of those points, so it leaves the
-/// shadow view's depth range alone. Such objects are still drawn, and clipped. A box far away
-/// in depth beside the image therefore no longer makes the shadow view impossibly wide.
-pub(crate) fn plan_views(
-    sensor: &Sensor,
-    shadow: &ShadowSettings,
-    effects: &Effects,
-    spheres: &[(DVec3, f64)],
-    name: &dyn Fn(usize) -> String,
-    max_side: u32,
-) -> Result<Views> {
-    let full_range = sensor.range_grid((0.0, 0.0));
-    let seen = |grid: &ViewGrid, (centre, radius): (DVec3, f64)| grid.footprint(centre, radius, 1).is_some();
-    let z_range = depth_bounds(spheres.iter().copied().filter(|&s| seen(&full_range, s)));
-    let range = sensor.range_grid(z_range);
-    let origin = range.local_origin();
-    if !origin.is_finite() {
-        return Err(Error::Scene(format!(
-            "the scene's depth range ({} to {}) is not finite: an object is posed too far away",
-            z_range.0, z_range.1
-        )));
-    }
-    let shadow_grid = match shadow.mode.needs_shadow_pass(sensor.theta_deg) {
-        false => None,
-        true => {
-            let to_shadow = sensor.to_shadow_frame();
-            let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
-            let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z, shadow.columns)?;
-            let shadow_z = depth_bounds(in_shadow_frame.filter(|&s| seen(&columns, s)));
-            Some(ViewGrid { z_range: shadow_z, ..columns })
-        }
-    };
-    for grid in std::iter::once(&range).chain(shadow_grid.as_ref()) {
-        if grid.width > max_side || grid.height > max_side {
-            return Err(Error::Scene(format!(
-                "a {}×{} view exceeds this device's limit of {max_side} pixels per side (its largest image and viewport)",
-                grid.width, grid.height
-            )));
-        }
-    }
-    let views = Views { origin, range, shadow: shadow_grid };
-    let to_shadow = sensor.to_shadow_frame();
-    let shadow_view = views.shadow.as_ref().map(|grid| (grid, to_shadow.transform_point3(origin)));
-    gpu_arithmetic::check_grid(&views.range, "range", origin)?;
-    if let Some((grid, local)) = shadow_view {
-        gpu_arithmetic::check_grid(grid, "shadow", local)?;
-    }
-    for (i, &(centre, radius)) in spheres.iter().enumerate() {
-        let in_range = (centre, radius);
-        let seen_in_range = seen(&views.range, in_range);
-        gpu_arithmetic::check_reach(&views.range, "range", origin, in_range, seen_in_range, &name(i))?;
-        if let Some((grid, local)) = shadow_view {
-            let in_shadow = (to_shadow.transform_point3(centre), radius);
-            gpu_arithmetic::check_reach(grid, "shadow", local, in_shadow, seen(grid, in_shadow), &name(i))?;
-        }
-    }
-    gpu_arithmetic::check_effects(effects, &views)?;
-    Ok(views)
 }
 
 /// Triangles a queue of large triangles has room for, in each view, for `draws` draws of up to
@@ -180,29 +113,6 @@ fn default_hypotheses_per_dispatch(ctx: &GpuContext) -> usize {
         1
     } else {
         COVERAGE_MEMBERS
-    }
-}
-
-/// The two views of one render, with the grids they were rendered on.
-pub(crate) struct Views {
-    /// The local origin both views measure from (range frame; `ViewGrid::local_origin`).
-    pub origin: DVec3,
-    pub range: ViewGrid,
-    /// `None` when no shadow pass is recorded (mode `none` or θ = 0).
-    pub shadow: Option<ViewGrid>,
-}
-
-impl Views {
-    /// 1, or 2 with a shadow view.
-    pub fn count(&self) -> u64 {
-        1 + u64::from(self.shadow.is_some())
-    }
-
-    /// How far, in pixels, a bounding sphere (centre in the range frame) reaches from the first
-    /// pixel of either view (`ViewGrid::reach`): what the compute rasterizer's choice reads.
-    pub fn reach(&self, sensor: &Sensor, (centre, radius): (DVec3, f64)) -> f64 {
-        let shadow = self.shadow.map_or(0.0, |g| g.reach(sensor.to_shadow_frame().transform_point3(centre), radius));
-        self.range.reach(centre, radius).max(shadow)
     }
 }
 
@@ -270,11 +180,16 @@ impl Renderer {
             && queue_fits
             && reach_pixels <= MAX_REACH_PIXELS
             && self.raster.computes(
-                (self.ctx.supports_compute_raster(), self.crossover()),
+                (self.supports_compute_raster(), self.crossover()),
                 draws,
                 triangles,
                 footprint_pixels,
             )
+    }
+
+    /// Whether this renderer's device can run the compute rasterizer (compute_raster.rs).
+    pub fn supports_compute_raster(&self) -> bool {
+        compute_raster::device_supports(&self.ctx)
     }
 
     /// Where `auto` takes the compute rasterizer on this renderer's device.
@@ -304,7 +219,7 @@ impl Renderer {
         match self.raster {
             Raster::Graphics => false,
             Raster::Compute => true,
-            Raster::Auto => self.ctx.supports_compute_raster(),
+            Raster::Auto => self.supports_compute_raster(),
         }
     }
 

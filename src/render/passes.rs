@@ -15,14 +15,14 @@
 //! stage's steps side by side behind one barrier ([`Passes::record_run`]).
 
 use super::compute_raster::{ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember};
-use super::draw::{record_view, Draw, DrawConstants, ViewPass};
+use super::draw::{record_view, Draw, DrawTable, ViewPass};
 use super::effect_pass::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use super::host_view::HostView;
 use super::pipelines::Pipelines;
+use super::plan::Views;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
 use super::targets::{ViewKind, ViewTargets};
-use super::Views;
 use crate::effects::{Effect, Effects, EFFECT_ORDER};
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
@@ -32,9 +32,6 @@ use crate::shadow::{ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
-
-/// Most slots one batch may keep (src/verify/batch.rs, `default_slots`).
-pub const MAX_SLOTS: usize = 64;
 
 /// The render targets and bindings one job renders into; a batch reuses a few in turn.
 pub(crate) struct Slot<'a> {
@@ -129,7 +126,8 @@ impl<'a> Slot<'a> {
             (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
-                let bindings = MaskBindings::new(ctx, p, &range, &shadow, &masked, &draw_table.buffer, words.as_ref())?;
+                let bindings =
+                    MaskBindings::new(ctx, &p.mask, &range, &shadow, &masked, &draw_table.buffer, words.as_ref())?;
                 (Some(shadow), Some(masked), Some(bindings))
             }
             _ => (None, None, None),
@@ -567,54 +565,5 @@ impl<'p> Passes<'p> {
             }
         }
         steps
-    }
-}
-
-/// A view's draw table: for each group of draws seen on planned views, in order, each draw's
-/// constants in that view, numbered consecutively from 0 (a job's `first_draw_index` is the
-/// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
-/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer's passes read
-/// both, its coverage passes from a uniform block the host writes with their entries (one
-/// command a coverage dispatch, not a copy a view: compute_raster.rs), so the entries are kept
-/// on the host too.
-pub(crate) struct DrawTable {
-    pub buffer: Buffer,
-    pub entries: Vec<DrawConstants>,
-}
-
-/// A view's [`DrawTable`]; `None` for the shadow view where there is none (mode `none` or
-/// θ = 0, which every job of a submission shares).
-pub(crate) fn draw_table<'a>(
-    ctx: &Arc<GpuContext>,
-    kind: ViewKind,
-    sensor: &Sensor,
-    groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
-) -> Result<Option<DrawTable>> {
-    let view_from_range = match kind {
-        ViewKind::Range => DMat4::IDENTITY,
-        ViewKind::Shadow => sensor.to_shadow_frame(),
-    };
-    let half_side = ctx.viewport_half_side();
-    let mut entries = Vec::new();
-    for (views, draws) in groups {
-        let grid = match kind {
-            ViewKind::Range => &views.range,
-            ViewKind::Shadow => match &views.shadow {
-                Some(grid) => grid,
-                None => return Ok(None),
-            },
-        };
-        for draw in draws {
-            let index = entries.len() as u32;
-            entries.push(DrawConstants::new(grid, view_from_range, views.origin, draw, index, half_side));
-        }
-    }
-    let name = format!("{kind:?} view draw table");
-    match entries.is_empty() {
-        true => Ok(None),
-        false => {
-            let buffer = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, &name)?;
-            Ok(Some(DrawTable { buffer, entries }))
-        }
     }
 }

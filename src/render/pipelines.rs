@@ -3,31 +3,17 @@
 //! the shadow-mask compute pipelines; and the effect and compute-raster pipelines, built the
 //! first time a call needs them.
 
-use super::compute_raster::ComputeRasterPipelines;
-use super::draw::DrawConstants;
+use super::built_once::built_once;
+use super::compute_raster::{self, ComputeRasterPipelines};
+use super::draw::{DrawConstants, ViewPipelines};
 use super::effect_pass::EffectPipelines;
 use super::shadow_pass::{MaskPipelines, MaskVariant};
-use super::targets::ViewKind;
+use super::targets::{check_formats, ViewKind};
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{GpuContext, DEPTH_FORMAT};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
-
-pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
-pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
-/// The shadow view's visibility buffer: label, draw index, triangle (and a spare word).
-pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
-
-/// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
-/// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
-/// objects go to the lower label whatever the order of the draws (see [`Depth`]).
-#[derive(Default)]
-pub struct ViewPipelines {
-    pub nearest: vk::Pipeline,
-    pub depth_only: vk::Pipeline,
-    pub ties: vk::Pipeline,
-}
 
 pub struct Pipelines {
     ctx: Arc<GpuContext>,
@@ -85,16 +71,6 @@ impl Pipelines {
     }
 }
 
-/// What `cell` holds, built by `build` on first use. Two threads may both build it; the one
-/// that comes second drops its own (std's fallible `get_or_try_init` is not stable).
-pub(super) fn built_once<T>(cell: &OnceLock<T>, build: impl FnOnce() -> Result<T>) -> Result<&T> {
-    if let Some(built) = cell.get() {
-        return Ok(built);
-    }
-    let built = build()?;
-    Ok(cell.get_or_init(|| built))
-}
-
 impl Pipelines {
     /// The effect pipelines, built on first use: a renderer that never meets an effect never
     /// compiles them.
@@ -106,7 +82,7 @@ impl Pipelines {
     /// 64-bit buffer atomics.
     pub fn compute_raster(&self) -> Result<&ComputeRasterPipelines> {
         built_once(&self.compute_raster, || {
-            if !self.ctx.supports_compute_raster() {
+            if !compute_raster::device_supports(&self.ctx) {
                 return Err(Error::Unsupported(format!(
                     "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \
                      use the graphics rasterizer",
@@ -219,28 +195,4 @@ fn raster_pipeline(
         .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))?;
     ctx.name_object(pipeline, name);
     Ok(pipeline)
-}
-
-/// The attachment formats are near-universal, but a device that lacks one gets a clear error
-/// instead of a validation failure later.
-fn check_formats(ctx: &GpuContext) -> Result<()> {
-    use vk::FormatFeatureFlags as F;
-    let needs = [
-        (LABEL_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_UINT colour attachment and storage image"),
-        (VALUE_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_SFLOAT colour attachment and storage image"),
-        (
-            VISIBILITY_FORMAT,
-            F::COLOR_ATTACHMENT | F::STORAGE_IMAGE,
-            "R32G32B32A32_UINT colour attachment and storage image",
-        ),
-        (DEPTH_FORMAT, F::DEPTH_STENCIL_ATTACHMENT, "D32_SFLOAT depth attachment"),
-    ];
-    for (format, features, what) in needs {
-        // SAFETY: valid physical device of a live instance.
-        let props = unsafe { ctx.instance().get_physical_device_format_properties(ctx.physical_device, format) };
-        if !props.optimal_tiling_features.contains(features) {
-            return Err(Error::Unsupported(what.into()));
-        }
-    }
-    Ok(())
 }

@@ -13,9 +13,8 @@
 //! ([`MaskVariant::WordsForScoring`]): 3% of the dense sphere's verification at 256², 9% of
 //! the box's.
 
-use super::pipelines::Pipelines;
+use super::plan::Views;
 use super::targets::{ViewKind, ViewTargets};
-use super::Views;
 use crate::error::Result;
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
@@ -169,7 +168,7 @@ impl MaskBindings {
     /// at the draw indices it recorded.
     pub fn new(
         ctx: &Arc<GpuContext>,
-        pipelines: &Pipelines,
+        pipelines: &MaskPipelines,
         range: &ViewTargets,
         shadow: &ViewTargets,
         masked: &Buffer,
@@ -182,7 +181,7 @@ impl MaskBindings {
             Some(w) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words],
             None => [masked, draw_table, draw_table, draw_table, draw_table],
         };
-        let set_layout = pipelines.mask.for_test(ShadowTest::Label).set_layout;
+        let set_layout = pipelines.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, (&[], &buffers), "shadow mask bindings")? })
     }
 

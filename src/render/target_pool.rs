@@ -4,12 +4,17 @@
 //! keeps those of the latest calls, at most [`KEPT`], so the memory it holds stays bounded
 //! by what recent calls used.
 
-use super::passes::MAX_SLOTS;
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::GpuContext;
-use crate::verify::MAX_CHUNKS_IN_FLIGHT;
 use std::sync::{Arc, Mutex};
+
+/// Most slots one batch may keep (src/verify/batch.rs, `default_slots`).
+pub const MAX_SLOTS: usize = 64;
+
+/// Most chunks a verification keeps in flight at once (src/verify/lanes.rs): each holds its
+/// batch's slots.
+pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
 
 /// Views' targets the pool keeps when no call uses them: those of a verification's most chunks
 /// in flight (src/verify/lanes.rs), each of the most slots a batch may keep, each slot with a

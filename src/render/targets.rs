@@ -8,11 +8,15 @@
 //!   intersect the camera ray with it exactly. One attachment, so the mask reads a pixel's
 //!   three words with one image load (it reads nine pixels per point).
 
-use super::pipelines::{LABEL_FORMAT, VALUE_FORMAT, VISIBILITY_FORMAT};
-use crate::error::Result;
-use crate::gpu::{GpuContext, Image, ImageDesc};
+use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, Image, ImageDesc, DEPTH_FORMAT};
 use ash::vk;
 use std::sync::Arc;
+
+pub const LABEL_FORMAT: vk::Format = vk::Format::R32_UINT;
+pub const VALUE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+/// The shadow view's visibility buffer: label, draw index, triangle (and a spare word).
+pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
 /// Which of the two views; fixes its colour attachments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,4 +76,28 @@ impl ViewTargets {
     pub fn z(&self) -> &Image {
         &self.colour[1]
     }
+}
+
+/// The attachment formats are near-universal, but a device that lacks one gets a clear error
+/// instead of a validation failure later.
+pub(super) fn check_formats(ctx: &GpuContext) -> Result<()> {
+    use vk::FormatFeatureFlags as F;
+    let needs = [
+        (LABEL_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_UINT colour attachment and storage image"),
+        (VALUE_FORMAT, F::COLOR_ATTACHMENT | F::STORAGE_IMAGE, "R32_SFLOAT colour attachment and storage image"),
+        (
+            VISIBILITY_FORMAT,
+            F::COLOR_ATTACHMENT | F::STORAGE_IMAGE,
+            "R32G32B32A32_UINT colour attachment and storage image",
+        ),
+        (DEPTH_FORMAT, F::DEPTH_STENCIL_ATTACHMENT, "D32_SFLOAT depth attachment"),
+    ];
+    for (format, features, what) in needs {
+        // SAFETY: valid physical device of a live instance.
+        let props = unsafe { ctx.instance().get_physical_device_format_properties(ctx.physical_device, format) };
+        if !props.optimal_tiling_features.contains(features) {
+            return Err(Error::Unsupported(what.into()));
+        }
+    }
+    Ok(())
 }

@@ -15,8 +15,9 @@ use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Condvar, Mutex};
 
-/// Most chunks a verification may keep in flight (`Verifier::with_chunks_in_flight`).
-pub const MAX_CHUNKS_IN_FLIGHT: usize = 4;
+/// Most chunks a verification may keep in flight (`Verifier::with_chunks_in_flight`): the
+/// render target pool keeps their slots' targets (src/render/target_pool.rs).
+pub use crate::render::MAX_CHUNKS_IN_FLIGHT;
 
 /// Chunks a verification keeps in flight unless the caller says otherwise
 /// (`Verifier::with_chunks_in_flight`): 3 on a GPU; 1 on a CPU device such as lavapipe, whose

@@ -1,10 +1,15 @@
-//! The files a render writes into its output directory (DESIGN.md "Interfaces").
+//! The files a render writes into its output directory (DESIGN.md "Interfaces"), as one set:
+//! the range image, the labels before shadowing, the previews and `labels.json` (labels.rs).
+//! It sits above `io` (the formats) and `scene` (what the labels stand for).
 
-use super::{
-    write_label_image, write_label_map, write_label_preview, write_range_image, write_range_preview, RangeImage,
-    StagedSet,
-};
+mod labels;
+
+pub use labels::{label_map, write_label_map, LabelEntry};
+
 use crate::error::Result;
+use crate::io::{
+    write_label_image, write_label_preview, write_range_image, write_range_preview, RangeImage, StagedSet,
+};
 use crate::render_output::RenderOutput;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};

@@ -2,8 +2,8 @@
 //! streamed, one entry at a time, to its temporary file: a scene of 100,000 objects would
 //! otherwise hold its whole text in memory.
 
-use super::write_atomically;
 use crate::error::{Error, Result};
+use crate::io::write_atomically;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize, Serializer};
 use std::io::{BufWriter, Write};
