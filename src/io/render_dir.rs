@@ -1,4 +1,4 @@
-//! The files a render writes into its output directory (DESIGN.md "Interfaces").
+//! The files a render writes into its output directory (docs/design.md "Interfaces").
 
 use super::{
     write_label_image, write_label_map, write_label_preview, write_range_image, write_range_preview, RangeImage,
