@@ -1,5 +1,5 @@
 #version 460
-// Triangulation shadow test (paper Fig. 4; DESIGN.md "The shadow test"; src/shadow.rs).
+// Triangulation shadow test (paper Fig. 4; docs/design.md "The shadow test"; src/shadow.rs).
 // One invocation per range pixel: move its point into the shadow frame with R_y(-theta),
 // find the nearest shadow-buffer pixel and keep or drop the label.
 //

@@ -1,4 +1,4 @@
-//! Sensor effects beyond the shadow (DESIGN.md "Sensor effects"): the scene's `[effects]`
+//! Sensor effects beyond the shadow (docs/design.md "Sensor effects"): the scene's `[effects]`
 //! table, or a hypothesis file's `"effects"` object, names them, and only the named ones are
 //! recorded as passes (src/render/effect_pass.rs, shaders/effect_*.comp).
 //!

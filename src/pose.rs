@@ -1,5 +1,5 @@
 //! Rigid poses (model → range frame), given as row-major 4×4 matrices in files and kept in
-//! f64 on the host (DESIGN.md "Coordinates"). A pose that is not rigid would silently scale
+//! f64 on the host (docs/design.md "Coordinates"). A pose that is not rigid would silently scale
 //! or shear the model, and a mirroring one would turn its solids inside out for culling
 //! (src/mesh/solid.rs), so either is refused: when read from a file, and again where the
 //! library takes a pose (`Renderer::render`, `Verifier::verify`).

@@ -1,4 +1,4 @@
-//! Which rasterizer renders a view (DESIGN.md "Raster paths"): the graphics pipeline, the
+//! Which rasterizer renders a view (docs/design.md "Raster paths"): the graphics pipeline, the
 //! compute rasterizer (src/render/compute_raster.rs), or `auto`, which picks per view from the
 //! [`Crossover`] measured for the device's kind. Kept apart from the rasterizer itself because
 //! the CLI, the library's settings and the summaries all name the choice, and the rule rests on

@@ -1,5 +1,5 @@
 //! Scenes: a sensor, a shadow setting, the sensor effects (src/effects.rs) and posed models,
-//! read from the TOML of DESIGN.md "Interfaces". Labels are numbered across objects in file order: object k's surface s has
+//! read from the TOML of docs/design.md "Interfaces". Labels are numbered across objects in file order: object k's surface s has
 //! label `label_base(k) + s`.
 
 use crate::effects::Effects;

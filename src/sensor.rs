@@ -1,4 +1,4 @@
-//! Sensor geometry: the orthographic range image of DESIGN.md and the shadow view derived
+//! Sensor geometry: the orthographic range image of docs/design.md and the shadow view derived
 //! from it. Pure f64 functions, so the conventions are testable without a GPU.
 //!
 //! Range frame: the sensor looks down −z (larger z is closer); pixel (col c, row r) has its

@@ -1,4 +1,4 @@
-//! How a range pixel is decided to be in triangulation shadow (DESIGN.md "The shadow test").
+//! How a range pixel is decided to be in triangulation shadow (docs/design.md "The shadow test").
 //!
 //! - `label`: the paper's Fig. 4. The pixel's point p is moved into the shadow frame,
 //!   p' = R_y(−θ)·p, and the label at the nearest shadow-buffer pixel is compared with the

@@ -1,5 +1,5 @@
 //! The six scores on tiny hand-made inputs, each expected value worked out by hand from
-//! DESIGN.md "Verification scores". CPU only: counts are given directly.
+//! docs/design.md "Verification scores". CPU only: counts are given directly.
 
 use rangesynth::io::RangeImage;
 use rangesynth::sensor::{Sensor, SensorKind};

@@ -1,4 +1,4 @@
-//! OpenEXR files (DESIGN.md "Interfaces"): `range.exr` has one layer with channels X, Y, Z
+//! OpenEXR files (docs/design.md "Interfaces"): `range.exr` has one layer with channels X, Y, Z
 //! (f32, NaN where there is no data), `label` (u32, exact for every value) and `reason` (u32,
 //! why a pixel has no data: src/effects.rs `Reason`); the sensor, shadow and effects settings
 //! go into the layer header as TOML text attributes, so `verify` can take them from the

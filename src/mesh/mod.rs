@@ -2,7 +2,7 @@
 //!
 //! The verifier binds scene segments to model surfaces (a planar face or a whole curved
 //! patch), never to triangles, so a mesh carries a surface id per triangle
-//! (DESIGN.md "Surfaces and labels"). Surface ids run from 1; 0 is "no data" everywhere.
+//! (docs/design.md "Surfaces and labels"). Surface ids run from 1; 0 is "no data" everywhere.
 //!
 //! Every constructor goes through [`Mesh::new`], which is the one place that rejects what
 //! cannot be rendered (non-finite coordinates, indices out of range, no triangles) and drops

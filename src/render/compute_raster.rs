@@ -1,4 +1,4 @@
-//! The compute rasterizer (DESIGN.md "Raster paths"): a job's views rendered by compute passes
+//! The compute rasterizer (docs/design.md "Raster paths"): a job's views rendered by compute passes
 //! instead of the graphics pipeline, into the same attachments, so every pass after it is
 //! unchanged.
 //!

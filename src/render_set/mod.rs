@@ -1,4 +1,4 @@
-//! The files a render writes into its output directory (DESIGN.md "Interfaces"), as one set:
+//! The files a render writes into its output directory (docs/design.md "Interfaces"), as one set:
 //! the range image, the labels before shadowing, the previews and `labels.json` (labels.rs).
 //! It sits above `io` (the formats) and `scene` (what the labels stand for).
 

@@ -1,4 +1,4 @@
-//! The hypothesis file (DESIGN.md "Interfaces"): a depth tolerance, optional sensor, shadow and
+//! The hypothesis file (docs/design.md "Interfaces"): a depth tolerance, optional sensor, shadow and
 //! effects settings (src/effects.rs), and hypotheses, each a model, a pose and bindings (scene label, model surface).
 
 use crate::effects::Effects;

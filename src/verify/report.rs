@@ -1,5 +1,5 @@
 //! One line of `verify`'s JSON-lines output: a hypothesis' scores with the counts they came
-//! from (DESIGN.md "Interfaces").
+//! from (docs/design.md "Interfaces").
 
 use super::{Counts, Scores, SensedImage, Verification};
 use serde::Serialize;

@@ -1,4 +1,4 @@
-//! The paper's six scores (§4) from exact counts, in f64, with the decisions of DESIGN.md
+//! The paper's six scores (§4) from exact counts, in f64, with the decisions of docs/design.md
 //! "Verification scores": s4's middle case is 1/r, s5 follows the formula as printed, s2 is a
 //! sum of logs. Every score is defined for every input (never NaN), with a reason wherever
 //! a rule forces it to zero.

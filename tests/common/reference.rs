@@ -1,4 +1,4 @@
-//! Independent CPU reference: exact f64 ray casting at pixel centres (DESIGN.md "Testing
+//! Independent CPU reference: exact f64 ray casting at pixel centres (docs/design.md "Testing
 //! stance"). Shares nothing with the GPU path but the scene description.
 //!
 //! The primary ray at a pixel centre travels down −z; the first hit is the triangle with

@@ -1,6 +1,6 @@
 //! Independent CPU scorer: counts and scores straight from the sensed and synthetic images,
-//! written from DESIGN.md "Verification scores" without the library's verify module. Area
-//! units follow the arithmetic DESIGN.md and src/verify/area.rs specify (f32, fixed order),
+//! written from docs/design.md "Verification scores" without the library's verify module. Area
+//! units follow the arithmetic docs/design.md and src/verify/area.rs specify (f32, fixed order),
 //! re-typed here, so the counts can be compared exactly.
 #![allow(clippy::needless_range_loop)]
 
