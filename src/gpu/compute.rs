@@ -20,15 +20,16 @@ pub struct ComputePipeline {
 impl ComputePipeline {
     /// A compute pipeline whose set 0 binds the resources of `shape`, from binding 0 (compute
     /// stage; the order a [`StorageSet`](super::StorageSet) writes them in), whose push
-    /// constants are `push_size` bytes, and whose u32 specialization constants
-    /// `constant_id = 0, 1, …` take the values of `constants`: codes the host defines once
-    /// (such as the shadow tests) reach the shader from that one definition.
+    /// constants are `push_size` bytes, and whose specialization constants take the values of
+    /// `constants`, (constant_id, 32-bit value) pairs, the ids as reflection found them in the
+    /// shader (`shaders::layout::spec`): codes the host defines once (such as the shadow tests)
+    /// reach the shader from that one definition, by name.
     pub fn new(
         ctx: &Arc<GpuContext>,
         shape: SetShape,
         push_size: usize,
         spirv: &[u8],
-        constants: &[u32],
+        constants: &[(u32, u32)],
         name: &str,
     ) -> Result<Self> {
         let d = &ctx.device;
@@ -69,11 +70,13 @@ impl ComputePipeline {
             }
         };
         let made = ShaderModule::new(ctx, spirv, name).and_then(|module| {
-            let entries: Vec<_> = (0..constants.len() as u32)
-                .map(|id| vk::SpecializationMapEntry { constant_id: id, offset: 4 * id, size: 4 })
+            let entries: Vec<_> = (0..)
+                .zip(constants)
+                .map(|(i, &(constant_id, _))| vk::SpecializationMapEntry { constant_id, offset: 4 * i, size: 4 })
                 .collect();
+            let values: Vec<u32> = constants.iter().map(|&(_, value)| value).collect();
             let specialization =
-                vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(constants));
+                vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&values));
             let stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module.raw)

@@ -1,33 +1,68 @@
-//! SPIR-V compiled by `build.rs` from `shaders/`, embedded in the binary.
+//! SPIR-V compiled by `build.rs` from `shaders/` (its list is the one list of shaders),
+//! embedded in the binary, and the shaders' side of the Rust↔GLSL contract as reflection
+//! found it.
 //! `include_bytes!` is not 4-byte aligned, so words are decoded with `ash::util::read_spv`.
 
 use super::GpuContext;
 use crate::error::{Error, Result, VkResultExt};
 use ash::vk;
 
-pub const RASTER_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.vert.spv"));
-pub const RASTER_RANGE_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_range.frag.spv"));
-pub const RASTER_RANGE_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_range_ties.frag.spv"));
-pub const RASTER_SHADOW_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow.frag.spv"));
-pub const RASTER_SHADOW_TIES_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_shadow_ties.frag.spv"));
-pub const RASTER_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster.comp.spv"));
-pub const RASTER_LARGE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large.comp.spv"));
-pub const RASTER_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_ties.comp.spv"));
-pub const RASTER_LARGE_TIES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_large_ties.comp.spv"));
-pub const RASTER_RESOLVE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve.comp.spv"));
-pub const RASTER_RESOLVE_SHADOW_COMP: &[u8] =
-    include_bytes!(concat!(env!("OUT_DIR"), "/raster_resolve_shadow.comp.spv"));
-pub const SHADOW_MASK_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask.comp.spv"));
-pub const SHADOW_MASK_WORDS_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/shadow_mask_words.comp.spv"));
-pub const SCORE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/score.comp.spv"));
-pub const EFFECT_GRAZING_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_grazing.comp.spv"));
-pub const EFFECT_WORKING_VOLUME_COMP: &[u8] =
-    include_bytes!(concat!(env!("OUT_DIR"), "/effect_working_volume.comp.spv"));
-pub const EFFECT_REFLECTIVITY_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_reflectivity.comp.spv"));
-pub const EFFECT_EDGES_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_edges.comp.spv"));
-pub const EFFECT_DROPOUT_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_dropout.comp.spv"));
-pub const EFFECT_NOISE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_noise.comp.spv"));
-pub const EFFECT_QUANTIZE_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/effect_quantize.comp.spv"));
+include!(concat!(env!("OUT_DIR"), "/shader_list.rs"));
+
+/// What build.rs read back from the compiled shaders: `structs::NAME` (each member's offset
+/// by name, `MEMBERS`, `SIZE`), and per shader `spec::SHADER` and `bindings::SHADER` (ids by
+/// name). The Rust side of each contract is asserted against it ([`matches_shader_struct`]).
+pub mod layout {
+    include!(concat!(env!("OUT_DIR"), "/shader_layout.rs"));
+}
+
+/// Asserts at compile time that the Rust struct `$rust` holds the fields listed where the
+/// shaders' struct `$glsl` (build.rs's reflection) has the members of the same names, that
+/// the list names every member, and that both take the same size (to a 16-byte multiple:
+/// padding may differ at the end). Reordering, renaming, adding or retyping a field on either
+/// side fails the build.
+macro_rules! matches_shader_struct {
+    ($rust:ty, $glsl:ident { $($field:ident),* $(,)? }) => {
+        const _: () = {
+            use $crate::gpu::shaders::layout::structs::$glsl as glsl;
+            $(assert!(
+                std::mem::offset_of!($rust, $field) == glsl::$field,
+                concat!(stringify!($rust), "::", stringify!($field), " is not where the shaders' ", stringify!($glsl), " has it")
+            );)*
+            assert!(
+                [$(stringify!($field)),*].len() == glsl::MEMBERS,
+                concat!(stringify!($rust), " lists fewer members than the shaders' ", stringify!($glsl), " has")
+            );
+            assert!(
+                size_of::<$rust>().next_multiple_of(16) == glsl::SIZE.next_multiple_of(16),
+                concat!(stringify!($rust), " and the shaders' ", stringify!($glsl), " differ in size")
+            );
+        };
+    };
+}
+pub(crate) use matches_shader_struct;
+
+/// Asserts at compile time that each shader binds, from binding 0 on, the resources named,
+/// in that order, and no others: the order the Rust side hands its resources to a
+/// [`StorageSet`](super::StorageSet) in, checked against the shaders' bindings (build.rs's
+/// reflection; a block with no instance name is known by its type's name).
+macro_rules! matches_shader_bindings {
+    ([$($shader:ident),+ $(,)?] $resources:tt) => {
+        $($crate::gpu::shaders::matches_shader_bindings!($shader $resources);)+
+    };
+    ($shader:ident { $($resource:ident),* $(,)? }) => {
+        const _: () = {
+            use $crate::gpu::shaders::layout::bindings::$shader as bound;
+            let mut binding = 0;
+            $(
+                assert!(bound::$resource == binding, concat!(stringify!($shader), " binds ", stringify!($resource), " elsewhere"));
+                binding += 1;
+            )*
+            assert!(bound::BINDINGS == binding, concat!(stringify!($shader), " binds other resources too"));
+        };
+    };
+}
+pub(crate) use matches_shader_bindings;
 
 /// A shader module that lives only as long as pipeline creation needs it.
 pub struct ShaderModule<'a> {

@@ -62,6 +62,7 @@ use super::draw::{Draw, DrawConstants, DrawTable};
 use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
+use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
 use crate::sensor::PixelRect;
@@ -98,13 +99,8 @@ struct MemberConstants {
     _pad: [u32; 3],
 }
 
-const _: () = assert!(size_of::<RasterView>() == 32);
-const _: () = assert!(std::mem::offset_of!(MemberConstants, triangles) == 64);
-const _: () = assert!(std::mem::offset_of!(MemberConstants, cull) == 68);
-const _: () = assert!(std::mem::offset_of!(MemberConstants, dealt_rows) == 72);
-const _: () = assert!(std::mem::offset_of!(MemberConstants, place) == 76);
-const _: () = assert!(std::mem::offset_of!(MemberConstants, z_keys) == 80);
-const _: () = assert!(size_of::<MemberConstants>() == 96);
+matches_shader_struct!(RasterView, RasterView { area, draw, stride });
+matches_shader_struct!(MemberConstants, Member { views, triangles, cull, dealt_rows, place, z_keys });
 
 /// The coverage passes' uniform block; matches `Coverage` in shaders/raster.comp (std140: the
 /// same offsets, as DrawData and Member keep them and their sizes are multiples of 16). Each
@@ -117,9 +113,7 @@ struct CoverageUniforms {
     members: [MemberConstants; COVERAGE_MEMBERS],
 }
 
-const _: () = assert!(size_of::<DrawConstants>().is_multiple_of(16) && size_of::<MemberConstants>().is_multiple_of(16));
-const _: () = assert!(std::mem::offset_of!(CoverageUniforms, members) == 1024);
-const _: () = assert!(size_of::<CoverageUniforms>() == 1408);
+matches_shader_struct!(CoverageUniforms, Coverage { draws, members });
 
 /// `cull` of the coverage pass: which triangles it skips, by the sign of their view-frame
 /// normal's z (the camera looks along −z). Only a solid's are skipped (src/mesh/solid.rs).
@@ -287,7 +281,15 @@ fn covering(
     let shape = SetShape { images: 0, uniform_buffers: 1, storage_buffers: COVERAGE_STORAGE_BUFFERS };
     // The shader's specialization constants: MAX_GROUPS, the views it covers, how it deals its
     // workgroups, whether a dispatch covers one job or up to COVERAGE_MEMBERS, and TILES.
-    let constants = [MAX_GROUPS, views, DEAL_BLOCK, DEAL_STRIPES, members, u32::from(tiles)];
+    use shaders::layout::spec::RASTER_COMP as spec;
+    let constants = [
+        (spec::MAX_GROUPS, MAX_GROUPS),
+        (spec::VIEW_COUNT, views),
+        (spec::DEAL_BLOCK, DEAL_BLOCK),
+        (spec::DEAL_STRIPES, DEAL_STRIPES),
+        (spec::MEMBERS, members),
+        (spec::TILES, u32::from(tiles)),
+    ];
     let dispatch = match (kind, members) {
         (Coverage::Ties, _) => "ties",
         (Coverage::Nearest, 1) => "one job",
@@ -319,7 +321,8 @@ impl ComputeRasterPipelines {
         // A view's attachments, its table and its words; whether the words hold several draws.
         let resolve = |kind: ViewKind, code, several: bool, name: &str| {
             let shape = SetShape::storage(kind.colour_attachments().len(), 2);
-            ComputePipeline::new(ctx, shape, size_of::<RasterView>(), code, &[u32::from(several)], name)
+            let several = (shaders::layout::spec::RASTER_RESOLVE_COMP::SEVERAL_DRAWS, u32::from(several));
+            ComputePipeline::new(ctx, shape, size_of::<RasterView>(), code, &[several], name)
         };
         Ok(Self {
             ctx: ctx.clone(),
@@ -405,6 +408,8 @@ impl<'a> ComputeViews<'a> {
                 Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {kind:?} view visibility words"))?;
             Ok(ViewWords { nearest, stride: width, draw_table: view.draw_table })
         };
+        matches_shader_bindings!([RASTER_RESOLVE_COMP] { label, z, dz_dx, dz_dy, DrawTable, Nearest });
+        matches_shader_bindings!([RASTER_RESOLVE_SHADOW_COMP] { visibility, DrawTable, Nearest });
         let resolve_set = |pipeline: &ComputePipeline, targets: &ViewTargets, words: &ViewWords, kind: ViewKind| {
             let images: Vec<&Image> = targets.colour.iter().collect();
             let buffers = [&words.draw_table.buffer, &words.nearest];
@@ -752,6 +757,19 @@ impl CoverageRun {
                 _ => &views.range.nearest,
             }
         };
+        matches_shader_bindings!([RASTER_COMP, RASTER_LARGE_COMP, RASTER_TIES_COMP, RASTER_LARGE_TIES_COMP] {
+            Coverage,
+            range_words0,
+            range_words1,
+            range_words2,
+            range_words3,
+            shadow_words0,
+            shadow_words1,
+            shadow_words2,
+            shadow_words3,
+            Large,
+            LargeArgs,
+        });
         let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
         buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
         buffers.extend([&large, &large_args]);

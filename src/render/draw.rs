@@ -6,6 +6,7 @@ use super::gpu_mesh::GpuMesh;
 use super::plan::Views;
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
+use crate::gpu::shaders::matches_shader_struct;
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::Solidity;
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
@@ -33,20 +34,27 @@ pub struct DrawConstants {
     links: [u32; 2],
 }
 
-// The struct's std430 size; also the push-constant size every Vulkan device supports.
+// Laid out as `DrawData` in every shader (build.rs checks that the std140 uniform block and
+// the std430 push constants and buffers agree); 128 bytes, the push-constant size every
+// Vulkan device supports.
+matches_shader_struct!(
+    DrawConstants,
+    DrawData {
+        view_from_model,
+        grid,
+        size,
+        z_range,
+        triangles,
+        viewport_half_side,
+        viewport_inverse_half_side,
+        surface_ids,
+        viewport_centre,
+        label_base,
+        draw_index,
+        links,
+    }
+);
 const _: () = assert!(size_of::<DrawConstants>() == 128);
-// Each member where std140 puts it as well (the coverage passes read DrawData as a uniform
-// block): a vec4 array's stride is 16 either way, and a vec2 or uvec2 aligns to 8.
-const _: () = {
-    use std::mem::offset_of;
-    assert!(offset_of!(DrawConstants, grid) == 48 && offset_of!(DrawConstants, size) == 64);
-    assert!(offset_of!(DrawConstants, z_range) == 72 && offset_of!(DrawConstants, triangles) == 80);
-    assert!(offset_of!(DrawConstants, viewport_half_side) == 88);
-    assert!(offset_of!(DrawConstants, viewport_inverse_half_side) == 92);
-    assert!(offset_of!(DrawConstants, viewport_centre) == 104);
-    assert!(offset_of!(DrawConstants, surface_ids) == 96 && offset_of!(DrawConstants, label_base) == 112);
-    assert!(offset_of!(DrawConstants, draw_index) == 116 && offset_of!(DrawConstants, links) == 120);
-};
 
 /// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
 /// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two

@@ -7,6 +7,8 @@
 use super::targets::ViewKind;
 use crate::effects::{Effect, Effects, EFFECT_ORDER, MAX_NOISE_INCIDENCE_DEG};
 use crate::error::Result;
+use crate::gpu::shaders::layout::spec;
+use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::sensor::{PixelRect, Sensor};
 use ash::vk;
@@ -31,10 +33,22 @@ pub struct EffectConstants {
     _pad: [u32; 3],
 }
 
-// std430 offsets of `Effect` in shaders/effect.glsl.
-const _: () = assert!(std::mem::offset_of!(EffectConstants, z_origin) == 32);
-const _: () = assert!(std::mem::offset_of!(EffectConstants, params) == 48);
-const _: () = assert!(std::mem::offset_of!(EffectConstants, reflectivity_offset) == 64);
+matches_shader_struct!(
+    EffectConstants,
+    Effect {
+        region,
+        width,
+        height,
+        use_shadowed,
+        z_in_buffer,
+        z_origin,
+        cos_theta,
+        sin_theta,
+        seed_or_width,
+        params,
+        reflectivity_offset,
+    }
+);
 
 /// Where a job's effect passes read and write, beyond the slot's images.
 #[derive(Clone, Copy)]
@@ -111,23 +125,27 @@ impl EffectPipelines {
         let pipelines = EFFECT_ORDER
             .iter()
             .map(|&effect| {
-                let spirv = match effect {
-                    Effect::Grazing => shaders::EFFECT_GRAZING_COMP,
-                    Effect::Range => shaders::EFFECT_WORKING_VOLUME_COMP,
-                    Effect::Reflectivity => shaders::EFFECT_REFLECTIVITY_COMP,
-                    Effect::Edges => shaders::EFFECT_EDGES_COMP,
-                    Effect::Dropout => shaders::EFFECT_DROPOUT_COMP,
-                    Effect::Noise => shaders::EFFECT_NOISE_COMP,
-                    Effect::Quantize => shaders::EFFECT_QUANTIZE_COMP,
+                let (spirv, reason_id) = match effect {
+                    Effect::Grazing => (shaders::EFFECT_GRAZING_COMP, spec::EFFECT_GRAZING_COMP::REASON),
+                    Effect::Range => (shaders::EFFECT_WORKING_VOLUME_COMP, spec::EFFECT_WORKING_VOLUME_COMP::REASON),
+                    Effect::Reflectivity => (shaders::EFFECT_REFLECTIVITY_COMP, spec::EFFECT_REFLECTIVITY_COMP::REASON),
+                    Effect::Edges => (shaders::EFFECT_EDGES_COMP, spec::EFFECT_EDGES_COMP::REASON),
+                    Effect::Dropout => (shaders::EFFECT_DROPOUT_COMP, spec::EFFECT_DROPOUT_COMP::REASON),
+                    Effect::Noise => (shaders::EFFECT_NOISE_COMP, spec::EFFECT_NOISE_COMP::REASON),
+                    Effect::Quantize => (shaders::EFFECT_QUANTIZE_COMP, spec::EFFECT_QUANTIZE_COMP::REASON),
                 };
                 let reason = effect.reason().map_or(0, |r| r.code());
+                let mut constants = vec![(reason_id, reason)];
+                if effect == Effect::Noise {
+                    constants.push((spec::EFFECT_NOISE_COMP::MAX_INCIDENCE, max_incidence));
+                }
                 let name = format!("{} effect", effect.pass_name());
                 ComputePipeline::new(
                     ctx,
                     SetShape::storage(Self::IMAGES, Self::BUFFERS),
                     size_of::<EffectConstants>(),
                     spirv,
-                    &[reason, max_incidence],
+                    &constants,
                     &name,
                 )
             })
@@ -184,6 +202,24 @@ impl EffectBuffers {
             measured_z.as_ref().unwrap_or(&placeholder),
             shape.reflectivities.unwrap_or(&placeholder),
         ];
+        matches_shader_bindings!([
+            EFFECT_GRAZING_COMP,
+            EFFECT_WORKING_VOLUME_COMP,
+            EFFECT_REFLECTIVITY_COMP,
+            EFFECT_EDGES_COMP,
+            EFFECT_DROPOUT_COMP,
+            EFFECT_NOISE_COMP,
+            EFFECT_QUANTIZE_COMP,
+        ] {
+            range_label,
+            range_z,
+            range_dz_dx,
+            range_dz_dy,
+            ShadowedLabels,
+            Losses,
+            MeasuredZ,
+            Reflectivities,
+        });
         let set =
             StorageSet::new(ctx, pipelines.set_layout(), &images, (&[], &buffers), &format!("{name} effect bindings"))?;
         Ok(Self { losses, measured_z, set, _placeholder: placeholder })

@@ -19,6 +19,7 @@
 //! digits (a box cut into aspect-1000 strips showed shadow on a face nothing can shadow).
 
 use crate::error::{Error, Result};
+use crate::gpu::shaders::matches_shader_struct;
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
@@ -58,7 +59,7 @@ impl GpuMesh {
             .triangles
             .iter()
             .zip(unit_normals(mesh))
-            .map(|(corners, normal)| TriangleRecord { corners: corners.map(|v| mesh.positions[v as usize]), normal })
+            .map(|(corners, normal)| TriangleRecord { corner: corners.map(|v| mesh.positions[v as usize]), normal })
             .collect();
         Ok(Self {
             vertices: Buffer::device_local_with_data(
@@ -112,11 +113,11 @@ fn longest_edge(mesh: &Mesh) -> f64 {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct TriangleRecord {
-    corners: [[f32; 3]; 3],
+    corner: [[f32; 3]; 3],
     normal: [f32; 3],
 }
 
-const _: () = assert!(size_of::<TriangleRecord>() == 48);
+matches_shader_struct!(TriangleRecord, TriangleRecord { corner, normal });
 
 /// Each triangle's unit normal (counter-clockwise winding), from its corners in f64.
 fn unit_normals(mesh: &Mesh) -> Vec<[f32; 3]> {

@@ -16,6 +16,8 @@
 use super::plan::Views;
 use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
+use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
+use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
@@ -42,9 +44,22 @@ pub struct MaskConstants {
 }
 
 // std430 offsets of `Mask` in shaders/shadow_mask.comp.
-const _: () = assert!(std::mem::offset_of!(MaskConstants, cos_theta) == 64);
-const _: () = assert!(std::mem::offset_of!(MaskConstants, words_draw) == 80);
-const _: () = assert!(size_of::<MaskConstants>() == 92);
+matches_shader_struct!(
+    MaskConstants,
+    Mask {
+        range_grid,
+        shadow_grid,
+        sizes,
+        region,
+        cos_theta,
+        sin_theta,
+        bias_pitch,
+        bias_relative,
+        words_draw,
+        shadow_stride,
+        range_stride,
+    }
+);
 
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
@@ -115,13 +130,13 @@ impl MaskPipelines {
                 size_of::<MaskConstants>(),
                 code,
                 &[
-                    test as u32,
-                    ShadowTest::Label as u32,
-                    ShadowTest::LabelSquare as u32,
-                    LINK_INDEX_SHIFT,
-                    LINK_SAME_WAY,
-                    LINK_EDGE_MASK,
-                    write_label_and_gradient,
+                    (spec::TEST, test as u32),
+                    (spec::TEST_LABEL, ShadowTest::Label as u32),
+                    (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
+                    (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
+                    (spec::LINK_SAME_WAY, LINK_SAME_WAY),
+                    (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
+                    (spec::WRITE_LABEL_AND_GRADIENT, write_label_and_gradient),
                 ],
                 &format!("{name}{source}"),
             )
@@ -181,6 +196,18 @@ impl MaskBindings {
             Some(w) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words],
             None => [masked, draw_table, draw_table, draw_table, draw_table],
         };
+        matches_shader_bindings!([SHADOW_MASK_COMP, SHADOW_MASK_WORDS_COMP] {
+            range_label,
+            range_z,
+            range_dz_dx,
+            range_dz_dy,
+            shadow_visibility,
+            Masked,
+            DrawTable,
+            ShadowWords,
+            RangeDrawTable,
+            RangeWords,
+        });
         let set_layout = pipelines.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, (&[], &buffers), "shadow mask bindings")? })
     }

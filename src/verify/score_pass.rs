@@ -3,6 +3,8 @@
 
 use super::counts::{N0_WORD, N1_MINUS_WORD, N1_PLUS_WORD, SCALARS};
 use crate::error::Result;
+use crate::gpu::shaders::layout::spec::SCORE_COMP as spec;
+use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use ash::vk;
 use std::sync::Arc;
@@ -26,10 +28,10 @@ pub struct ScoreConstants {
     pub dy: f32,
 }
 
-// std430 offsets of `Score` in shaders/score.comp: a uvec4 aligns to 16.
-const _: () = assert!(std::mem::offset_of!(ScoreConstants, z_origin) == 12);
-const _: () = assert!(std::mem::offset_of!(ScoreConstants, region) == 16);
-const _: () = assert!(size_of::<ScoreConstants>() == 56);
+matches_shader_struct!(
+    ScoreConstants,
+    Score { counts_offset, width, height, z_origin, region, surfaces, segments, tolerance, area_scale, dx, dy }
+);
 
 /// What a score pass counts from (specialization constants of shaders/score.comp).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,16 +95,16 @@ impl ScorePass {
                 size_of::<ScoreConstants>(),
                 shaders::SCORE_COMP,
                 &[
-                    N1_PLUS_WORD,
-                    N1_MINUS_WORD,
-                    N0_WORD,
-                    SCALARS,
-                    SCORE_RUN,
-                    flags[0],
-                    flags[1],
-                    flags[2],
-                    u32::from(correct),
-                    error_ulps as u32,
+                    (spec::N1_PLUS, N1_PLUS_WORD),
+                    (spec::N1_MINUS, N1_MINUS_WORD),
+                    (spec::N0, N0_WORD),
+                    (spec::POPULATIONS, SCALARS),
+                    (spec::RUN, SCORE_RUN),
+                    (spec::USE_SHADOWED, flags[0]),
+                    (spec::USE_LOSSES, flags[1]),
+                    (spec::USE_MEASURED_Z, flags[2]),
+                    (spec::CORRECT_SQRT, u32::from(correct)),
+                    (spec::SQRT_ERROR_ULPS, error_ulps as u32),
                 ],
                 &format!("verification counts ({sources:?})"),
             )
@@ -117,6 +119,15 @@ impl ScorePass {
     /// they are not read).
     pub fn bindings(&self, ctx: &Arc<GpuContext>, reads: &ScoreInputs) -> Result<ScoreBindings> {
         let buffers = [reads.shadowed_labels, reads.sensed, reads.counts, reads.losses, reads.measured_z];
+        matches_shader_bindings!([SCORE_COMP] {
+            range_label,
+            range_z,
+            ShadowedLabels,
+            Sensed,
+            Counts,
+            Losses,
+            MeasuredZ,
+        });
         let set_layout = self.pipelines[0].set_layout;
         let set = StorageSet::new(ctx, set_layout, &[reads.label, reads.z], (&[], &buffers), "score bindings")?;
         Ok(ScoreBindings { set })
