@@ -106,7 +106,13 @@ impl Effect {
         }
     }
 
-    /// The reason a pixel this effect loses records; `None` for noise and quantization.
+    /// Whether this effect changes z rather than losing points: the one list of such effects.
+    /// Where one is named, z goes through a buffer of measured values from its pass on.
+    pub fn changes_z(self) -> bool {
+        matches!(self, Effect::Noise | Effect::Quantize)
+    }
+
+    /// The reason a pixel this effect loses records; `None` for those that change z.
     pub fn reason(self) -> Option<Reason> {
         match self {
             Effect::Grazing => Some(Reason::Grazing),
@@ -262,9 +268,9 @@ impl Effects {
         }
     }
 
-    /// Whether an effect changes z (then z goes through a buffer of measured values).
+    /// Whether a named effect changes z ([`Effect::changes_z`]).
     pub fn changes_z(&self) -> bool {
-        self.noise.is_some() || self.quantize.is_some()
+        self.passes().any(Effect::changes_z)
     }
 
     /// Checks every parameter; the error names the key and the allowed range. The GPU takes
@@ -380,6 +386,15 @@ mod tests {
         }
         let fine = "[noise]\nsigma = 0\n[dropout]\nprobability = 1\n[grazing]\nmax_incidence_deg = 90\n";
         parse(fine).validate().unwrap();
+    }
+
+    #[test]
+    fn an_effect_either_loses_points_for_a_reason_or_changes_z() {
+        for effect in EFFECT_ORDER {
+            assert_eq!(effect.reason().is_none(), effect.changes_z(), "{effect:?}");
+        }
+        assert!(!parse("[dropout]\nprobability = 0.5\n").changes_z());
+        assert!(parse("[quantize]\nz_step = 0.1\n").changes_z());
     }
 
     #[test]

@@ -13,6 +13,7 @@ mod effect_pass;
 mod gpu_arithmetic;
 mod gpu_mesh;
 mod host_view;
+mod memory;
 mod mesh_cache;
 mod passes;
 mod pipelines;
@@ -23,8 +24,8 @@ mod targets;
 
 pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
-pub(crate) use compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
-use compute_raster::{ComputeViews, CoverageGroup};
+
+use compute_raster::{large_queue_bytes, ComputeViews, CoverageGroup, VISIBILITY_WORD_BYTES};
 pub use compute_raster::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub(crate) use draw::draw_table;
 pub use draw::Draw;
@@ -32,6 +33,7 @@ pub(crate) use effect_pass::EffectShape;
 pub use gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use host_view::HostView;
+pub(crate) use memory::slot_bytes;
 pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
 pub(crate) use plan::{plan_views, Views};
 pub use target_pool::{MAX_CHUNKS_IN_FLIGHT, MAX_SLOTS};
@@ -39,7 +41,7 @@ pub(crate) use targets::ViewKind;
 
 use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
-use crate::exact::{self, render_scene_exact};
+use crate::exact::render_scene_exact;
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::{Ledger, MemoryBudget};
 use crate::pose::check_rigid;
@@ -74,34 +76,6 @@ pub struct Renderer {
 /// `largest` (compute_raster.rs: room for every triangle of every member).
 fn queued_triangles(draws: usize, largest: u64) -> u64 {
     largest.saturating_mul(draws as u64)
-}
-
-/// Bytes a render of these views takes at its peak, and writing its files after it (the
-/// larger of the two). Rendering: per range pixel its five attachments (20 bytes), three
-/// readback buffers (12) and the returned label, unshadowed label, z and reason (16), and with
-/// effects their losses and measured z on the GPU and on the host (16); per shadow pixel its
-/// visibility and depth attachments (20). Writing: the returned image (16), the range image's
-/// X, Y, Z, label and reason (20) and the EXR encoder's copy of them (20), and the previews
-/// (4). With the compute rasterizer, each view's 8-byte visibility words a pixel and its
-/// queue of large triangles, with room for `compute_triangles`. In shadow mode `exact`, the
-/// CPU's casters and image (exact.rs) and their upload (host_view.rs). Measured before the
-/// range view gained its gradient: a 16384² render peaked at 47 bytes per pixel.
-fn render_memory(
-    views: &Views,
-    effects: &Effects,
-    compute_triangles: Option<u64>,
-    exact_triangles: Option<u64>,
-) -> u64 {
-    let range = u64::from(views.range.width) * u64::from(views.range.height);
-    let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
-    let effect_bytes = if effects.is_empty() { 0 } else { 16 };
-    let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
-    let range_pixel = ViewKind::Range.bytes_per_pixel() + 28 + effect_bytes + visibility;
-    let queue = compute_triangles.map_or(0, |t| large_queue_bytes(t, views.count()));
-    let rendering = range_pixel * range + (ViewKind::Shadow.bytes_per_pixel() + visibility) * shadow + queue;
-    let exact = exact_triangles
-        .map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + HostView::BYTES_PER_PIXEL) * range);
-    (rendering + exact).max(60 * range)
 }
 
 /// Jobs a coverage dispatch covers unless the caller says otherwise
@@ -334,7 +308,7 @@ impl Renderer {
         let queued = queued_triangles(draws.len(), largest);
         self.ledger.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            render_memory(&views, &scene.effects, compute.then_some(queued), exact_triangles),
+            memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws, compute)
     }

@@ -23,7 +23,7 @@ use super::plan::Views;
 use super::shadow_pass::{MaskBindings, MaskConstants};
 use super::target_pool::{PooledTargets, TargetPool};
 use super::targets::{ViewKind, ViewTargets};
-use crate::effects::{Effect, Effects, EFFECT_ORDER};
+use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
 use crate::render_output::PassTime;
@@ -518,7 +518,7 @@ impl<'p> Passes<'p> {
                     buffers.record(cmd, pipelines, effect, (effects, sensor), &effect_job, z_in_buffer)
                 };
                 steps.push(Step::new(reads, used, record).timed(effect.pass_name()));
-                z_in_buffer |= matches!(effect, Effect::Noise | Effect::Quantize);
+                z_in_buffer |= effect.changes_z();
             }
         }
         let (losses, measured_z) = slot.effect_outputs();

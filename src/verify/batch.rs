@@ -26,9 +26,8 @@ use crate::exact::{render_exact, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestamps};
 use crate::mesh::Mesh;
 use crate::render::{
-    draw_table, large_queue_bytes, plan_views, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock,
-    PassTime, Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
-    VISIBILITY_WORD_BYTES,
+    draw_table, plan_views, slot_bytes, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock, PassTime,
+    Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
 };
 use crate::sensor::{PixelRect, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -120,13 +119,11 @@ impl BatchItem<'_> {
     }
 }
 
-/// Bytes of GPU memory each slot of a verification of these posed bounding spheres takes:
-/// a range view (its attachments and the shadowed labels: 24
-/// bytes a pixel, and 8 more for the effects' losses and measured z) and a shadow view as
-/// wide as the widest hypothesis needs (20 bytes a pixel), and with the compute rasterizer 8
-/// bytes a pixel of each view for its visibility words and a queue of large triangles with
-/// room for every triangle of the largest model (`max_triangles`) in each view.
-/// Fails as a batch would on a hypothesis whose views cannot be planned.
+/// Bytes of GPU memory each slot of a verification of these posed bounding spheres takes
+/// (render/memory.rs, `slot_bytes`): a range view of the sensor's size and a shadow view as
+/// wide as the widest hypothesis needs, and with the compute rasterizer room in its queue for
+/// every triangle of the largest model (`max_triangles`) in each view. Fails as a batch would
+/// on a hypothesis whose views cannot be planned.
 pub(crate) fn slot_memory(
     renderer: &Renderer,
     sensor: &Sensor,
@@ -143,14 +140,9 @@ pub(crate) fn slot_memory(
         shadow_width = shadow_width.max(views.shadow.map_or(0, |g| g.width));
     }
     let rows = u64::from(sensor.height);
-    let effect_bytes = if effects.is_empty() { 0 } else { 8 };
-    // The compute rasterizer's visibility words, per pixel of each view, and queue.
-    let visibility = if renderer.may_compute() { VISIBILITY_WORD_BYTES } else { 0 };
+    let pixels = (rows * u64::from(sensor.width), rows * u64::from(shadow_width));
     let views = if shadow_width > 0 { 2 } else { 1 };
-    let queue = if renderer.may_compute() { large_queue_bytes(max_triangles, views) } else { 0 };
-    let range_pixel = ViewKind::Range.bytes_per_pixel() + 4 + effect_bytes + visibility;
-    let shadow_pixel = ViewKind::Shadow.bytes_per_pixel() + visibility;
-    Ok(rows * (range_pixel * u64::from(sensor.width) + shadow_pixel * u64::from(shadow_width)) + queue)
+    Ok(slot_bytes(pixels, effects, renderer.may_compute().then_some(max_triangles), views))
 }
 
 /// What one batch counted: `counts_words` u32 words, each item's at its `counts_offset`, and

@@ -1,0 +1,61 @@
+//! The one memory model of a job's GPU work, which `render` checks a render against and
+//! `verify` sizes its batches' slots by: what a slot holds per pixel of each view, and the
+//! compute rasterizer's queue; a render adds what it reads back and returns on the host.
+
+use super::compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
+use super::host_view::HostView;
+use super::plan::Views;
+use super::targets::ViewKind;
+use crate::effects::Effects;
+use crate::exact;
+
+/// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
+const SHADOWED_LABEL_BYTES: u64 = 4;
+/// Bytes a range pixel's effect outputs take: its loss and its measured z.
+const EFFECT_OUTPUT_BYTES: u64 = 8;
+/// Bytes a render reads back and returns on the host per range pixel: three readback
+/// buffers (label, shadowed label, z: 12) and the returned label, unshadowed label, z and
+/// reason (16); with effects, their losses and measured z once more (8).
+const RETURNED_BYTES: u64 = 28;
+/// Bytes writing a render's files takes per range pixel at its peak: the returned image (16),
+/// the range image's X, Y, Z, label and reason (20), the EXR encoder's copy of them (20), and
+/// the previews (4).
+const WRITING_BYTES: u64 = 60;
+
+/// GPU bytes one job's slot takes: per pixel of the range view (its attachments, the
+/// shadowed labels, the effects' outputs where effects are named) and of the shadow view (its
+/// attachments), and with the compute rasterizer each view's visibility words and a queue
+/// with room for `compute_triangles` in each of `views` views.
+pub(crate) fn slot_bytes(
+    (range_pixels, shadow_pixels): (u64, u64),
+    effects: &Effects,
+    compute_triangles: Option<u64>,
+    views: u64,
+) -> u64 {
+    let effect_bytes = if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
+    let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
+    let range = ViewKind::Range.bytes_per_pixel() + SHADOWED_LABEL_BYTES + effect_bytes + visibility;
+    let shadow = ViewKind::Shadow.bytes_per_pixel() + visibility;
+    let queue = compute_triangles.map_or(0, |t| large_queue_bytes(t, views));
+    range * range_pixels + shadow * shadow_pixels + queue
+}
+
+/// Bytes a render of these views takes at its peak, rendering or writing its files after
+/// (the larger of the two): its slot ([`slot_bytes`]), what it returns on the host, and in
+/// shadow mode `exact` the CPU's casters and image (exact.rs) and their upload
+/// (host_view.rs). A 16384² render peaked at 47 bytes per pixel, measured before the range
+/// view gained its gradient.
+pub(super) fn render_bytes(
+    views: &Views,
+    effects: &Effects,
+    compute_triangles: Option<u64>,
+    exact_triangles: Option<u64>,
+) -> u64 {
+    let range = u64::from(views.range.width) * u64::from(views.range.height);
+    let shadow = views.shadow.map_or(0, |g| u64::from(g.width) * u64::from(g.height));
+    let returned = RETURNED_BYTES + if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
+    let rendering = slot_bytes((range, shadow), effects, compute_triangles, views.count()) + returned * range;
+    let exact = exact_triangles
+        .map_or(0, |t| t * exact::BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + HostView::BYTES_PER_PIXEL) * range);
+    (rendering + exact).max(WRITING_BYTES * range)
+}
