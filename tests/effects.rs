@@ -70,7 +70,7 @@ fn noise_has_the_asked_mean_and_sigma_and_is_reproducible_per_seed() {
     let noisy = render(&noisy_scene);
     assert_eq!(noisy.label, clean.label, "noise loses no point");
     let n = pixels(&noisy) as f64;
-    let d: Vec<f64> = noisy.z.iter().zip(&clean.z).map(|(a, b)| f64::from(*a) - f64::from(*b)).collect();
+    let d: Vec<f64> = common::paired(&noisy.z, &clean.z).map(|(a, b)| f64::from(*a) - f64::from(*b)).collect();
     let (mean, sd) = moments(&d);
     // Five standard errors: of the mean, σ/√n; of the sample deviation, σ/√(2n).
     assert!(mean.abs() < 5.0 * 0.01 / n.sqrt(), "mean {mean}");
@@ -83,7 +83,7 @@ fn noise_has_the_asked_mean_and_sigma_and_is_reproducible_per_seed() {
     let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&again.z), bits(&noisy.z), "bit-identical across runs");
     let other_seed = render(&with(&base, "[noise]\nsigma = 0.01\nseed = 2"));
-    let same = other_seed.z.iter().zip(&noisy.z).filter(|(a, b)| a == b).count();
+    let same = common::paired(&other_seed.z, &noisy.z).filter(|(a, b)| a == b).count();
     assert!(same < pixels(&noisy) / 100, "{same} pixels equal under another seed");
 }
 
@@ -99,7 +99,7 @@ fn noise_grows_with_depth_and_incidence_as_the_axial_model_says() {
     for (base, terms, sigma) in cases {
         let clean = render(&base);
         let noisy = render(&with(&base, &format!("[noise]\nseed = 5\n{terms}")));
-        let d: Vec<f64> = noisy.z.iter().zip(&clean.z).map(|(a, b)| f64::from(*a) - f64::from(*b)).collect();
+        let d: Vec<f64> = common::paired(&noisy.z, &clean.z).map(|(a, b)| f64::from(*a) - f64::from(*b)).collect();
         let (_, sd) = moments(&d);
         assert!((sd / sigma - 1.0).abs() < 5.0 / (2.0 * d.len() as f64).sqrt() + 1e-3, "{terms}: σ {sd}, not {sigma}");
     }
@@ -111,7 +111,7 @@ fn quantization_stores_exact_multiples_of_the_step() {
     let clean = render(&base);
     for (text, step) in [("[quantize]\nz_step = 0.25", 0.25f32), ("[quantize]\nz_step = 0.1", 0.1f32)] {
         let out = render(&with(&base, text));
-        for (i, (&q, &z)) in out.z.iter().zip(&clean.z).enumerate() {
+        for (i, (&q, &z)) in common::paired(&out.z, &clean.z).enumerate() {
             let k = (f64::from(q) / f64::from(step)).round();
             assert_eq!(q, k as f32 * step, "{text}: pixel {i}: {q} is not a multiple");
             assert!(f64::from((q - z).abs()) <= f64::from(step) / 2.0 + 1e-6, "{text}: pixel {i}: {z} → {q}");
@@ -313,7 +313,7 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
     assert_no_validation_messages();
     assert_eq!(results[0].scores.s, 1.0, "{:?}", results[0].scores);
     assert!(results[1].scores.s < 0.9);
-    for (h, v) in hypotheses.iter().zip(&results) {
+    for (h, v) in common::paired(&hypotheses, &results) {
         let synthetic = render(&step_scene(sensor, h.pose));
         let images = Images::of(&image, &synthetic);
         let cpu = cpu_counts(&images, TOLERANCE as f32);

@@ -341,10 +341,10 @@ fn far_from_the_origin_the_same_geometry_renders_the_same_image() {
             assert_eq!(shadow_errors_against_reference(&name, &far), 0, "{name} against exact ray casting");
         }
         let (near_out, far_out) = (render(&near), render(&far));
-        let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(a, b)| a != b).count();
+        let differ = |a: &[u32], b: &[u32]| common::paired(a, b).filter(|(a, b)| a != b).count();
         assert_eq!(differ(&near_out.label_unshadowed, &far_out.label_unshadowed), 0, "{name}: surfaces hit");
         assert_eq!(differ(&near_out.label, &far_out.label), 0, "{name}: shadowed labels");
-        for (i, (zn, zf)) in near_out.z.iter().zip(&far_out.z).enumerate() {
+        for (i, (zn, zf)) in common::paired(&near_out.z, &far_out.z).enumerate() {
             if near_out.label_unshadowed[i] != 0 {
                 let error = (f64::from(*zf) - (f64::from(*zn) + offset.z)).abs();
                 assert!(error <= HALF_ULP_AT_1E5 + 1e-6, "{name}: pixel {i}: z {zf} for {zn} + 10^5");

@@ -142,7 +142,7 @@ fn gpu_counts_and_scores_match_the_cpu_scorer() {
             hypothesis("at the corner", "builtin:box", DMat4::from_translation(DVec3::new(2.1, -2.1, 0.0)), &[(1, 1)]),
         ];
         let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
-        for (h, v) in hypotheses.iter().zip(&results) {
+        for (h, v) in common::paired(&hypotheses, &results) {
             let synthetic = render(&scene(sensor, mode, &[(h.model.mesh.name.as_str(), h.pose)]));
             let images = Images::of(&image, &synthetic);
             let cpu = cpu_counts(&images, TOLERANCE as f32);
@@ -210,17 +210,18 @@ fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
     };
     for chunk_size in [1, 7, 1024] {
         let batch = verify(&sensed, &VerifySettings { chunk_size, ..base }, &hypotheses);
-        alone.iter().zip(&batch).for_each(|(a, b)| same(a, b));
+        common::paired(&alone, &batch).for_each(|(a, b)| same(a, b));
     }
     let reversed: Vec<Hypothesis> = hypotheses.iter().rev().cloned().collect();
     let batch = verify(&sensed, &base, &reversed);
+    assert_eq!(alone.len(), batch.len());
     alone.iter().rev().zip(&batch).for_each(|(a, b)| same(a, b));
     // The sensed image's GPU copy is made once and kept: a clone shares it, and verifying
     // against another image in between changes nothing.
     let (_, other) = self::sensed(test_sensor(30.0));
     verify(&other, &settings(test_sensor(30.0), ShadowMode::Depth), &hypotheses[..3]);
     let batch = verify(&sensed.clone(), &base, &hypotheses);
-    alone.iter().zip(&batch).for_each(|(a, b)| same(a, b));
+    common::paired(&alone, &batch).for_each(|(a, b)| same(a, b));
 }
 
 #[test]
@@ -241,7 +242,7 @@ fn exact_mode_scores_the_same_alone_or_in_chunks() {
     // 20 hypotheses: more than one exact-mode chunk (EXACT_CHUNK).
     assert!(hypotheses.len() > rangesynth::verify::EXACT_CHUNK);
     let batch = verify(&sensed, &VerifySettings { chunk_size: 1024, ..base }, &hypotheses);
-    for (h, b) in hypotheses.iter().zip(&batch) {
+    for (h, b) in common::paired(&hypotheses, &batch) {
         let alone = verify(&sensed, &base, std::slice::from_ref(h)).remove(0);
         assert_eq!(alone.counts, b.counts, "{}", h.id);
         assert_eq!(alone.scores.s.to_bits(), b.scores.s.to_bits(), "{}", h.id);
@@ -341,6 +342,7 @@ fn verifications_come_chunk_by_chunk_and_a_handlers_error_stops_them() {
         })
         .expect("verification runs");
     assert_eq!(chunks.iter().map(Vec::len).collect::<Vec<_>>(), [16, 16, 8]);
+    assert_eq!(whole.len(), 40);
     for (v, w) in chunks.iter().flatten().zip(&whole) {
         assert_eq!((&v.id, &v.counts), (&w.id, &w.counts));
     }
@@ -406,7 +408,7 @@ fn one_verifier_serves_several_threads_at_once() {
             .collect();
         for run in runs {
             let results = run.join().expect("no panic");
-            for (a, b) in sequential.iter().zip(&results) {
+            for (a, b) in common::paired(&sequential, &results) {
                 assert_eq!(
                     (a.id.as_str(), &a.counts, a.scores.s.to_bits()),
                     (b.id.as_str(), &b.counts, b.scores.s.to_bits())

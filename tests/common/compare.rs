@@ -39,6 +39,9 @@ pub fn compare_labels(
     expected: &[u32],
     allowed: &[bool],
 ) -> LabelDiff {
+    for (what, len) in [("actual", actual.len()), ("expected", expected.len()), ("allowance", allowed.len())] {
+        assert_eq!(len, width * height, "{name}: the {what} image is not {width}×{height}");
+    }
     let mut diff = LabelDiff { pixels: actual.len(), ..Default::default() };
     for i in 0..actual.len() {
         diff.allowance_pixels += usize::from(allowed[i]);
@@ -60,6 +63,7 @@ pub fn write_artifacts(name: &str, width: usize, height: usize, actual: &[u32], 
     let (w, h) = (width as u32, height as u32);
     let _ = write_label_preview(&dir.join(format!("{name}_actual.png")), w, h, actual, None);
     let _ = write_label_preview(&dir.join(format!("{name}_expected.png")), w, h, expected, None);
+    assert_eq!(actual.len(), expected.len(), "{name}: the images differ in size");
     let diff: Vec<u32> = actual.iter().zip(expected).map(|(a, e)| u32::from(a != e)).collect();
     let _ = write_label_preview(&dir.join(format!("{name}_diff.png")), w, h, &diff, None);
     eprintln!("wrote {name}_actual/_expected/_diff.png to {}", dir.display());

@@ -63,6 +63,13 @@ pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
     }
 }
 
+/// The pairs of two lists compared element by element, after asserting they are as long: a
+/// truncated result must not pass as a match.
+pub fn paired<'a, A, B>(a: &'a [A], b: &'a [B]) -> impl Iterator<Item = (&'a A, &'a B)> {
+    assert_eq!(a.len(), b.len(), "the lists compared differ in length");
+    a.iter().zip(b)
+}
+
 pub fn renderer() -> &'static Renderer {
     VERIFIER.renderer()
 }
