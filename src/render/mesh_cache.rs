@@ -4,10 +4,10 @@
 //! against a weak reference, so a freed model's address reused by another is never mistaken
 //! for it; dead entries are dropped on the next upload.
 
-use super::gpu_mesh::GpuMesh;
 use crate::error::Result;
 use crate::gpu::GpuContext;
 use crate::mesh::Mesh;
+use crate::render::gpu_mesh::GpuMesh;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, Weak};
 

@@ -7,35 +7,29 @@
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
 mod built_once;
-mod compute_raster;
-mod draw;
-mod effect_pass;
-mod gpu_arithmetic;
 mod gpu_mesh;
-mod host_view;
-mod memory;
 mod mesh_cache;
 mod passes;
 mod pipelines;
 mod plan;
-mod shadow_pass;
+mod raster;
 mod target_pool;
 mod targets;
 
 pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
 
-use compute_raster::{large_queue_bytes, ComputeViews, CoverageGroup, VISIBILITY_WORD_BYTES};
-pub use compute_raster::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
-pub(crate) use draw::draw_table;
-pub use draw::Draw;
-pub(crate) use effect_pass::EffectShape;
-pub use gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
 pub use gpu_mesh::GpuMesh;
-pub(crate) use host_view::HostView;
-pub(crate) use memory::slot_bytes;
+pub(crate) use passes::effects::EffectShape;
+pub(crate) use passes::host_view::HostView;
 pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
+pub use plan::gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
+pub(crate) use plan::memory::slot_bytes;
 pub(crate) use plan::{plan_views, Views};
+use raster::compute::{large_queue_bytes, ComputeViews, CoverageGroup, VISIBILITY_WORD_BYTES};
+pub use raster::compute::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
+pub(crate) use raster::draw::draw_table;
+pub use raster::draw::Draw;
 pub use target_pool::{MAX_CHUNKS_IN_FLIGHT, MAX_SLOTS};
 pub(crate) use targets::ViewKind;
 
@@ -163,7 +157,7 @@ impl Renderer {
 
     /// Whether this renderer's device can run the compute rasterizer (compute_raster.rs).
     pub fn supports_compute_raster(&self) -> bool {
-        compute_raster::device_supports(&self.ctx)
+        raster::compute::device_supports(&self.ctx)
     }
 
     /// Where `auto` takes the compute rasterizer on this renderer's device.
@@ -308,7 +302,7 @@ impl Renderer {
         let queued = queued_triangles(draws.len(), largest);
         self.ledger.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
+            plan::memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws, compute)
     }

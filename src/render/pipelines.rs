@@ -3,15 +3,15 @@
 //! the shadow-mask compute pipelines; and the effect and compute-raster pipelines, built the
 //! first time a call needs them.
 
-use super::built_once::built_once;
-use super::compute_raster::{self, ComputeRasterPipelines};
-use super::draw::{DrawConstants, ViewPipelines};
-use super::effect_pass::EffectPipelines;
-use super::shadow_pass::{MaskPipelines, MaskVariant};
-use super::targets::{check_formats, ViewKind};
 use crate::error::{Error, Result, VkResultExt};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{GpuContext, DEPTH_FORMAT};
+use crate::render::built_once::built_once;
+use crate::render::passes::effects::EffectPipelines;
+use crate::render::passes::shadow_mask::{MaskPipelines, MaskVariant};
+use crate::render::raster::compute::{self, ComputeRasterPipelines};
+use crate::render::raster::draw::{DrawConstants, ViewPipelines};
+use crate::render::targets::{check_formats, ViewKind};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -82,7 +82,7 @@ impl Pipelines {
     /// 64-bit buffer atomics.
     pub fn compute_raster(&self) -> Result<&ComputeRasterPipelines> {
         built_once(&self.compute_raster, || {
-            if !compute_raster::device_supports(&self.ctx) {
+            if !compute::device_supports(&self.ctx) {
                 return Err(Error::Unsupported(format!(
                     "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \
                      use the graphics rasterizer",

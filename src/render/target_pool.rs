@@ -4,9 +4,9 @@
 //! keeps those of the latest calls, at most [`KEPT`], so the memory it holds stays bounded
 //! by what recent calls used.
 
-use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::GpuContext;
+use crate::render::targets::{ViewKind, ViewTargets};
 use std::sync::{Arc, Mutex};
 
 /// Most slots one batch may keep (src/verify/batch.rs, `default_slots`).

@@ -2,13 +2,13 @@
 //! view and the shadow view differ only in their grid, their view rotation, their pipeline
 //! and what the fragment shader writes.
 
-use super::gpu_mesh::GpuMesh;
-use super::plan::Views;
-use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::shaders::matches_shader_struct;
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::Solidity;
+use crate::render::gpu_mesh::GpuMesh;
+use crate::render::plan::Views;
+use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use ash::vk;
 use glam::{DMat4, DVec3};

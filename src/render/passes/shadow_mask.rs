@@ -13,13 +13,13 @@
 //! ([`MaskVariant::WordsForScoring`]): 3% of the dense sphere's verification at 256², 9% of
 //! the box's.
 
-use super::plan::Views;
-use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
+use crate::render::plan::Views;
+use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{PixelRect, Sensor, ViewGrid};
 use crate::shadow::{ShadowTest, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
@@ -179,7 +179,7 @@ impl MaskBindings {
     /// [`WordsToMask`]'s three.
     pub const BUFFERS: usize = 5;
 
-    /// `draw_table` holds the shadow pass's [`DrawConstants`](super::draw::DrawConstants)
+    /// `draw_table` holds the shadow pass's [`DrawConstants`](crate::render::raster::draw::DrawConstants)
     /// at the draw indices it recorded.
     pub fn new(
         ctx: &Arc<GpuContext>,

@@ -3,7 +3,9 @@
 //! that the GPU's f32 arithmetic holds them (gpu_arithmetic.rs). `render` plans one scene's
 //! views, `verify` one hypothesis' at a time.
 
-use super::gpu_arithmetic;
+pub(crate) mod gpu_arithmetic;
+pub(crate) mod memory;
+
 use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};

@@ -2,12 +2,12 @@
 //! `verify` sizes its batches' slots by: what a slot holds per pixel of each view, and the
 //! compute rasterizer's queue; a render adds what it reads back and returns on the host.
 
-use super::compute_raster::{large_queue_bytes, VISIBILITY_WORD_BYTES};
-use super::host_view::HostView;
-use super::plan::Views;
-use super::targets::ViewKind;
 use crate::effects::Effects;
 use crate::exact;
+use crate::render::passes::host_view::HostView;
+use crate::render::plan::Views;
+use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
+use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
 const SHADOWED_LABEL_BYTES: u64 = 4;
@@ -45,7 +45,7 @@ pub(crate) fn slot_bytes(
 /// shadow mode `exact` the CPU's casters and image (exact.rs) and their upload
 /// (host_view.rs). A 16384² render peaked at 47 bytes per pixel, measured before the range
 /// view gained its gradient.
-pub(super) fn render_bytes(
+pub(crate) fn render_bytes(
     views: &Views,
     effects: &Effects,
     compute_triangles: Option<u64>,

@@ -3,10 +3,10 @@
 //! would have written them: the effect passes and the sink then read it as they read a
 //! rasterized view, so exact mode's images go through the same effects and the same score pass.
 
-use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::exact::ExactImage;
 use crate::gpu::{Access, Buffer, GpuContext, Step};
+use crate::render::targets::{ViewKind, ViewTargets};
 use ash::vk;
 use std::sync::Arc;
 

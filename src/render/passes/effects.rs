@@ -4,12 +4,12 @@
 //! slot's losses (a [`Reason`](crate::effects::Reason) code per pixel) and, where an effect
 //! changes z, its measured z; the sink reads both.
 
-use super::targets::ViewKind;
 use crate::effects::{Effect, Effects, EFFECT_ORDER, MAX_NOISE_INCIDENCE_DEG};
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
+use crate::render::targets::ViewKind;
 use crate::sensor::{PixelRect, Sensor};
 use ash::vk;
 use std::sync::Arc;

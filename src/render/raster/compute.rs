@@ -24,7 +24,7 @@
 //!   each, their draws and constants in one uniform block, their words bound side by side) and
 //!   one large triangles' dispatch, so that a GPU pays a dispatch and a barrier per group
 //!   rather than per hypothesis. How many is the renderer's
-//!   ([`Renderer::with_hypotheses_per_dispatch`](super::Renderer::with_hypotheses_per_dispatch)):
+//!   ([`Renderer::with_hypotheses_per_dispatch`](crate::render::Renderer::with_hypotheses_per_dispatch)):
 //!   by default all of them on a GPU, and one on a CPU device, where a dispatch costs next to
 //!   nothing and a group's reads of its members' constants cost more (dense sphere at 256²,
 //!   verification 3.5–3.9 → 4.8–4.9 ms a hypothesis on lavapipe). Pipelines for one member
@@ -54,17 +54,17 @@
 //! device cannot bind as one storage buffer, or whose draw reaches beyond
 //! [`MAX_REACH_PIXELS`] (Renderer::computes).
 //!
-//! Whether a view takes it is decided in raster_choice.rs ([`Raster`](super::Raster),
-//! [`Crossover`](super::Crossover)).
+//! Whether a view takes it is decided in raster_choice.rs ([`Raster`](crate::render::Raster),
+//! [`Crossover`](crate::render::Crossover)).
 
-use super::built_once::built_once;
-use super::draw::{Draw, DrawConstants, DrawTable};
-use super::shadow_pass::{MaskPipelines, MaskVariant, WordsToMask};
-use super::targets::{ViewKind, ViewTargets};
 use crate::error::Result;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, Step, StorageSet};
 use crate::mesh::Solidity;
+use crate::render::built_once::built_once;
+use crate::render::passes::shadow_mask::{MaskPipelines, MaskVariant, WordsToMask};
+use crate::render::raster::draw::{Draw, DrawConstants, DrawTable};
+use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::PixelRect;
 use crate::shader_contract::{COVERAGE_GROUP, EMPTY_HALF, MEMBER_SHIFT, QUEUE_VIEW_BIT};
 use ash::vk;
