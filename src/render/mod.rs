@@ -8,11 +8,13 @@
 
 mod built_once;
 mod gpu_mesh;
+mod memory;
 mod mesh_cache;
 mod passes;
 mod pipelines;
 mod plan;
 mod raster;
+mod stages;
 mod target_pool;
 mod targets;
 
@@ -20,16 +22,16 @@ pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
 
 pub use gpu_mesh::GpuMesh;
-pub(crate) use passes::effects::EffectShape;
-pub(crate) use passes::host_view::HostView;
+pub(crate) use memory::slot_bytes;
 pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
 pub use plan::gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
-pub(crate) use plan::memory::slot_bytes;
 pub(crate) use plan::{plan_views, Views};
 use raster::compute::{large_queue_bytes, ComputeViews, CoverageGroup, VISIBILITY_WORD_BYTES};
 pub use raster::compute::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub(crate) use raster::draw::draw_table;
 pub use raster::draw::Draw;
+pub(crate) use stages::effects::EffectShape;
+pub(crate) use stages::host_view::HostView;
 pub use target_pool::{MAX_CHUNKS_IN_FLIGHT, MAX_SLOTS};
 pub(crate) use targets::ViewKind;
 
@@ -302,7 +304,7 @@ impl Renderer {
         let queued = queued_triangles(draws.len(), largest);
         self.ledger.check(
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
-            plan::memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
+            memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
         self.render_views(scene, &views, &draws, compute)
     }

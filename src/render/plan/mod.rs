@@ -4,7 +4,6 @@
 //! views, `verify` one hypothesis' at a time.
 
 pub(crate) mod gpu_arithmetic;
-pub(crate) mod memory;
 
 use crate::effects::Effects;
 use crate::error::{Error, Result};

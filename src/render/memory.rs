@@ -4,9 +4,9 @@
 
 use crate::effects::Effects;
 use crate::exact;
-use crate::render::passes::host_view::HostView;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
+use crate::render::stages::host_view::HostView;
 use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).

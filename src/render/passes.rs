@@ -14,22 +14,18 @@
 //! records its steps one after the other; a run of jobs in different slots records each
 //! stage's steps side by side behind one barrier ([`Passes::record_run`]).
 
-pub(crate) mod effects;
-pub(crate) mod host_view;
-pub(crate) mod shadow_mask;
-
 use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
-use crate::render::passes::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
-use crate::render::passes::host_view::HostView;
-use crate::render::passes::shadow_mask::{MaskBindings, MaskConstants};
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{
     ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember,
 };
 use crate::render::raster::draw::{record_view, Draw, DrawTable, ViewPass};
+use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
+use crate::render::stages::host_view::HostView;
+use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
 use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
