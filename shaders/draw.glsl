@@ -79,8 +79,8 @@ vec2 depth_step(DrawData d, vec3 n) {
 //   sub-pixel grid (NVIDIA's does; lavapipe and the compute rasterizer from the unsnapped
 //   corners), which moves it by up to the depth change over half a snapping step (1/512
 //   pixel) each way, so two faces part by up to that over 1/256 pixel: TIE_SLOPE allows
-//   twice that. (With TIE_RELATIVE alone, 366 pixels of two leaning boxes' coincident tops
-//   went to the higher label on an NVIDIA H200.)
+//   twice that. (With TIE_RELATIVE alone, two leaning boxes' coincident tops go in part to the
+//   higher label on a GPU whose depths come from snapped corners.)
 // The slope counted is at most, in each axis, a face's at 89° from the view (TIE_STEEPEST, tan
 // 89°; θ has that limit too, src/sensor.rs): a sliver of a face seen almost edge-on, whose
 // slope has no bound, would otherwise tie with, and so win through, any surface in front of

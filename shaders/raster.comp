@@ -34,32 +34,28 @@
 // the last drawn.
 //
 // A software rasterizer runs every instruction of a shader for every group of invocations,
-// whatever their branches (lavapipe, Mesa 22.3: a shader returning at its first line cost half
-// as much as this one doing its work), so the small triangles' pass holds no 64-bit path of
-// its own: dense sphere at 256², coverage 5.2–5.3 → 4.65–4.8 ms.
+// whatever their branches, so the small triangles' pass holds no 64-bit path of its own.
 #ifdef TIES
 #extension GL_KHR_memory_scope_semantics : require
 #endif
 #include "raster_compute.glsl"
 layout(local_size_x = COVERAGE_GROUP) in;
 
-// Many hypotheses a dispatch (the issue's "many hypotheses per dispatch"): a coverage
-// dispatch covers up to COVERAGE_MEMBERS jobs (contract.glsl), one a z slice of its
-// workgroups (the large triangles' pass reads each queued triangle's member from the queue),
-// so that a GPU pays a dispatch and a barrier per group rather than per hypothesis. MEMBERS, a
-// specialization constant, is 1 or COVERAGE_MEMBERS: with 1, the member is the constant 0 and
-// every read of its constants is at a constant offset, as a software rasterizer needs (it
-// gathers a uniform read at an index it cannot prove the same for all its lanes, lane by lane:
-// dense sphere at 256², coverage 3.29 → 4.58 ms), and keep_word's branches fold away.
+// Many hypotheses a dispatch: a coverage dispatch covers up to COVERAGE_MEMBERS jobs
+// (contract.glsl), one a z slice of its workgroups (the large triangles' pass reads each queued
+// triangle's member from the queue), so that a GPU pays a dispatch and a barrier per group
+// rather than per hypothesis. MEMBERS, a specialization constant, is 1 or COVERAGE_MEMBERS:
+// with 1, the member is the constant 0 and every read of its constants is at a constant offset,
+// as a software rasterizer needs (it gathers a uniform read at an index it cannot prove the
+// same for all its lanes, lane by lane), and keep_word's branches fold away.
 
 // Each member's draw in each view and its constants (Member, below), which the host writes
 // before the pass (CoverageUniforms in src/render/compute_raster.rs): draws[m] the range view's
 // of member m, draws[COVERAGE_MEMBERS + m] its shadow view's (where it has none, zeros, read
 // only to cull: it covers no pixels; member_draw). A uniform block, not a storage buffer: a
 // software rasterizer loads a uniform block's value once for all the invocations it runs
-// together, a storage buffer's invocation by invocation (dense sphere at 256², coverage
-// 4.7–4.8 → 4.45–4.55 ms). A new branch on one of its values may make lavapipe compile the
-// shader again at every dispatch (keep).
+// together, a storage buffer's invocation by invocation. A new branch on one of its values may
+// make lavapipe compile the shader again at every dispatch (keep).
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
 // src/render/compute_raster.rs.
@@ -128,8 +124,7 @@ layout(constant_id = 4) const uint MEMBERS = 1u;
 // shorter than 6 pixels: compute_raster.rs), so the tiles' code is left out, and a box over 8
 // pixels, were there one, would go to the large triangles' pass (exact too, but slow for
 // many). A software rasterizer runs the tiles' loops at least once for every group of
-// invocations, whatever their boxes: without them, the dense sphere's coverage at 256² took
-// 6.2–9.1 ms against 8.3–11.0 (lavapipe, 2026-11-26, a slower machine than earlier notes').
+// invocations, whatever their boxes, so a dispatch that needs none leaves them out.
 layout(constant_id = 5) const uint TILES = 1u;
 
 // Window coordinates of a view-frame point, operation for operation as raster.vert and the
@@ -292,10 +287,10 @@ void keep(uint t, Setup s, ivec2 pixel) {
     // The same z, from the same arithmetic on the same record, as the view's resolve would work out
     // (range_pixel_of, draw.glsl), which then reads it here. Worked out in every view and then
     // selected (an OpSelect of two locals: glslang makes a branch of a ?: whose operands call
-    // functions), not branched on: with a branch on z_keys, lavapipe (Mesa 22.3) took 4–5 times as
-    // long a hypothesis, and kept 0.5 MB more memory with each one (bench_verify's memory table),
-    // as if it compiled the shader again at every dispatch. It can inline into a shader the values
-    // of a uniform block that decide a branch, and this block is written before every dispatch.
+    // functions), not branched on: with a branch on z_keys, lavapipe takes several times as
+    // long a hypothesis, and its memory grows with each one, as if it compiled the shader again
+    // at every dispatch. It can inline into a shader the values of a uniform block that decide
+    // a branch, and this block is written before every dispatch.
     uint z = z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel)));
     uint depth_bits = floatBitsToUint(depth);
     uint key = s.z_keys ? z : depth_bits;
@@ -354,8 +349,7 @@ void queue_large(uint t, Setup s) {
 // pixels it covers are first found as bits (8 a row, rows 0–3 in x, 4–7 in y), then kept one
 // set bit at a time, so that invocations running in lockstep take as many rounds of keep as
 // the most pixels any of them covers, not as the largest box among them has pixels. (A
-// software rasterizer runs a keep for every lane of every round, covered or not.) Dense
-// sphere at 256², whose boxes fit one tile: coverage pass 6.5–6.8 → 5.2–5.5 ms.
+// software rasterizer runs a keep for every lane of every round, covered or not.)
 void cover_tile(uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e) {
     uvec2 covered = uvec2(0u);
     ivec3 row_start = tile_first;
@@ -387,14 +381,10 @@ void cover_tile(uint t, Setup s, ivec2 tile, ivec3 tile_first, Edges32 e) {
     }
 }
 
-// A box wider or taller than 8 pixels (at most 33), tile by tile. Walking such a box pixel
-// by pixel with a keep at each took the dense sphere's coverage at 1024², where many of its
-// triangles' boxes are 9 pixels or more on a side, 31–32 ms; by tiles, 21–23 ms. (Every box
-// by tiles, the one-tile boxes too, cost 12% more at 256².) Boxes of more than 256 pixels had
-// been queued for the large triangles' pass; covered here, by tiles, a 9,800-triangle sphere's
-// coverage at 1024² went from 38 to 18–21 ms, a 960-triangle sphere's at 256² from 2.9 to
-// 0.9 ms. The edge functions at a tile's first pixel lie in the box, below 2^30: the sum
-// wraps to them exactly.
+// A box wider or taller than 8 pixels (at most 33), tile by tile: faster than pixel by pixel
+// with a keep at each, and than the large triangles' pass, for the many such boxes of a dense
+// mesh at high resolution. A box of one tile keeps its own, cheaper path (cover_tile). The edge
+// functions at a tile's first pixel lie in the box, below 2^30: the sum wraps to them exactly.
 void cover_tiles(uint t, Setup s, Edges32 e) {
     ivec2 box = s.last - s.first + 1;
     for (int ty = 0; ty < box.y; ty += 8) {

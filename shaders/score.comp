@@ -161,8 +161,7 @@ int midpoint_square_minus(float r, bool up, float s) {
 // and the GPU count must agree to the bit. The device's root is moved to the float whose
 // midpoints with its neighbours bracket √s (a square root is never such a midpoint: the
 // comparisons are strict). Zero, subnormal and infinite sums are left as the device has them.
-// Not compiled in on a CPU device, whose root is the IEEE one (lavapipe: the box's verification
-// at 256² took 1.44 ms a hypothesis with it, 1.33 without).
+// Not compiled in on a CPU device, whose root is the IEEE one: there it would only cost time.
 float sqrt_rounded(float s) {
     float r = sqrt(s);
     if (!CORRECT_SQRT) {

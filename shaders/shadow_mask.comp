@@ -329,8 +329,8 @@ bool shadowed(ivec2 pixel, RangePixel range) {
 #ifdef FROM_WORDS
 // The range view at a pixel from its words (a view of one draw, whose words hold z keys:
 // visibility_word.glsl), written to its attachments as raster_resolve.comp writes them (zeros
-// where no triangle covers it), its label and gradient only where a later pass reads them: on
-// lavapipe the three stores cost about 0.5 ms of the dense sphere's 7 ms a hypothesis at 256².
+// where no triangle covers it), its label and gradient only where a later pass reads them:
+// the stores cost time on a software rasterizer.
 // The gradient is read only where it is written or the depth test needs it.
 RangePixel resolve_range(DrawData d, ivec2 pixel) {
     uint at = 2u * word_index(m.range_stride, pixel);
@@ -362,8 +362,7 @@ RangePixel read_range(ivec2 pixel) {
 void main() {
 #ifdef FROM_WORDS
     // Read while every invocation is still active: a software rasterizer then reads them once
-    // for all of them instead of gathering them per invocation (the shadow view's, read where
-    // the label test needs it, cost 1–2 ms of the dense sphere's 21 ms of mask at 1024²).
+    // for all of them instead of gathering them per invocation.
     DrawData range_draw = range_draws[m.words_draw];
     shadow_draw = draws[m.words_draw];
 #endif

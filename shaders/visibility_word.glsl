@@ -10,8 +10,7 @@
 // The key is one of two:
 // - In the range view of one draw, the z that the range view holds at the pixel (the plane's
 //   at its exact centre), as z_key orders it. Whoever resolves the view reads z from the word
-//   and only the label and normal from the triangle's record: the mask of the dense sphere at
-//   1024² took 38–43 ms on lavapipe instead of 55–62 ms when it read the corners too
+//   and only the label and normal from the triangle's record, not its corners
 //   (docs/compute-rasterizer.md, "The mask's lookups").
 // - In a shadow view, whose key nothing reads, and in the views of several draws, whose ties
 //   passes compare depths within the tie tolerance (raster.comp, TIES), the depth (0..1) of

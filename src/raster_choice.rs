@@ -37,27 +37,19 @@ pub struct Crossover {
 }
 
 impl Crossover {
-    /// A CPU device's (lavapipe, 2 cores; three runs, 2026-11-25, confirmed in two on
-    /// 2026-11-26): in depth-mode verification at 256², batches of 64, the box, 0.001 triangles
-    /// per footprint pixel, ran 0.94–1.17× as fast by compute, spheres of 0.015 1.27–1.43×,
-    /// 0.071 1.26–1.46×, 0.17 1.36–1.49×, 0.31 1.57–1.61×, 0.70 1.72–1.83×, 1.3 2.09–2.11×, 3.1
-    /// 2.74–2.86×, 32 9.15–9.44×; the box filling a 256² image, 0.00018, 0.87–1.19× in label
-    /// mode and 0.95–1.00× in depth mode. Filling 512², 0.000046, it ran 0.70–0.80× (label) and
-    /// 0.90–0.95× (depth) as fast (two runs of batches of 16, 2026-11-23). The two are even,
-    /// within that machine's noise, between 0.00018 and 0.001.
+    /// A CPU device's: there the compute rasterizer runs as fast as the graphics pipeline or
+    /// faster at every density measured down to the box filling a 256² image (0.00018
+    /// triangles per footprint pixel), and slower only sparser still (the box filling 512²,
+    /// 0.000046): the bound lies between. The measured points: docs/performance-history.md.
     pub const CPU: Crossover = Crossover { min_triangles: 0, min_density: 0.0001, sparse_below: 0.0 };
 
-    /// A GPU's, measured on NVIDIA H100s and an H200 (six runs, 2026-11-26; every GPU takes it
-    /// until others are measured), the same tables: the box (12 triangles, 0.001) ran
-    /// 0.94–1.16× as fast by compute; spheres of 48 to 960 triangles (0.015–0.31) 0.65–1.07×,
-    /// graphics winning by up to a third; 2,208 (0.70) 1.01–1.45×; 3,968 (1.3) 1.16–1.44×;
-    /// 9,800 (3.1) 2.04–2.27×; 101,760 (32) 9.78–11.63×. Filling the image, the box (0.00018)
-    /// ran 1.72–2.14× as fast, and 101,760 triangles 8.19–9.02× at 256² (1.6) and
-    /// 12.24–13.16× at 1024² (0.1). So what parts them is the triangle count,
-    /// not the density: a few hundred triangles leave most of a GPU's cores idle in the compute
-    /// rasterizer, which gives one invocation to each, while its large triangles' workgroups
-    /// beat the graphics pipeline's few rasterizers. The bounds lie between the measured
-    /// points, near their geometric means (960 and 2,208 triangles; 0.001 and 0.015).
+    /// A GPU's (every GPU takes it until others are measured). What parts the two rasterizers
+    /// there is the triangle count, not the density: a few hundred triangles leave most of a
+    /// GPU's cores idle in the compute rasterizer, which gives one invocation to each, while its
+    /// large triangles' workgroups beat the graphics pipeline's few rasterizers. The bounds lie
+    /// between the measured points, near their geometric means (960 triangles, slower by
+    /// compute, and 2,208, faster; 0.001 and 0.015 triangles per footprint pixel). The measured
+    /// points: docs/performance-history.md.
     pub const GPU: Crossover = Crossover { min_triangles: 1_500, min_density: 0.0, sparse_below: 0.004 };
 
     /// The crossover measured for a CPU device (`is_cpu`) or a GPU.
@@ -142,9 +134,9 @@ impl std::str::FromStr for Raster {
 mod tests {
     use super::*;
 
-    /// Each device's rule against the measured points it rests on (the Crossover constants'
-    /// docs): (triangles, footprint pixels, whether the rule should pick compute there: where
-    /// it ran faster, or even).
+    /// Each device's rule against the measured points it rests on (docs/performance-history.md,
+    /// `Crossover`): (triangles, footprint pixels, whether the rule should pick compute there:
+    /// where it ran faster, or even).
     #[test]
     fn each_devices_crossover_picks_the_rasterizer_measured_faster() {
         let cpu = [

@@ -7,12 +7,10 @@
 //!
 //! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
 //! triangle's corner then reads it directly, not an index first and then the position it
-//! names. The depth test's walks read a corner at every step, and took 15% less time
-//! (dense sphere, 256²: 22.7–23.7 → 19.3–20.4 ms), for 36 bytes a triangle. With the normal
-//! they make one 48-byte record ([`TriangleRecord`]), which the compute rasterizer's shaders
-//! read in 64-bit words, half as many loads (shaders/triangle_words.glsl): the dense sphere's
-//! coverage at 256² took 3.30–3.38 ms instead of 3.71–3.81, at 1024² 16.2–16.3 instead of
-//! 17.3–17.9, and its mask at 1024² 16.0 instead of 18.3–19.2 (three alternations).
+//! names. The depth test's walks, which read a corner at every step, gain most from it; it
+//! costs 36 bytes a triangle. With the normal they make one 48-byte record
+//! ([`TriangleRecord`]), which the compute rasterizer's shaders read in 64-bit words, half as
+//! many loads (shaders/triangle_words.glsl).
 //!
 //! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its

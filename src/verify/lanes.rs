@@ -1,15 +1,14 @@
 //! Several chunks of a verification in flight: while the device runs one chunk's command buffer,
-//! the host records the next. A chunk's recording is host work: 5.0–8.2 µs a hypothesis on this
-//! project's 2-core machine (`GpuContext::recording_time`, which bench_verify's grouping table
-//! prints, 2026-11-25), with 0.5–1.8 µs more to plan it, and 5–11 µs on the NVIDIA machines' hosts,
-//! where the device takes about 5 µs a hypothesis for a 10k-triangle model at 256² (an H200,
-//! 2026-11-26). Recorded and run one after the other, that adds to every hypothesis' time. So on a
-//! GPU a call's chunks go to lanes, the caller's thread and more, each taking the next chunk when
-//! it is done with its last: each lane has at most one chunk in flight, and the verifier's plan
-//! counts the memory of one chunk a lane. A call is then split into a few chunks a lane at least,
-//! or one chunk's recording would overlap nothing, and its first chunks are shorter, so that the
-//! device starts sooner (`lane_chunk_cap`). No lane starts a chunk two a lane past the outputs
-//! handed on, so a call holds a few chunks' outputs at a time, however slow one of them is.
+//! the host records the next. A chunk's recording is host work, which on a fast GPU takes as
+//! long as the device's work or longer (`GpuContext::recording_time`, which bench_verify's
+//! grouping table prints; figures in docs/performance-history.md). Recorded and run one after
+//! the other, that adds to every hypothesis' time. So on a GPU a call's chunks go to lanes, the
+//! caller's thread and more, each taking the next chunk when it is done with its last: each
+//! lane has at most one chunk in flight, and the verifier's plan counts the memory of one chunk
+//! a lane. A call is then split into a few chunks a lane at least, or one chunk's recording
+//! would overlap nothing, and its first chunks are shorter, so that the device starts sooner
+//! (`lane_chunk_cap`). No lane starts a chunk two a lane past the outputs handed on, so a call
+//! holds a few chunks' outputs at a time, however slow one of them is.
 
 use crate::gpu::GpuContext;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -20,14 +19,10 @@ use std::sync::{mpsc, Condvar, Mutex};
 pub use crate::render::MAX_CHUNKS_IN_FLIGHT;
 
 /// Chunks a verification keeps in flight unless the caller says otherwise
-/// (`Verifier::with_chunks_in_flight`): 3 on a GPU; 1 on a CPU device such as lavapipe, whose
-/// device work runs on the host's own cores, where a second lane only contends with it. On an
-/// NVIDIA H200 (2026-11-26, nine runs of `bench_verify -- --rasters`, batches of 4,096 at 256²),
-/// a third lane gained 1–21% over two in every run (the 9,800-triangle sphere 93,100–119,800 →
-/// 101,600–131,000 hypotheses a second); a fourth gained 0–14% more for that sphere and the box,
-/// but lost 9–22% for a 101,760-triangle sphere. After the ramp and the coverage set-up's one
-/// update (the next session, two rounds) a fourth still gained 10–17% for the box and the
-/// 9,800-triangle sphere and lost 11% for the 101,760-triangle one.
+/// (`Verifier::with_chunks_in_flight`): 3 on a GPU, where a third lane gains over two for
+/// every model measured and a fourth gains for some but loses for a dense one; 1 on a CPU
+/// device such as lavapipe, whose device work runs on the host's own cores, where a second lane
+/// only contends with it.
 pub(crate) fn default_chunks_in_flight(ctx: &GpuContext) -> usize {
     if ctx.is_cpu() {
         1
@@ -44,15 +39,9 @@ const LANE_CHUNKS: usize = 2;
 const MIN_LANE_CHUNK: usize = 64;
 /// The first chunks of a call in lanes ramp up to the cap in this many steps: chunk k holds at
 /// most (k + 1) eighths of it. The lanes start their first chunks together, and the device
-/// waits until the first of them is recorded: on an NVIDIA H200 (2026-11-26) a chunk of 1,024
-/// took 13.2 ms with one chunk in flight, 6.0 of them the device's, and a call of six such
-/// chunks in three lanes 7.9–8.6 ms a chunk. Short first chunks start the device sooner, and
-/// each next one is recorded while the device runs those before it (a model of the lanes with
-/// those times: 45 → 39 ms for the call of six chunks, 33 → 27 ms for four, 106 → 99 ms for
-/// sixteen; the longer the call, the less it gains). Measured there, calls of six chunks'
-/// length in three lanes, two rounds in turn with the build before (hypotheses a second): the
-/// 9,800-triangle sphere 118,600–123,400 → 134,400–137,500, the 101,760-triangle one
-/// 99,500–103,300 → 108,500–113,300, the box 121,300–125,900 → 112,600–133,600.
+/// waits until the first of them is recorded, which on a GPU takes longer than running it.
+/// Short first chunks start the device sooner, and each next one is recorded while the device
+/// runs those before it; the longer the call, the less it gains.
 const RAMP_STEPS: usize = 8;
 
 /// The most hypotheses chunk number `chunk` of a call of `hypotheses` may hold where it runs

@@ -63,11 +63,9 @@ impl ScoreSources {
 const SCORE_RUN: u32 = 16;
 
 /// The score pass's pipelines, one for each [`ScoreSources`], built once per verifier. Their
-/// descriptor-set layouts are defined identically, so one set serves them all. On lavapipe,
-/// which runs both sides of a branch on a uniform value, choosing the sources by
-/// specialization instead of push constants took the box's verification at 256² in label
-/// mode from 2.30 to 1.91 ms a hypothesis with the graphics pipeline, and from 2.02 to 1.81 ms
-/// with the compute rasterizer (medians of five alternating runs).
+/// descriptor-set layouts are defined identically, so one set serves them all. A software
+/// rasterizer such as lavapipe runs both sides of a branch on a uniform value, so the sources
+/// are chosen by specialization, not by a push constant.
 pub(crate) struct ScorePass {
     pipelines: Vec<ComputePipeline>,
 }

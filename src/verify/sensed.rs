@@ -33,9 +33,7 @@ pub struct SensedImage {
 
 /// The sensed image's per-pixel segment indices and z in device-local memory, one pair of
 /// words a pixel (segment index + 1 or 0, z's bits): the score pass reads both with one load
-/// where a software rasterizer makes a load of each buffer invocation by invocation (dense
-/// sphere's verification at 1024², label mode, compute rasterizer: 35.5 → 34.8 ms a
-/// hypothesis, medians of eight alternations, every quantile lower).
+/// where a software rasterizer makes a load of each buffer invocation by invocation.
 pub(crate) struct SensedGpu {
     /// The context the buffer belongs to.
     context: Arc<GpuContext>,

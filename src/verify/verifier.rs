@@ -156,10 +156,9 @@ impl Verifier {
     /// The same verifier, keeping up to `n` chunks of a call in flight at once (clamped to 1
     /// to [`MAX_CHUNKS_IN_FLIGHT`]): with more than one, chunks are recorded while the device
     /// runs another (lanes.rs). The default is 3 on a GPU and 1 on a CPU device, whose
-    /// "device" is the host's own cores: there the lanes only contend (lavapipe: 0.32–0.40
-    /// against 0.33–0.45 ms a hypothesis for the box at 64² in chunks of 64). Each needs the
-    /// memory of a chunk; a call keeps as many as the budget holds. The counts and scores are
-    /// the same either way.
+    /// "device" is the host's own cores: there the lanes only contend. Each needs the memory of
+    /// a chunk; a call keeps as many as the budget holds. The counts and scores are the same
+    /// either way.
     pub fn with_chunks_in_flight(self, n: usize) -> Self {
         Self { chunks_in_flight: n.clamp(1, MAX_CHUNKS_IN_FLIGHT), ..self }
     }

@@ -26,8 +26,7 @@
 //!   rather than per hypothesis. How many is the renderer's
 //!   ([`Renderer::with_hypotheses_per_dispatch`](crate::render::Renderer::with_hypotheses_per_dispatch)):
 //!   by default all of them on a GPU, and one on a CPU device, where a dispatch costs next to
-//!   nothing and a group's reads of its members' constants cost more (dense sphere at 256²,
-//!   verification 3.5–3.9 → 4.8–4.9 ms a hypothesis on lavapipe). Pipelines for one member
+//!   nothing and a group's reads of its members' constants cost more. Pipelines for one member
 //!   are specialized to it (the member the constant 0), so a group of one runs the code a
 //!   coverage pass of one job always ran. The images and counts are the same either way.
 //!   Each group has buffers of its own, so a batch records all of a run of slots' groups side
@@ -47,12 +46,11 @@
 //!   tests/compute_raster.rs). Resolve passes then write both views' attachments, and the
 //!   shadow mask reads them as it reads the graphics path's.
 //!
-//! Triangle setup is where lavapipe's graphics pipeline spends its time (one thread, about
-//! 0.2 µs a triangle), and a datacenter GPU runs its graphics pipeline on a few of its units;
-//! a compute pass spreads the triangles over every core. A view of more draws than a
-//! dispatch's members keeps the graphics path, and so does a view whose visibility words the
-//! device cannot bind as one storage buffer, or whose draw reaches beyond
-//! [`MAX_REACH_PIXELS`] (Renderer::computes).
+//! Triangle setup is where lavapipe's graphics pipeline spends its time (on one thread), and a
+//! datacenter GPU runs its graphics pipeline on a few of its units; a compute pass spreads the
+//! triangles over every core. A view of more draws than a dispatch's members keeps the graphics
+//! path, and so does a view whose visibility words the device cannot bind as one storage
+//! buffer, or whose draw reaches beyond [`MAX_REACH_PIXELS`] (Renderer::computes).
 //!
 //! Whether a view takes it is decided in raster_choice.rs ([`Raster`](crate::render::Raster),
 //! [`Crossover`](crate::render::Crossover)).
@@ -145,12 +143,10 @@ pub const MAX_REACH_PIXELS: f64 = 2_097_152.0;
 
 /// Coverage workgroups a block, and stripes of the mesh the blocks are dealt over (`main` in
 /// shaders/raster.comp): each thread of a software rasterizer takes a share of every stripe,
-/// from meshes of DEAL_BLOCK × DEAL_STRIPES × 2 workgroups (4,096 triangles). Measured on
-/// lavapipe (2 threads; medians of four or five alternations), coverage of a UV sphere seen
-/// along its poles, whose front half comes first in its file: 101,760 triangles at 256², 4.45
-/// → 3.72 ms; at 1024², 22.0 → 14.6–16.7 ms; 9,800 triangles at 256², 1.30 → 1.09 ms. Seen
-/// from the side, where its file's order already splits evenly: 3.29 → 3.33, 11.2 → 11.7–12.1
-/// and 0.77 → 0.79 ms. Blocks of 8 workgroups were no better, nor worse at 1024².
+/// from meshes of DEAL_BLOCK × DEAL_STRIPES × 2 workgroups (4,096 triangles). On lavapipe this
+/// speeds the coverage of a mesh whose file lists the half in view first (a UV sphere seen
+/// along its poles), and costs little where the file's order already splits evenly. Blocks of
+/// 8 workgroups are no better.
 const DEAL_BLOCK: u32 = 2;
 const DEAL_STRIPES: u32 = 16;
 
@@ -207,10 +203,7 @@ struct SmallTriangles {
 /// centres from floor(`lo` − ½) to ceil(`lo` + `w` − ½), at most ceil(`w`) + 2 of them, so 5.9
 /// pixels (below 6, for the rounding of poses and corners) leaves at most 8. The small
 /// triangles' pass then leaves out the tiles' code, which a software rasterizer runs whatever
-/// the boxes: on lavapipe (2026-11-26, a slower machine than earlier notes'), the dense
-/// sphere's coverage at 256² took 6.2–9.1 ms against 8.3–11.0 (GPU stage times, best of five
-/// batches of 16, ten alternations), and a 9,800-triangle sphere in the example's sensed scene
-/// verified at 713–1,010 against 566–892 hypotheses/s (batches of 256, as a GPU groups them).
+/// the boxes, so dense meshes cover faster there.
 fn fits_one_tile(longest_edge: f64, pitch: f64) -> bool {
     longest_edge <= 5.9 * pitch
 }
@@ -633,12 +626,8 @@ impl CoverageGroup {
         // covering no triangles.
         let mut cleared: Vec<_> = emptied.iter().map(|&(words, ..)| (words, Access::TransferWrite)).collect();
         cleared.extend([&buffers.large_args, &buffers.uniforms].map(|b| (b, Access::TransferWrite)));
-        // The members' draws and constants, written in one command: on an NVIDIA H200
-        // (2026-11-26), one update where there had been an update and two copies from the draw
-        // tables a dispatch (about 1.8 µs of the GPU's each) took the set-up stage from
-        // 2.24–2.26 to 1.32–1.34 ms a 1,024 hypotheses (device 5.90 → 4.92 ms for a
-        // 9,800-triangle sphere at 256²), and its verification, three chunks in flight, from
-        // 125,600–129,400 to 136,500–146,100 hypotheses a second.
+        // The members' draws and constants, written in one command rather than an update and
+        // two copies from the draw tables: on a GPU each command costs time of its own.
         let mut uniforms = <CoverageUniforms as bytemuck::Zeroable>::zeroed();
         for &(m, member) in &covered {
             let range = ComputeViews::raster_view(&member.views.range, member.range_area, member.index);

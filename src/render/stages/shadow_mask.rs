@@ -5,13 +5,11 @@
 //! their visibility words instead, so that neither view takes a resolve pass of its own: it
 //! reads the shadow view's words where the other reads the visibility attachment, and it
 //! resolves the range view itself, writing the range view's attachments from its words as the
-//! resolve pass would and testing what it wrote. On lavapipe the shadow view's resolve cost
-//! about 0.9 ms of the box's 3.7 ms a hypothesis in label mode; the range view's pass cost
-//! 0.65–0.75 ms of the box's 1.2 ms of compute raster at 256², of which the mask now spends
-//! about 0.5 ms more, so a render saves 0.1–0.3 ms (docs/compute-rasterizer.md). Where no pass
-//! after it reads the range view's label or gradient, a variant writes only its z
-//! ([`MaskVariant::WordsForScoring`]): 3% of the dense sphere's verification at 256², 9% of
-//! the box's.
+//! resolve pass would and testing what it wrote. A resolve pass is a large share of a small
+//! model's time on lavapipe, and resolving in the mask costs less than a pass of its own
+//! (docs/compute-rasterizer.md). Where no pass after it reads the range view's label or
+//! gradient, a variant writes only its z ([`MaskVariant::WordsForScoring`]), saving those
+//! stores.
 
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
@@ -106,9 +104,9 @@ pub enum MaskVariant {
 
 /// The mask pipelines of one [`MaskVariant`], one per [`ShadowTest`], the test a
 /// specialization constant. Their descriptor-set layouts are defined identically, so one set
-/// serves them all. On lavapipe, which runs both sides of a branch on a uniform value, the
-/// label test alone ran in a quarter of the time of the shader that switched on a push
-/// constant (256², 1.0 ms against 4.5 ms).
+/// serves them all. A software rasterizer such as lavapipe runs both sides of a branch on a
+/// uniform value, so each test gets a pipeline of its own rather than a branch on a push
+/// constant.
 pub struct MaskPipelines {
     label: ComputePipeline,
     label_square: ComputePipeline,
