@@ -1,5 +1,5 @@
 // One posed mesh in one view: what the raster shaders get as push constants and what the
-// shadow mask reads back from the draw table (src/render/draw.rs, DrawConstants: 128 bytes,
+// shadow mask reads back from the draw table (src/render/raster/draw.rs, DrawConstants: 128 bytes,
 // std430 either way), and what the compute rasterizer's coverage passes read as a uniform
 // block (std140: the same offsets, as DrawData has no vec3 and no array of scalars or vec2;
 // draw.rs asserts them). Also the one way any shader reaches a mesh's triangles.
@@ -72,7 +72,7 @@ vec2 depth_step(DrawData d, vec3 n) {
 }
 
 // Depths (0..1) within this of the nearest at a pixel are a tie, decided for the lower label
-// (src/render/draw.rs), for a fragment of a triangle whose depth steps by `step` (depth_step).
+// (src/render/raster/draw.rs), for a fragment of a triangle whose depth steps by `step` (depth_step).
 // Coincident faces of two objects part by two roundings, which must not pick the winner:
 // - their poses': a few f32 ulps of the view's largest coordinate (TIE_RELATIVE of it);
 // - their depths': a GPU may work a triangle's depth out from its corners snapped to the

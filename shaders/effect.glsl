@@ -1,4 +1,4 @@
-// What every effect pass shares (src/effects.rs, src/render/effect_pass.rs): one invocation
+// What every effect pass shares (src/effects.rs, src/render/stages/effects.rs): one invocation
 // per range pixel of the region, the range view's attachments, the labels after shadowing,
 // and the buffers the effects write: each pixel's loss (the Reason code of the first effect
 // that lost it, 0 while none has) and its measured z (absolute, range frame) where an effect
@@ -26,7 +26,7 @@ layout(push_constant, std430) uniform Effect {
     float cos_theta;
     float sin_theta;
     uint seed_or_width;            // the effect's seed, or edges' width in pixels
-    vec4 params;           // the effect's parameters (src/render/effect_pass.rs)
+    vec4 params;           // the effect's parameters (src/render/stages/effects.rs)
     uint reflectivity_offset;
 } e;
 

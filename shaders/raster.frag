@@ -21,7 +21,7 @@ layout(location = 3) out float dz_dy;
 #endif
 #ifdef TIES
 // Drawn after a depth-only pass, against its depths: every fragment within the tie tolerance
-// of the nearest passes, and the last drawn (the lowest label) stays (src/render/draw.rs).
+// of the nearest passes, and the last drawn (the lowest label) stays (src/render/raster/draw.rs).
 layout(depth_less) out float gl_FragDepth;
 #endif
 

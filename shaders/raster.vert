@@ -1,7 +1,7 @@
 #version 460
 // Both views are orthographic: pixel (c, r) has its centre at x = x0 + c·dx, y = y0 − r·dy
 // (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½) through the
-// viewport (src/render/draw.rs).
+// viewport (src/render/raster/draw.rs).
 #include "draw.glsl"
 
 layout(push_constant, std430) uniform Draw {

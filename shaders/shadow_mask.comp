@@ -3,7 +3,7 @@
 // One invocation per range pixel: move its point into the shadow frame with R_y(-theta),
 // find the nearest shadow-buffer pixel and keep or drop the label.
 //
-// FROM_WORDS: the variant for views the compute rasterizer rendered (src/render/shadow_pass.rs).
+// FROM_WORDS: the variant for views the compute rasterizer rendered (src/render/stages/shadow_mask.rs).
 // It reads the shadow view from its visibility words, and resolves the range view itself: it
 // reads the range view's words, writes the range view's attachments as the resolve pass would
 // (raster_resolve.comp) and tests the values it wrote, so the range view takes no resolve pass
@@ -53,7 +53,7 @@ layout(push_constant, std430) uniform Mask {
 
 // The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
 // other is the depth test. All given by the host (ShadowTest, src/shadow.rs): one pipeline a
-// test, so that only its code is compiled (src/render/shadow_pass.rs).
+// test, so that only its code is compiled (src/render/stages/shadow_mask.rs).
 layout(constant_id = 0) const uint TEST = 0xffffffffu;
 layout(constant_id = 1) const uint TEST_LABEL = 0xffffffffu;
 layout(constant_id = 2) const uint TEST_LABEL_SQUARE = 0xffffffffu;
@@ -65,7 +65,7 @@ layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 // FROM_WORDS: 0 where no pass after the mask reads the range view's label or gradient (a
 // score pass of shadowed labels, without effects), which are then not written (MaskVariant,
-// src/render/shadow_pass.rs). Its z always is.
+// src/render/stages/shadow_mask.rs). Its z always is.
 layout(constant_id = 6) const uint WRITE_LABEL_AND_GRADIENT = 1u;
 
 #ifdef FROM_WORDS

@@ -1,4 +1,4 @@
-//! The compute rasterizer (src/render/compute_raster.rs) against the graphics pipeline: the
+//! The compute rasterizer (src/render/raster/compute.rs) against the graphics pipeline: the
 //! same coverage rule (top-left), the same sub-pixel precision (1/256) and the same plane z
 //! should give the same images. The allowance is stated here: none on lavapipe, where every
 //! label, shadowed label and z bit is identical on every case below; on a GPU, a boundary
@@ -424,7 +424,7 @@ fn a_queue_longer_than_a_dispatch_is_covered_whole() {
 /// 5,000 spikes from 57,000 pixels left of the view (edge functions past 32 bits in their
 /// boxes), their depths 0.001 apart (3 of 2,477 pixels kept another spike: z differs); and
 /// 5,000 from about 250 pixels (1 pixel). The viewport is now 16,384 pixels a side on
-/// lavapipe (src/render/draw.rs, `ViewportFrame`): a spike from 57,000 pixels away is still
+/// lavapipe (src/render/raster/draw.rs, `ViewportFrame`): a spike from 57,000 pixels away is still
 /// clipped, 8,192 pixels from the view's centre, where moving its corner by a snapping step
 /// moves its edge in the view by a hundredth of that or less. The viewport's centre is the
 /// view's rounded down to a whole pixel, so a view of an odd number of pixels a side is

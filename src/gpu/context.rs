@@ -258,7 +258,7 @@ impl GpuContext {
     }
 
     /// Half the side of the square viewport through which the graphics pipeline draws every
-    /// view (src/render/draw.rs, `ViewportFrame`): half the largest power of two within the
+    /// view (src/render/raster/draw.rs, `ViewportFrame`): half the largest power of two within the
     /// device's viewport dimensions (maxViewportDimensions: 16,384 on lavapipe, so 8,192).
     pub fn viewport_half_side(&self) -> f32 {
         let [width, height] = self.limits.max_viewport_dimensions;

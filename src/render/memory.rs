@@ -43,7 +43,7 @@ pub(crate) fn slot_bytes(
 /// Bytes a render of these views takes at its peak, rendering or writing its files after
 /// (the larger of the two): its slot ([`slot_bytes`]), what it returns on the host, and in
 /// shadow mode `exact` the CPU's casters and image (exact.rs) and their upload
-/// (host_view.rs).
+/// (stages/host_view.rs).
 pub(crate) fn render_bytes(
     views: &Views,
     effects: &Effects,

@@ -3,13 +3,13 @@
 //! range raster → [shadow raster → shadow mask] → [each named effect] → sink
 //!
 //! or, in shadow mode `exact`, the range view and its shadowed labels copied from the host
-//! (host_view.rs) in place of the three passes before the effects.
+//! (stages/host_view.rs) in place of the three passes before the effects.
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute passes over them (`verify`'s score passes, one job a hypothesis, in
 //! verify/batch.rs).
 //! The shadow passes are recorded only when the mode and θ ask for them, and an effect's pass
-//! only when the effects name it (effect_pass.rs). Each pass is a [`Step`]: the use it makes
+//! only when the effects name it (stages/effects.rs). Each pass is a [`Step`]: the use it makes
 //! of each resource, from which the [`Encoder`] derives the barriers, and its commands. A job
 //! records its steps one after the other; a run of jobs in different slots records each
 //! stage's steps side by side behind one barrier ([`Passes::record_run`]).
@@ -67,7 +67,7 @@ pub(crate) struct SlotShape<'a> {
     /// view's table from `shadow`).
     pub compute_raster: Option<&'a DrawTable>,
     /// The compute rasterizer's views hold several draws (a scene of several objects): the
-    /// slot resolves the shadow view's words too (compute_raster.rs).
+    /// slot resolves the shadow view's words too (raster/compute.rs).
     pub several_draws: bool,
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
@@ -283,7 +283,7 @@ type ShadowPass<'s> = (&'s ViewTargets, &'s ViewGrid, PixelRect, &'s Buffer, &'s
 type ComputeJob<'s, 'p> = (&'s ComputeViews<'s>, &'p ComputeRasterPipelines, (u32, &'s [Draw<'s>]));
 
 impl<'p> Passes<'p> {
-    /// The compute rasterizer's state and pipelines for a job it renders (compute_raster.rs),
+    /// The compute rasterizer's state and pipelines for a job it renders (raster/compute.rs),
     /// with its draws and the first's index in the draw tables.
     fn compute_job<'s>(&self, slot: &'s Slot<'s>, job: &'s Job<'s>) -> Option<ComputeJob<'s, 'p>> {
         match (&slot.compute, self.raster_pipelines, job.host_view) {
@@ -386,7 +386,7 @@ impl<'p> Passes<'p> {
         let compute = self.compute_job(slot, job);
         let shadow = self.shadow_pass(slot, job);
         match compute {
-            // Both views were covered in one pass (compute_raster.rs). Words of several draws
+            // Both views were covered in one pass (raster/compute.rs). Words of several draws
             // are resolved into both views' attachments, for the shadow mask that reads them.
             Some((state, rp, (first, draws))) if draws.len() > 1 => {
                 steps.push(state.resolve_step(rp, (&slot.range, job.area), (first, draws.len())).timed("range"));
@@ -444,7 +444,7 @@ impl<'p> Passes<'p> {
         let mut shadowed_labels = None;
         if let Some((targets, grid, _, masked, bindings, test)) = shadow {
             // Where the compute rasterizer rendered the views, the mask reads their words and
-            // writes the range view's attachments (shadow_pass.rs). The words are bound in a
+            // writes the range view's attachments (stages/shadow_mask.rs). The words are bound in a
             // slot that has them for either variant, so their reads are stated either way.
             let words = slot.compute.as_ref().and_then(|c| c.to_mask());
             let constants = MaskConstants::new(sensor, views, grid, job.area);

@@ -1,6 +1,6 @@
 //! Planning a render's views before anything is recorded: the range grid over the scene's
 //! depth bounds, the shadow grid that covers what the range view can see, and the checks
-//! that the GPU's f32 arithmetic holds them (gpu_arithmetic.rs). `render` plans one scene's
+//! that the GPU's f32 arithmetic holds them (plan/gpu_arithmetic.rs). `render` plans one scene's
 //! views, `verify` one hypothesis' at a time.
 
 pub(crate) mod gpu_arithmetic;
@@ -38,7 +38,7 @@ impl Views {
 /// `none` or θ = 0, the shadow grid (sensor.rs) for bounding spheres (centre, radius) given in
 /// the range frame, `name(i)` naming sphere i's model in errors. The plan is refused where the
 /// GPU's f32 arithmetic would not hold it: its grids, each model's reach, and the effects that
-/// change z over its depth range (gpu_arithmetic.rs).
+/// change z over its depth range (plan/gpu_arithmetic.rs).
 ///
 /// Only what a view can show sizes it: an object whose footprint misses the range image
 /// cannot put a point into it, so it neither widens the range view's depth range nor the

@@ -34,7 +34,7 @@
 //! - Resolve, the range view's (a view of one draw): one invocation per pixel writes what the
 //!   graphics path's fragment shader would have written for that triangle. Where a shadow
 //!   mask follows, the mask does it as it tests each pixel, and reads the shadow view's words
-//!   as they are (shadow_pass.rs): neither view takes a pass of its own. Without one, the
+//!   as they are (stages/shadow_mask.rs): neither view takes a pass of its own. Without one, the
 //!   resolve pass (shaders/raster_resolve.comp) does it.
 //! - Views of several draws (a scene of up to [`COVERAGE_MEMBERS`] objects,
 //!   [`CoverageGroup::of_draws`]): the draws are the members of one coverage dispatch and
@@ -303,7 +303,7 @@ pub struct ComputeRasterPipelines {
     resolve: ComputePipeline,
     resolve_several: ComputePipeline,
     resolve_shadow: ComputePipeline,
-    /// The shadow mask reading the shadow view's words (shadow_pass.rs), writing the range
+    /// The shadow mask reading the shadow view's words (stages/shadow_mask.rs), writing the range
     /// view's attachments whole, or only its z for a score pass.
     pub mask: MaskPipelines,
     pub mask_for_scoring: MaskPipelines,
@@ -423,7 +423,7 @@ impl<'a> ComputeViews<'a> {
         Ok(Self { range, shadow, resolve, resolve_shadow })
     }
 
-    /// What the shadow mask's variant reading words reads (shadow_pass.rs), where these words
+    /// What the shadow mask's variant reading words reads (stages/shadow_mask.rs), where these words
     /// include the shadow view's, and the views' pixels per row (range view's, shadow view's).
     pub fn to_mask(&self) -> Option<(WordsToMask<'_>, (u32, u32))> {
         self.shadow.as_ref().map(|shadow| {
@@ -585,7 +585,7 @@ impl CoverageGroup {
     /// buffers made ready, the coverage dispatch and the large triangles' (none where no
     /// member is covered); for one job's draws, `members[m]` its draw m, and two more, the
     /// ties passes'. Both views' words are left for the shadow mask, which resolves the
-    /// range view (shadow_pass.rs), or for the resolve pass where there is no shadow view
+    /// range view (stages/shadow_mask.rs), or for the resolve pass where there is no shadow view
     /// ([`ComputeViews::resolve_step`]).
     pub fn steps<'s>(
         &'s self,
