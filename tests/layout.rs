@@ -11,7 +11,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// A module's path below the crate: `["render", "draw"]` for src/render/raster/draw.rs.
+/// A module's path below the crate: `["render", "raster", "draw"]` for src/render/raster/draw.rs.
 type ModulePath = Vec<String>;
 
 fn module_of(file: &Path, src: &Path) -> ModulePath {
