@@ -34,29 +34,31 @@ fn contract_glsl() -> String {
     )
 }
 
-/// (source, output name, macros defined). One source can yield several variants.
+/// (source, output name, macros defined). One source can yield several variants. The folders
+/// of shaders/ mirror src/render's: raster/ (both rasterizers and what they share), stages/
+/// (the shadow mask and the effects), and verify/ (the score pass).
 const SHADERS: &[(&str, &str, &[&str])] = &[
-    ("raster.vert", "raster.vert.spv", &[]),
-    ("raster.frag", "raster_range.frag.spv", &[]),
-    ("raster.frag", "raster_range_ties.frag.spv", &["TIES"]),
-    ("raster.frag", "raster_shadow.frag.spv", &["SHADOW_VIEW"]),
-    ("raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
-    ("shadow_mask.comp", "shadow_mask.comp.spv", &[]),
-    ("shadow_mask.comp", "shadow_mask_words.comp.spv", &["FROM_WORDS"]),
-    ("raster.comp", "raster.comp.spv", &[]),
-    ("raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
-    ("raster.comp", "raster_ties.comp.spv", &["TIES"]),
-    ("raster.comp", "raster_large_ties.comp.spv", &["LARGE_TRIANGLES", "TIES"]),
-    ("raster_resolve.comp", "raster_resolve.comp.spv", &[]),
-    ("raster_resolve.comp", "raster_resolve_shadow.comp.spv", &["SHADOW_VIEW"]),
-    ("score.comp", "score.comp.spv", &[]),
-    ("effect_grazing.comp", "effect_grazing.comp.spv", &[]),
-    ("effect_working_volume.comp", "effect_working_volume.comp.spv", &[]),
-    ("effect_reflectivity.comp", "effect_reflectivity.comp.spv", &[]),
-    ("effect_edges.comp", "effect_edges.comp.spv", &[]),
-    ("effect_dropout.comp", "effect_dropout.comp.spv", &[]),
-    ("effect_noise.comp", "effect_noise.comp.spv", &[]),
-    ("effect_quantize.comp", "effect_quantize.comp.spv", &[]),
+    ("raster/raster.vert", "raster.vert.spv", &[]),
+    ("raster/raster.frag", "raster_range.frag.spv", &[]),
+    ("raster/raster.frag", "raster_range_ties.frag.spv", &["TIES"]),
+    ("raster/raster.frag", "raster_shadow.frag.spv", &["SHADOW_VIEW"]),
+    ("raster/raster.frag", "raster_shadow_ties.frag.spv", &["SHADOW_VIEW", "TIES"]),
+    ("stages/shadow_mask.comp", "shadow_mask.comp.spv", &[]),
+    ("stages/shadow_mask.comp", "shadow_mask_words.comp.spv", &["FROM_WORDS"]),
+    ("raster/raster.comp", "raster.comp.spv", &[]),
+    ("raster/raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
+    ("raster/raster.comp", "raster_ties.comp.spv", &["TIES"]),
+    ("raster/raster.comp", "raster_large_ties.comp.spv", &["LARGE_TRIANGLES", "TIES"]),
+    ("raster/raster_resolve.comp", "raster_resolve.comp.spv", &[]),
+    ("raster/raster_resolve.comp", "raster_resolve_shadow.comp.spv", &["SHADOW_VIEW"]),
+    ("verify/score.comp", "score.comp.spv", &[]),
+    ("stages/effect_grazing.comp", "effect_grazing.comp.spv", &[]),
+    ("stages/effect_working_volume.comp", "effect_working_volume.comp.spv", &[]),
+    ("stages/effect_reflectivity.comp", "effect_reflectivity.comp.spv", &[]),
+    ("stages/effect_edges.comp", "effect_edges.comp.spv", &[]),
+    ("stages/effect_dropout.comp", "effect_dropout.comp.spv", &[]),
+    ("stages/effect_noise.comp", "effect_noise.comp.spv", &[]),
+    ("stages/effect_quantize.comp", "effect_quantize.comp.spv", &[]),
 ];
 
 fn main() {
@@ -64,8 +66,11 @@ fn main() {
     println!("cargo:rerun-if-changed=shaders");
     println!("cargo:rerun-if-changed=src/shader_contract.rs");
     let contract = contract_glsl();
-    for entry in std::fs::read_dir(dir).expect("shaders/ exists") {
-        println!("cargo:rerun-if-changed={}", entry.expect("readable shaders/").path().display());
+    for folder in std::fs::read_dir(dir).expect("shaders/ exists") {
+        let folder = folder.expect("readable shaders/").path();
+        for entry in std::fs::read_dir(&folder).unwrap_or_else(|e| panic!("{}: {e}", folder.display())) {
+            println!("cargo:rerun-if-changed={}", entry.expect("a readable folder of shaders/").path().display());
+        }
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let compiler = shaderc::Compiler::new().expect("shaderc initialises");
@@ -89,12 +94,13 @@ fn main() {
             for name in defines {
                 options.add_macro_definition(name, None);
             }
-            options.set_include_callback(|name, _, _, _| {
+            // An include is found beside the file that includes it, as a C compiler finds it.
+            options.set_include_callback(|name, _, including, _| {
                 if name == "contract.glsl" {
                     let content = contract.clone();
                     return Ok(shaderc::ResolvedInclude { resolved_name: name.to_string(), content });
                 }
-                let include = dir.join(name);
+                let include = Path::new(including).parent().unwrap_or(dir).join(name);
                 std::fs::read_to_string(&include)
                     .map(|content| shaderc::ResolvedInclude { resolved_name: include.display().to_string(), content })
                     .map_err(|e| format!("{}: {e}", include.display()))
@@ -261,7 +267,7 @@ mod reflect {
     }
 
     /// The Rust source of `shader_layout.rs`: `structs::NAME::{member…, MEMBERS, SIZE}`;
-    /// `spec::SOURCE::NAME` for each source (`shadow_mask.comp` → `SHADOW_MASK_COMP`); and
+    /// `spec::SOURCE::NAME` for each source (`stages/shadow_mask.comp` → `SHADOW_MASK_COMP`); and
     /// `bindings::SHADER::NAME` for each shader (by its constant's name in src/gpu/shaders.rs).
     /// A struct of one name must be laid out alike in every shader. `sources` are the shaders'
     /// source files, in order.
@@ -291,7 +297,8 @@ mod reflect {
         // shader (a variant may bind more).
         let mut spec: BTreeMap<String, (&BTreeMap<String, u32>, &str)> = BTreeMap::new();
         for ((shader_name, shader), source) in shaders.iter().zip(sources) {
-            let module = source.replace('.', "_").to_uppercase();
+            let file = source.rsplit('/').next().unwrap_or(source);
+            let module = file.replace('.', "_").to_uppercase();
             if let Some((other, where_)) = spec.insert(module, (&shader.spec_ids, shader_name)) {
                 assert_eq!(other, &shader.spec_ids, "{where_} and {shader_name} number {source}'s constants apart");
             }

@@ -7,7 +7,7 @@
 //! on the order of the passes, so the set of lost pixels is the union of what each effect
 //! loses; where several effects lose one pixel, its reason is the first in [`EFFECT_ORDER`].
 //! Random effects draw from a counter-based generator keyed by (seed, pixel, effect)
-//! (shaders/random.glsl), so an image is bit-identical across runs, batch sizes and orders.
+//! (shaders/stages/random.glsl), so an image is bit-identical across runs, batch sizes and orders.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};

@@ -74,7 +74,7 @@ impl Sensor {
         Ok(())
     }
 
-    /// The grid as the GPU and the files hold it, in f32 (shaders/draw.glsl's grid,
+    /// The grid as the GPU and the files hold it, in f32 (shaders/raster/draw.glsl's grid,
     /// range.exr's X and Y, the score's areas in src/verify/area.rs): each pitch a normal f32,
     /// a pixel's squared area (dx·dy)² too (the area of a block divides by it), and every pixel
     /// centre a finite f32 at most a pitch from its neighbours' values, so that no two columns
@@ -211,7 +211,7 @@ impl Sensor {
 }
 
 /// One rendered view: an orthographic grid looking down −z, and the depth range mapped onto
-/// the depth buffer (larger z is closer, so it maps to smaller depth; shaders/raster.vert).
+/// the depth buffer (larger z is closer, so it maps to smaller depth; shaders/raster/raster.vert).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewGrid {
     pub origin: [f64; 2],

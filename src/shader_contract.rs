@@ -11,30 +11,30 @@
 /// Heights (depths) this close, relative to the scene's (the view's) largest coordinate, are a
 /// tie: 2^-17, about 64 f32 ulps, the rounding of poses (README "the tie rule"). Exact mode
 /// (src/exact.rs) uses it as it is; the GPU paths add an allowance for depths worked out from
-/// snapped corners (`tie_depth`, shaders/draw.glsl), which exact mode has none of.
+/// snapped corners (`tie_depth`, shaders/raster/draw.glsl), which exact mode has none of.
 pub const TIE_RELATIVE: f64 = 1.0 / 131072.0;
 
 /// An edge link that names no triangle (src/mesh/adjacency.rs).
 pub const NO_NEIGHBOUR: u32 = u32::MAX;
 
 /// Each half of a pixel's visibility word where no triangle covers it: the compute rasterizer
-/// fills the words with it before its coverage passes (shaders/visibility_word.glsl).
+/// fills the words with it before its coverage passes (shaders/raster/visibility_word.glsl).
 pub const EMPTY_HALF: u32 = u32::MAX;
 
 /// Where a member's place starts above a triangle's index, in the compute rasterizer's words
-/// of a view of several draws and in its queue of large triangles (shaders/raster_compute.glsl):
+/// of a view of several draws and in its queue of large triangles (shaders/raster/raster_compute.glsl):
 /// meshes have fewer than 2^29 triangles (`mesh::MAX_LINKED_TRIANGLES`).
 pub const MEMBER_SHIFT: u32 = 29;
 
-/// Most jobs one coverage dispatch of the compute rasterizer covers (shaders/raster.comp binds
+/// Most jobs one coverage dispatch of the compute rasterizer covers (shaders/raster/raster.comp binds
 /// each member's words, four bindings a view, which it checks, and src/render/raster/compute.rs
 /// groups its slots by it).
 pub const COVERAGE_MEMBERS: usize = 4;
 
 /// The bit of a queued large triangle's entry that says its view (0 range, 1 shadow), above
-/// its member's place (shaders/raster.comp).
+/// its member's place (shaders/raster/raster.comp).
 pub const QUEUE_VIEW_BIT: u32 = 31;
 
 /// Invocations a workgroup of the compute rasterizer's coverage passes (`local_size_x` in
-/// shaders/raster.comp): each covers a triangle, or in the large triangles' pass a row.
+/// shaders/raster/raster.comp): each covers a triangle, or in the large triangles' pass a row.
 pub const COVERAGE_GROUP: u32 = 64;

@@ -127,7 +127,7 @@ impl ShadowSettings {
     }
 }
 
-/// The tests of shaders/shadow_mask.comp. Each has a pipeline of its own, the test a
+/// The tests of shaders/stages/shadow_mask.comp. Each has a pipeline of its own, the test a
 /// specialization constant, so that a software rasterizer, which runs both sides of a branch
 /// on a uniform value, runs only its test's code (src/render/stages/shadow_mask.rs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -347,7 +347,7 @@ fn an_open_mesh_shows_its_inside_to_the_compute_rasterizer() {
 /// `count` spikes entering a 64² view from outside it: each has one corner at x = `tip`, left
 /// of the view, and two inside, so its box within the view is small while a corner lies far
 /// from it, which the small triangles' pass leaves to the queue of large triangles
-/// (shaders/raster.comp). Spike i lies nearer than spike i − 1 where both are, by far more
+/// (shaders/raster/raster.comp). Spike i lies nearer than spike i − 1 where both are, by far more
 /// than rounding. Returns the scene, without a shadow view (a far tip makes the scene too deep
 /// for one), and what the graphics pipeline renders.
 fn spikes(count: u32, tip: f32) -> (Scene, RenderOutput) {

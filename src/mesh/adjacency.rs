@@ -1,6 +1,6 @@
 //! Which triangle lies across each edge of each triangle, so that the depth-mode shadow test
 //! can walk over a surface from the triangle a shadow-buffer pixel saw to the one over a
-//! point, however much smaller than a pixel the triangles are (shaders/shadow_mask.comp).
+//! point, however much smaller than a pixel the triangles are (shaders/stages/shadow_mask.comp).
 //!
 //! Vertices are matched by position, not index: OBJ files often repeat a vertex for each
 //! normal or texture coordinate it carries, and the surface is still one surface. An edge

@@ -44,7 +44,7 @@ pub struct Mesh {
 }
 
 /// The largest |coordinate| a model's vertex may have: a rotation's sum of three products
-/// (shaders/draw.glsl, `to_view`) stays finite in f32 far beyond it.
+/// (shaders/raster/draw.glsl, `to_view`) stays finite in f32 far beyond it.
 pub const MAX_COORDINATE: f32 = 1e30;
 
 impl Mesh {

@@ -10,7 +10,7 @@
 //! names. The depth test's walks, which read a corner at every step, gain most from it; it
 //! costs 36 bytes a triangle. With the normal they make one 48-byte record
 //! ([`TriangleRecord`]), which the compute rasterizer's shaders read in 64-bit words, half as
-//! many loads (shaders/triangle_words.glsl).
+//! many loads (shaders/raster/triangle_words.glsl).
 //!
 //! The normals are computed here, once, in f64 from the (f32) corners: a sliver triangle's
 //! edges are nearly parallel, and their cross product in f32, per fragment, lost most of its
@@ -105,8 +105,8 @@ fn longest_edge(mesh: &Mesh) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// A triangle as the shaders read it (`TriangleRecord` in shaders/draw.glsl, and as six 64-bit
-/// words in shaders/triangle_words.glsl): its corners' xyz, then its unit normal's (model
+/// A triangle as the shaders read it (`TriangleRecord` in shaders/raster/draw.glsl, and as six 64-bit
+/// words in shaders/raster/triangle_words.glsl): its corners' xyz, then its unit normal's (model
 /// frame), twelve floats. 48 bytes, so that each record starts on 8 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

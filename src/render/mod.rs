@@ -51,7 +51,7 @@ use std::time::Instant;
 use target_pool::TargetPool;
 
 /// Pixels added around a footprint: one for rounding, one more in the shadow view for the
-/// depth test's neighbourhood of the nearest shadow pixel (shaders/shadow_mask.comp).
+/// depth test's neighbourhood of the nearest shadow pixel (shaders/stages/shadow_mask.comp).
 pub(crate) const FOOTPRINT_MARGIN: u32 = 2;
 
 pub struct Renderer {

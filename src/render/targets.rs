@@ -1,5 +1,5 @@
 //! The attachments of one view: its colour attachments, in the fragment shader's output
-//! order (shaders/raster.frag), and a depth buffer that resolves visibility.
+//! order (shaders/raster/raster.frag), and a depth buffer that resolves visibility.
 //!
 //! - Range view: label, z, ∂z/∂x, ∂z/∂y — the surface, its point and its plane's gradient,
 //!   which the depth-mode shadow test needs to know which way the surface faces.

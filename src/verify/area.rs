@@ -4,7 +4,7 @@
 //! Areas must be deterministic whatever the batch order, so each triangle's area is rounded
 //! once to a whole number of [`AREA_UNITS_PER_PIXEL`]ths of a pixel's area and summed as an
 //! integer. The arithmetic is spelled out in f32 in a fixed order with no fused operations,
-//! the same as `shaders/score.comp` (which marks it `precise`): Vulkan rounds additions and
+//! the same as `shaders/verify/score.comp` (which marks it `precise`): Vulkan rounds additions and
 //! multiplications as IEEE 754 does, and the shader rounds its square root as IEEE does where
 //! the device's may err (a GPU's; `sqrt_rounded`), so the host and the GPU get the same bits.
 //! The sensed image's areas come from the same function, so identical images give a ratio of

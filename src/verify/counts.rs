@@ -1,5 +1,5 @@
 //! The integer counts the GPU accumulates for one hypothesis, and where each lives in its
-//! slice of the counts buffer (shared with `shaders/score.comp`):
+//! slice of the counts buffer (shared with `shaders/verify/score.comp`):
 //!
 //! | words | content |
 //! |---|---|

@@ -1,5 +1,5 @@
 //! The compute pass that accumulates one hypothesis' verification counts
-//! (shaders/score.comp, src/verify/counts.rs).
+//! (shaders/verify/score.comp, src/verify/counts.rs).
 
 use super::counts::{N0_WORD, N1_MINUS_WORD, N1_PLUS_WORD, SCALARS};
 use crate::error::Result;
@@ -9,7 +9,7 @@ use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, 
 use ash::vk;
 use std::sync::Arc;
 
-/// Push constants of the score pass; matches `shaders/score.comp`.
+/// Push constants of the score pass; matches `shaders/verify/score.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ScoreConstants {
@@ -33,7 +33,7 @@ matches_shader_struct!(
     Score { counts_offset, width, height, z_origin, region, surfaces, segments, tolerance, area_scale, dx, dy }
 );
 
-/// What a score pass counts from (specialization constants of shaders/score.comp).
+/// What a score pass counts from (specialization constants of shaders/verify/score.comp).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct ScoreSources {
     /// The shadow mask's labels, not the range view's.
@@ -57,7 +57,7 @@ impl ScoreSources {
     }
 }
 
-/// Pixels of a row one invocation of the score pass scores (`RUN` in shaders/score.comp): it
+/// Pixels of a row one invocation of the score pass scores (`RUN` in shaders/verify/score.comp): it
 /// adds to a counter once for as many of them as count for it in turn. At 1024² on lavapipe,
 /// adding a pixel at a time spent about half the pass on its atomics.
 const SCORE_RUN: u32 = 16;
@@ -71,7 +71,7 @@ pub(crate) struct ScorePass {
 }
 
 impl ScorePass {
-    /// The pass, correcting the device's square root to the IEEE one (shaders/score.comp,
+    /// The pass, correcting the device's square root to the IEEE one (shaders/verify/score.comp,
     /// `sqrt_rounded`) on a GPU, where Vulkan lets it err by a few ulp; a CPU device's is exact.
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         Self::with_sqrt((!ctx.is_cpu(), 0), ctx)
@@ -132,7 +132,7 @@ impl ScorePass {
     }
 }
 
-/// What a score pass binds (shaders/score.comp, bindings 0 to 6).
+/// What a score pass binds (shaders/verify/score.comp, bindings 0 to 6).
 pub(crate) struct ScoreInputs<'a> {
     pub label: &'a Image,
     pub z: &'a Image,

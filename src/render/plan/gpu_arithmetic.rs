@@ -14,11 +14,11 @@ use crate::mesh::MAX_COORDINATE;
 use crate::sensor::ViewGrid;
 use glam::DVec3;
 
-/// The largest |standard normal variate| shaders/random.glsl draws (below 5.8), with a margin.
+/// The largest |standard normal variate| shaders/stages/random.glsl draws (below 5.8), with a margin.
 const GAUSSIAN_BOUND: f32 = 6.0;
 
 /// How far, in pixels of a view, a model that shows in the view may reach from its first
-/// pixel: below 2^23 pixels, f32 window coordinates (shaders/draw.glsl, `clip_position`) are
+/// pixel: below 2^23 pixels, f32 window coordinates (shaders/raster/draw.glsl, `clip_position`) are
 /// spaced at most half a pixel, so a corner rounds by at most a quarter pixel and an edge
 /// crossing the view lies within about half a pixel of where f64 puts it. Farther, a pixel's
 /// coverage is decided by rounding (a 16-pixel image of a 1-unit box at a pitch of 1e-30 lost
@@ -102,7 +102,7 @@ pub(super) fn check_reach(
 }
 
 /// Checks that the effects that change z keep every valid pixel's z finite, as the effect
-/// shaders compute it (shaders/effect_noise.comp, effect_quantize.comp), for any z the range
+/// shaders compute it (shaders/stages/effect_noise.comp, effect_quantize.comp), for any z the range
 /// view (`range`) can hold: its depth range, measured from the local origin `local` as the GPU
 /// adds it back.
 pub(super) fn check_effects(effects: &Effects, range: &ViewGrid, local: DVec3) -> Result<()> {

@@ -2,13 +2,13 @@
 //! instead of the graphics pipeline, into the same attachments, so every pass after it is
 //! unchanged.
 //!
-//! - Coverage (shaders/raster.comp), over the range view and the shadow view at once: one
+//! - Coverage (shaders/raster/raster.comp), over the range view and the shadow view at once: one
 //!   invocation per triangle reads its corners and normal once (reading them is most of a small
 //!   triangle's set-up) and, in each view, finds the pixel centres it covers (1/256-pixel
 //!   snapped corners, the top-left rule, exact integer edge functions in 32 bits) and keeps
 //!   the nearest triangle per pixel with a 64-bit atomicMin of (key, triangle; tagged with its
 //!   draw's place in a view of several draws, below) on that view's words, the key the exact z
-//!   in the range view of one draw and the depth elsewhere (shaders/visibility_word.glsl), by tiles
+//!   in the range view of one draw and the depth elsewhere (shaders/raster/visibility_word.glsl), by tiles
 //!   of 8 × 8 pixels (one, in a variant without the tiles' code, which a software rasterizer
 //!   would run whatever the boxes, where no triangle's box can be larger: `fits_one_tile`).
 //!   A triangle whose corners lie too far from its box for 32 bits (more than 32 pixels) is
@@ -35,12 +35,12 @@
 //!   graphics path's fragment shader would have written for that triangle. Where a shadow
 //!   mask follows, the mask does it as it tests each pixel, and reads the shadow view's words
 //!   as they are (stages/shadow_mask.rs): neither view takes a pass of its own. Without one, the
-//!   resolve pass (shaders/raster_resolve.comp) does it.
+//!   resolve pass (shaders/raster/raster_resolve.comp) does it.
 //! - Views of several draws (a scene of up to [`COVERAGE_MEMBERS`] objects,
 //!   [`CoverageGroup::of_draws`]): the draws are the members of one coverage dispatch and
 //!   share the view's words, each triangle tagged with its draw's place in the order the
 //!   graphics path's ties pass draws them (draw.rs; `render` numbers its draws in that
-//!   order). After the passes that keep the nearest, two ties passes (shaders/raster.comp,
+//!   order). After the passes that keep the nearest, two ties passes (shaders/raster/raster.comp,
 //!   TIES) keep, among the triangles within the tie depth of the nearest, the last drawn, as
 //!   the graphics path's tie rule does (lavapipe: the same labels, shadowed labels and z bits,
 //!   tests/compute_raster.rs). Resolve passes then write both views' attachments, and the
@@ -68,7 +68,7 @@ use crate::shader_contract::{COVERAGE_GROUP, EMPTY_HALF, MEMBER_SHIFT, QUEUE_VIE
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
-/// One view as both passes see it; matches `RasterView` in shaders/raster_compute.glsl.
+/// One view as both passes see it; matches `RasterView` in shaders/raster/raster_compute.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct RasterView {
@@ -79,7 +79,7 @@ struct RasterView {
 }
 
 /// One member's constants in the coverage passes' uniform block; matches `Member` in
-/// shaders/raster.comp (std140: the same offsets, as it holds no vec3 and no array of scalars).
+/// shaders/raster/raster.comp (std140: the same offsets, as it holds no vec3 and no array of scalars).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct MemberConstants {
@@ -91,7 +91,7 @@ struct MemberConstants {
     /// ties order; else 0.
     place: u32,
     /// 1 where the member's range view is its own, of one draw: its words then hold z keys
-    /// (shaders/visibility_word.glsl), from which its resolve reads z; 0 where members share
+    /// (shaders/raster/visibility_word.glsl), from which its resolve reads z; 0 where members share
     /// words, whose ties passes compare depths.
     z_keys: u32,
     _pad: [u32; 3],
@@ -100,7 +100,7 @@ struct MemberConstants {
 matches_shader_struct!(RasterView, RasterView { area, draw, stride });
 matches_shader_struct!(MemberConstants, Member { views, triangles, cull, dealt_rows, place, z_keys });
 
-/// The coverage passes' uniform block; matches `Coverage` in shaders/raster.comp (std140: the
+/// The coverage passes' uniform block; matches `Coverage` in shaders/raster/raster.comp (std140: the
 /// same offsets, as DrawData and Member keep them and their sizes are multiples of 16). Each
 /// member's draw in each view: draws[m] its range view's, draws[COVERAGE_MEMBERS + m] its
 /// shadow view's; then each member's constants.
@@ -124,7 +124,7 @@ fn cull_sign(solidity: Solidity) -> i32 {
     }
 }
 
-/// Bytes of a pixel's visibility word (shaders/visibility_word.glsl), in each view.
+/// Bytes of a pixel's visibility word (shaders/raster/visibility_word.glsl), in each view.
 pub(crate) const VISIBILITY_WORD_BYTES: u64 = 8;
 /// Bytes of the queue of large triangles for meshes of up to `triangles` in `views` views:
 /// room for every triangle in every view, an entry (a triangle and its view's bit) 4 bytes.
@@ -142,7 +142,7 @@ pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
 pub const MAX_REACH_PIXELS: f64 = 2_097_152.0;
 
 /// Coverage workgroups a block, and stripes of the mesh the blocks are dealt over (`main` in
-/// shaders/raster.comp): each thread of a software rasterizer takes a share of every stripe,
+/// shaders/raster/raster.comp): each thread of a software rasterizer takes a share of every stripe,
 /// from meshes of DEAL_BLOCK × DEAL_STRIPES × 2 workgroups (4,096 triangles). On lavapipe this
 /// speeds the coverage of a mesh whose file lists the half in view first (a UV sphere seen
 /// along its poles), and costs little where the file's order already splits evenly. Blocks of
@@ -208,7 +208,7 @@ fn fits_one_tile(longest_edge: f64, pitch: f64) -> bool {
     longest_edge <= 5.9 * pitch
 }
 
-/// Which of shaders/raster.comp's two kinds of coverage passes.
+/// Which of shaders/raster/raster.comp's two kinds of coverage passes.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Coverage {
     /// The nearest triangle a pixel.
@@ -259,7 +259,7 @@ impl SmallTriangles {
     }
 }
 
-/// A coverage pipeline of shaders/raster.comp's variant `code`, for dispatches of `members`
+/// A coverage pipeline of shaders/raster/raster.comp's variant `code`, for dispatches of `members`
 /// jobs of `kind`, covering `views` (the range view, or both; the large triangles' pass reads
 /// each queued triangle's view), boxes over a tile by tiles or not.
 fn covering(
@@ -775,7 +775,7 @@ mod tests {
     proptest! {
         /// A span of window x (or y) no longer than the longest edge `fits_one_tile` allows,
         /// in pixels, wherever it lies: the pixel centres of its box (first `floor(lo − ½)`,
-        /// last `ceil(hi − ½)`, as shaders/raster.comp's set_up finds them) number at most 8.
+        /// last `ceil(hi − ½)`, as shaders/raster/raster.comp's set_up finds them) number at most 8.
         /// (Spans up to 10 pixels are drawn: one of 6.5 may have 9.)
         #[test]
         fn a_span_fits_one_tile_allows_has_at_most_eight_pixel_centres(

@@ -14,7 +14,7 @@ use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
 
-/// One draw as the shaders see it (`DrawData` in `shaders/draw.glsl`, std430): the raster
+/// One draw as the shaders see it (`DrawData` in `shaders/raster/draw.glsl`, std430): the raster
 /// shaders' push constants, and an entry of the shadow view's draw table, which the shadow
 /// mask reads to reach the triangles the shadow view stored per pixel.
 #[repr(C)]
@@ -188,7 +188,7 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
 /// centred on the view's centre rounded down to a whole pixel (a device may hold a viewport's
 /// corner to whole pixels: viewportSubPixelBits), far larger than the view; the render area
 /// keeps the fragments to the view. The raster shaders and the compute rasterizer read its
-/// centre and half side from the draw's constants (shaders/draw.glsl, `clip_position`).
+/// centre and half side from the draw's constants (shaders/raster/draw.glsl, `clip_position`).
 ///
 /// Why so large: the graphics pipeline clips a triangle that crosses the viewport's edge
 /// (lavapipe has no guard band where a depth attachment is bound), and the corners the
@@ -265,7 +265,7 @@ fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws
 /// A view's draw table: for each group of draws seen on planned views, in order, each draw's
 /// constants in that view, numbered consecutively from 0 (a job's `first_draw_index` is the
 /// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
-/// the shadow view stored (shaders/shadow_mask.comp); the compute rasterizer's passes read
+/// the shadow view stored (shaders/stages/shadow_mask.comp); the compute rasterizer's passes read
 /// both, its coverage passes from a uniform block the host writes with their entries (one
 /// command a coverage dispatch, not a copy a view: raster/compute.rs), so the entries are kept
 /// on the host too.

@@ -1,4 +1,4 @@
-//! The compute pass that applies the shadow test (shaders/shadow_mask.comp, src/shadow.rs)
+//! The compute pass that applies the shadow test (shaders/stages/shadow_mask.comp, src/shadow.rs)
 //! to the range view, reading both views' attachments and writing the shadowed labels.
 //!
 //! Where the compute rasterizer rendered the views (raster/compute.rs), its variant reads
@@ -24,7 +24,7 @@ use ash::vk;
 use glam::DVec3;
 use std::sync::Arc;
 
-/// Push constants of the mask pass; matches `shaders/shadow_mask.comp`.
+/// Push constants of the mask pass; matches `shaders/stages/shadow_mask.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MaskConstants {
@@ -41,7 +41,7 @@ pub struct MaskConstants {
     range_stride: u32,
 }
 
-// std430 offsets of `Mask` in shaders/shadow_mask.comp.
+// std430 offsets of `Mask` in shaders/stages/shadow_mask.comp.
 matches_shader_struct!(
     MaskConstants,
     Mask {

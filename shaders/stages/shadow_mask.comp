@@ -8,10 +8,10 @@
 // reads the range view's words, writes the range view's attachments as the resolve pass would
 // (raster_resolve.comp) and tests the values it wrote, so the range view takes no resolve pass
 // of its own.
-#include "draw.glsl"
-#include "visibility_word.glsl"
+#include "../raster/draw.glsl"
+#include "../raster/visibility_word.glsl"
 #ifdef FROM_WORDS
-#include "triangle_words.glsl"
+#include "../raster/triangle_words.glsl"
 #endif
 
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -148,7 +148,7 @@ vec2 plane_gradient(vec3 n) {
 }
 
 // What lies across edge k (corners k, k + 1) of a triangle: NO_NEIGHBOUR, or a link that
-// shaders/shadow_mask.comp decodes (src/mesh/adjacency.rs, Mesh::edge_links).
+// shaders/stages/shadow_mask.comp decodes (src/mesh/adjacency.rs, Mesh::edge_links).
 uint triangle_link(DrawData d, uint triangle, uint k) {
     return Words(d.links).word[3u * triangle + k];
 }
