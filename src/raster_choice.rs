@@ -1,5 +1,5 @@
 //! Which rasterizer renders a view (docs/design.md "Raster paths"): the graphics pipeline, the
-//! compute rasterizer (src/render/raster/compute.rs), or `auto`, which picks per view from the
+//! compute rasterizer (src/render/raster/compute/), or `auto`, which picks per view from the
 //! [`Crossover`] measured for the device's kind. Kept apart from the rasterizer itself because
 //! the CLI, the library's settings and the summaries all name the choice, and the rule rests on
 //! measurements (docs/compute-rasterizer.md), not on how either rasterizer works.

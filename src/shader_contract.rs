@@ -27,7 +27,7 @@ pub const EMPTY_HALF: u32 = u32::MAX;
 pub const MEMBER_SHIFT: u32 = 29;
 
 /// Most jobs one coverage dispatch of the compute rasterizer covers (shaders/raster/raster.comp binds
-/// each member's words, four bindings a view, which it checks, and src/render/raster/compute.rs
+/// each member's words, four bindings a view, which it checks, and src/render/raster/compute/
 /// groups its slots by it).
 pub const COVERAGE_MEMBERS: usize = 4;
 

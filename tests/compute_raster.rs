@@ -1,4 +1,4 @@
-//! The compute rasterizer (src/render/raster/compute.rs) against the graphics pipeline: the
+//! The compute rasterizer (src/render/raster/compute/) against the graphics pipeline: the
 //! same coverage rule (top-left), the same sub-pixel precision (1/256) and the same plane z
 //! should give the same images. The allowance is stated here: none on lavapipe, where every
 //! label, shadowed label and z bit is identical on every case below; on a GPU, a boundary

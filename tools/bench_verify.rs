@@ -3,7 +3,7 @@
 //! baseline, measured in the same run, verifies the same hypotheses one call (one
 //! submission) each, so the batching gain shows as a ratio.
 //!
-//! A third table compares the rasterizers (src/render/raster/compute.rs): the same batches
+//! A third table compares the rasterizers (src/render/raster/compute/): the same batches
 //! verified with the graphics pipeline and with the compute rasterizer, in the same run, for
 //! models of growing density (triangles per footprint pixel, which with the triangle count is
 //! what `auto` reads, and its pick on this device); a fourth, the

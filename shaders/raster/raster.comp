@@ -1,5 +1,5 @@
 #version 460
-// The compute rasterizer's coverage passes (src/render/raster/compute.rs), over the range
+// The compute rasterizer's coverage passes (src/render/raster/compute/), over the range
 // view and, where there is one, the shadow view at once: a triangle's corners and normal are
 // read once for both (reading them is most of a small triangle's set-up). Corners go to window
 // coordinates as raster.vert and the viewport transform put them, are snapped to 1/256 pixel
@@ -50,7 +50,7 @@ layout(local_size_x = COVERAGE_GROUP) in;
 // same for all its lanes, lane by lane), and keep_word's branches fold away.
 
 // Each member's draw in each view and its constants (Member, below), which the host writes
-// before the pass (CoverageUniforms in src/render/raster/compute.rs): draws[m] the range view's
+// before the pass (CoverageUniforms in src/render/raster/compute/): draws[m] the range view's
 // of member m, draws[COVERAGE_MEMBERS + m] its shadow view's (where it has none, zeros, read
 // only to cull: it covers no pixels; member_draw). A uniform block, not a storage buffer: a
 // software rasterizer loads a uniform block's value once for all the invocations it runs
@@ -58,7 +58,7 @@ layout(local_size_x = COVERAGE_GROUP) in;
 // make lavapipe compile the shader again at every dispatch (keep).
 
 // What a member's pass needs beside its draws; matches `MemberConstants` in
-// src/render/raster/compute.rs.
+// src/render/raster/compute/.
 struct Member {
     RasterView views[2]; // range view, shadow view (of no pixels where the member has none)
     uint triangles;      // the mesh's triangle count; 0 for a member with nothing to cover
@@ -83,7 +83,7 @@ DrawData member_draw(uint m, uint v) {
 // Each member's visibility words in each view (where a view or a member is missing, another
 // member's are bound, never written: a member with no job covers no triangles, a view of no
 // pixels none of them): a binding each, as keep_word picks them, for COVERAGE_MEMBERS = 4
-// (COVERAGE_STORAGE_BUFFERS in src/render/raster/compute.rs counts them).
+// (COVERAGE_STORAGE_BUFFERS in src/render/raster/compute/ counts them).
 #if COVERAGE_MEMBERS != 4
 #error "raster.comp binds and picks four members' words"
 #endif
@@ -108,9 +108,9 @@ layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 large_args; };
 const float NEAR = 8192.0;
 
 // Workgroups a dispatch is given at most along x (every device allows 65,535), given by the
-// host (raster/compute.rs): the large triangles' workgroups stride over the rest of the queue.
+// host (raster/compute/): the large triangles' workgroups stride over the rest of the queue.
 layout(constant_id = 0) const uint MAX_GROUPS = 1u;
-// 1: the range view alone; 2: and the shadow view. One pipeline each (raster/compute.rs): a
+// 1: the range view alone; 2: and the shadow view. One pipeline each (raster/compute/): a
 // software rasterizer would run the shadow view's code even where it has none.
 layout(constant_id = 1) const uint VIEW_COUNT = 2u;
 // Workgroups a block, and stripes the blocks are dealt over (powers of two; main).
@@ -121,7 +121,7 @@ layout(constant_id = 3) const uint DEAL_STRIPES = 1u;
 layout(constant_id = 4) const uint MEMBERS = 1u;
 // 1: boxes of up to 33 pixels a side are covered by tiles (cover_tiles); 0: the host found no
 // triangle of the dispatch's meshes can have a box over 8 pixels in its views (every edge
-// shorter than 6 pixels: raster/compute.rs), so the tiles' code is left out, and a box over 8
+// shorter than 6 pixels: raster/compute/), so the tiles' code is left out, and a box over 8
 // pixels, were there one, would go to the large triangles' pass (exact too, but slow for
 // many). A software rasterizer runs the tiles' loops at least once for every group of
 // invocations, whatever their boxes, so a dispatch that needs none leaves them out.
@@ -430,7 +430,7 @@ void main() {
     DrawData range_draw = member_draw(member, 0u);
     DrawData shadow_draw = member_draw(member, 1u);
     Member constants = members[member];
-    // Dispatched as up to 65,535 workgroups per row (src/render/raster/compute.rs). A software
+    // Dispatched as up to 65,535 workgroups per row (src/render/raster/compute/). A software
     // rasterizer hands each of its threads a contiguous range of a dispatch's workgroups
     // (lavapipe: the count over the threads), and a mesh's triangles lie in its file's order,
     // near ones together: one range may hold every triangle facing the camera and another

@@ -1,4 +1,4 @@
-// What the compute rasterizer's passes share (src/render/raster/compute.rs): each view's
+// What the compute rasterizer's passes share (src/render/raster/compute/): each view's
 // visibility words (visibility_word.glsl), one buffer a view, and how they are addressed.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -6,7 +6,7 @@
 #include "triangle_words.glsl"
 #include "visibility_word.glsl"
 
-// One view as the passes see it; matches `RasterView` in src/render/raster/compute.rs.
+// One view as the passes see it; matches `RasterView` in src/render/raster/compute/.
 struct RasterView {
     uvec4 area;        // the pixels to draw: first column, first row, width, height
     uint draw;         // the draw's entry in the view's draw table (the coverage passes

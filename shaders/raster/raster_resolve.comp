@@ -1,5 +1,5 @@
 #version 460
-// The compute rasterizer's resolve pass (src/render/raster/compute.rs): one invocation per
+// The compute rasterizer's resolve pass (src/render/raster/compute/): one invocation per
 // pixel of a view's area writes what raster.frag would have written for the triangle its word
 // kept into the view's attachments, or zeros where no triangle covers the pixel (the graphics
 // pass clears to 0). Recorded for the range view only where no shadow mask follows, as the

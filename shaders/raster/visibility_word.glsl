@@ -1,4 +1,4 @@
-// A pixel's visibility word, as the compute rasterizer keeps it (src/render/raster/compute.rs)
+// A pixel's visibility word, as the compute rasterizer keeps it (src/render/raster/compute/)
 // and the shadow mask reads it: 64 bits, an order key high and the triangle low, so that an
 // atomicMin keeps the nearest triangle, and among equal keys the first in the mesh, as the
 // graphics pipeline's LESS depth test does. All ones where no triangle covers the pixel (the

@@ -1,5 +1,5 @@
 //! Whether a mesh bounds a solid, and which way its normals point: what back-face culling
-//! needs to know (src/render/raster/draw.rs for the graphics pipeline, src/render/raster/compute.rs).
+//! needs to know (src/render/raster/draw.rs for the graphics pipeline, src/render/raster/compute/).
 //!
 //! A camera ray first meets a solid where it enters it, through a triangle whose outward
 //! normal faces the camera; a triangle facing away can be first only where it meets one that

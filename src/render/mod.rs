@@ -69,7 +69,7 @@ pub struct Renderer {
 }
 
 /// Triangles a queue of large triangles has room for, in each view, for `draws` draws of up to
-/// `largest` (raster/compute.rs: room for every triangle of every member).
+/// `largest` (raster/compute/: room for every triangle of every member).
 fn queued_triangles(draws: usize, largest: u64) -> u64 {
     largest.saturating_mul(draws as u64)
 }
@@ -105,7 +105,7 @@ impl Renderer {
     }
 
     /// The same renderer, rendering with `raster` (views of more objects than
-    /// [`COVERAGE_MEMBERS`] stay on the graphics path; see raster/compute.rs).
+    /// [`COVERAGE_MEMBERS`] stay on the graphics path; see raster/compute/).
     pub fn with_raster(self, raster: Raster) -> Self {
         Self { raster, ..self }
     }
@@ -118,7 +118,7 @@ impl Renderer {
     /// dispatch of the compute rasterizer's coverage pass (clamped to 1 to
     /// [`COVERAGE_MEMBERS`]). The default is [`COVERAGE_MEMBERS`] on a GPU, where it saves a
     /// dispatch and a barrier per hypothesis, and 1 on a CPU device, where those cost next to
-    /// nothing and reading a member's constants costs more (raster/compute.rs). The images and
+    /// nothing and reading a member's constants costs more (raster/compute/). The images and
     /// counts are the same either way.
     pub fn with_hypotheses_per_dispatch(self, n: usize) -> Self {
         Self { hypotheses_per_dispatch: n.clamp(1, COVERAGE_MEMBERS), ..self }
@@ -129,7 +129,7 @@ impl Renderer {
     }
 
     /// Whether the compute rasterizer renders a view of `draws` draws, `triangles` in all, the
-    /// largest of `largest`, over `footprint_pixels` (raster/compute.rs), into visibility
+    /// largest of `largest`, over `footprint_pixels` (raster/compute/), into visibility
     /// words for views of at most `view_pixels`, its draws reaching `reach_pixels` from the
     /// views' first pixels ([`Views::reach`]). Words this device cannot bind as one storage
     /// buffer (its maxStorageBufferRange: 128 MiB, 16.7 million pixels, on lavapipe), a queue
@@ -157,7 +157,7 @@ impl Renderer {
             )
     }
 
-    /// Whether this renderer's device can run the compute rasterizer (raster/compute.rs).
+    /// Whether this renderer's device can run the compute rasterizer (raster/compute/).
     pub fn supports_compute_raster(&self) -> bool {
         raster::compute::device_supports(&self.ctx)
     }
@@ -224,7 +224,7 @@ impl Renderer {
     }
 
     /// The compute rasterizer's coverage of `slots`, `members` a dispatch, for draws of up to
-    /// `max_triangles` (raster/compute.rs).
+    /// `max_triangles` (raster/compute/).
     pub(crate) fn coverage_group(
         &self,
         slots: &[&ComputeViews],
@@ -270,7 +270,7 @@ impl Renderer {
         // In the order the graphics path's ties pass draws them (draw.rs: the lowest label
         // last), so that the compute rasterizer's members, which share a view's words and are
         // tagged there with their place in that order, are numbered as their draws
-        // (raster/compute.rs).
+        // (raster/compute/).
         draws.sort_by_key(|draw| std::cmp::Reverse(draw.label_base));
         let spheres: Vec<_> = scene
             .objects

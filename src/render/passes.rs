@@ -67,7 +67,7 @@ pub(crate) struct SlotShape<'a> {
     /// view's table from `shadow`).
     pub compute_raster: Option<&'a DrawTable>,
     /// The compute rasterizer's views hold several draws (a scene of several objects): the
-    /// slot resolves the shadow view's words too (raster/compute.rs).
+    /// slot resolves the shadow view's words too (raster/compute/).
     pub several_draws: bool,
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
@@ -283,7 +283,7 @@ type ShadowPass<'s> = (&'s ViewTargets, &'s ViewGrid, PixelRect, &'s Buffer, &'s
 type ComputeJob<'s, 'p> = (&'s ComputeViews<'s>, &'p ComputeRasterPipelines, (u32, &'s [Draw<'s>]));
 
 impl<'p> Passes<'p> {
-    /// The compute rasterizer's state and pipelines for a job it renders (raster/compute.rs),
+    /// The compute rasterizer's state and pipelines for a job it renders (raster/compute/),
     /// with its draws and the first's index in the draw tables.
     fn compute_job<'s>(&self, slot: &'s Slot<'s>, job: &'s Job<'s>) -> Option<ComputeJob<'s, 'p>> {
         match (&slot.compute, self.raster_pipelines, job.host_view) {
@@ -386,7 +386,7 @@ impl<'p> Passes<'p> {
         let compute = self.compute_job(slot, job);
         let shadow = self.shadow_pass(slot, job);
         match compute {
-            // Both views were covered in one pass (raster/compute.rs). Words of several draws
+            // Both views were covered in one pass (raster/compute/). Words of several draws
             // are resolved into both views' attachments, for the shadow mask that reads them.
             Some((state, rp, (first, draws))) if draws.len() > 1 => {
                 steps.push(state.resolve_step(rp, (&slot.range, job.area), (first, draws.len())).timed("range"));

@@ -6,7 +6,7 @@
 //! sink. Render targets live in slots reused round-robin, and the hypotheses are recorded in
 //! runs, one a slot (as many slots as the verifier asks for and the memory budget holds:
 //! [`default_slots`]): the compute rasterizer covers a run's hypotheses in one
-//! dispatch, or a few (src/render/raster/compute.rs, `CoverageGroup`), and then the run's
+//! dispatch, or a few (src/render/raster/compute/, `CoverageGroup`), and then the run's
 //! passes go side by side (`Passes::record_run`), each stage of them behind one barrier: a GPU
 //! waits for the work before a barrier once a stage for the run, not once a pass for each
 //! hypothesis (tests/verify.rs counts them). So that the run's score passes need no barrier

@@ -228,7 +228,7 @@ impl ViewportFrame {
 
 /// Which of a mesh's triangles the graphics pipeline culls: a solid's facing away from the
 /// camera, which are never the first hit (src/mesh/solid.rs), and none of an open mesh's. The
-/// compute rasterizer skips the same ones (raster/compute.rs).
+/// compute rasterizer skips the same ones (raster/compute/).
 fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
     match solidity {
         Solidity::Outward => vk::CullModeFlags::BACK,
@@ -267,7 +267,7 @@ fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws
 /// number of draws before it). The shadow mask reads the shadow view's to reach the triangles
 /// the shadow view stored (shaders/stages/shadow_mask.comp); the compute rasterizer's passes read
 /// both, its coverage passes from a uniform block the host writes with their entries (one
-/// command a coverage dispatch, not a copy a view: raster/compute.rs), so the entries are kept
+/// command a coverage dispatch, not a copy a view: raster/compute/), so the entries are kept
 /// on the host too.
 pub(crate) struct DrawTable {
     pub buffer: Buffer,

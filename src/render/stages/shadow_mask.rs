@@ -1,7 +1,7 @@
 //! The compute pass that applies the shadow test (shaders/stages/shadow_mask.comp, src/shadow.rs)
 //! to the range view, reading both views' attachments and writing the shadowed labels.
 //!
-//! Where the compute rasterizer rendered the views (raster/compute.rs), its variant reads
+//! Where the compute rasterizer rendered the views (raster/compute/), its variant reads
 //! their visibility words instead, so that neither view takes a resolve pass of its own: it
 //! reads the shadow view's words where the other reads the visibility attachment, and it
 //! resolves the range view itself, writing the range view's attachments from its words as the
