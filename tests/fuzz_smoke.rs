@@ -17,7 +17,7 @@ mod targets;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::os::unix::process::{CommandExt, ExitStatusExt};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -119,6 +119,14 @@ fn run_child(target: &str, crash_file: &PathBuf) {
         run(&input);
     }
     std::fs::remove_file(crash_file).unwrap();
+    // What the parent reads to know the child ran the target (a child that matched no test
+    // would exit successfully too).
+    std::fs::write(ran_file(crash_file), (seeds.len() + ITERATIONS).to_string()).unwrap();
+}
+
+/// Where a child says how many inputs it ran.
+fn ran_file(crash_file: &Path) -> PathBuf {
+    crash_file.with_extension("ran")
 }
 
 fn smoke(target: &str, test_name: &str) {
@@ -143,6 +151,7 @@ fn smoke(target: &str, test_name: &str) {
             }
         })
     };
+    let _ = std::fs::remove_file(ran_file(&crash_file));
     let mut child = command.spawn().unwrap();
     let start = Instant::now();
     let status = loop {
@@ -162,6 +171,11 @@ fn smoke(target: &str, test_name: &str) {
         "{target}: the child failed ({status:?}, signal {:?}); the input is in {}:\n{stderr}",
         status.signal(),
         crash_file.display()
+    );
+    let ran = std::fs::read_to_string(ran_file(&crash_file)).unwrap_or_default();
+    assert!(
+        ran.parse::<usize>().is_ok_and(|n| n > ITERATIONS),
+        "{target}: the child exited without running the target (it reported {ran:?} inputs)"
     );
 }
 

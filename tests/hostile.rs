@@ -277,7 +277,20 @@ fn a_killed_verify_leaves_the_earlier_output_whole() {
             });
         }
         let child = command.spawn().unwrap();
-        std::thread::sleep(Duration::from_secs(4));
+        // Killed once it has begun to write its output (its temporary file beside the target
+        // exists, `.scores.jsonl.*.tmp`): the kill then lands mid-write, not before it. The
+        // wait's limit is a hang guard only.
+        let writing = || {
+            std::fs::read_dir(&d).unwrap().flatten().any(|e| {
+                let name = e.file_name().to_string_lossy().into_owned();
+                name.starts_with(".scores.jsonl.") && name.ends_with(".tmp")
+            })
+        };
+        let start = Instant::now();
+        while !writing() {
+            assert!(start.elapsed() < Duration::from_secs(300), "verify began no output in 300 s (a hang)");
+            std::thread::sleep(Duration::from_millis(10));
+        }
         // SAFETY: signalling our own child.
         assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
         let (status, stderr) = finish_within(child, Duration::from_secs(30), "killed verify");

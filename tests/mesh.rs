@@ -85,8 +85,8 @@ fn bad_models_are_refused_with_the_reason() {
     assert!(mesh_error("inf.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n").contains("non-finite"));
     let out_of_range = mesh_error("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
     assert!(out_of_range.contains("vert") || out_of_range.contains("index"), "{out_of_range}");
-    assert!(mesh_error("empty.obj", "# nothing\n").contains("no"));
-    assert!(mesh_error("points.obj", "v 0 0 0\nv 1 0 0\n").contains("no"));
+    assert!(mesh_error("empty.obj", "# nothing\n").contains("no (non-degenerate) triangles"));
+    assert!(mesh_error("points.obj", "v 0 0 0\nv 1 0 0\n").contains("no (non-degenerate) triangles"));
     assert!(mesh_error("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").contains("no (non-degenerate) triangles"));
     assert!(matches!(
         load_obj(std::path::Path::new("/nonexistent/model.obj"), &Ledger::default()),

@@ -379,7 +379,8 @@ fn bad_verification_input_is_refused() {
     let err = VERIFIER.verify(&sensed, &settings(finer, ShadowMode::Depth), &[correct()], &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("pitch"), "{err}");
     let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
-    assert!(VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).is_err());
+    let err = VERIFIER.verify(&sensed, &nan_tolerance, &[correct()], &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("tolerance NaN must be a finite number ≥ 0"), "{err}");
     // A pose given through the library is checked as one read from a file: a mirror would turn
     // the box's solid inside out for culling, a scale would stretch it.
     for pose in [DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)), DMat4::from_scale(DVec3::splat(2.0))] {

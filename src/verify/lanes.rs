@@ -268,8 +268,8 @@ mod tests {
     #[test]
     fn outputs_come_in_chunk_order_from_as_many_threads_at_once_as_lanes() {
         for lanes in [2, 4] {
-            // Chunks 0 to lanes - 1 each wait, up to 10 s, until all of them are running: in
-            // fewer lanes they cannot be, and the first fails.
+            // Chunks 0 to lanes - 1 each wait until all of them are running: in fewer lanes they
+            // cannot be, and the first fails (after the hang guard's minute).
             let inside = AtomicUsize::new(0);
             let mut handed = Vec::new();
             let result = in_lanes(
@@ -278,13 +278,8 @@ mod tests {
                 |chunk| {
                     if chunk < lanes {
                         inside.fetch_add(1, Ordering::SeqCst);
-                        let start = Instant::now();
-                        while inside.load(Ordering::SeqCst) < lanes {
-                            if start.elapsed() > Duration::from_secs(10) {
-                                return Err(format!("chunk {chunk} of {lanes} lanes ran without the others"));
-                            }
-                            std::thread::sleep(Duration::from_millis(1));
-                        }
+                        let all_inside = || inside.load(Ordering::SeqCst) >= lanes;
+                        wait_until(all_inside, &format!("chunk {chunk} of {lanes} lanes waiting for the others"))?;
                     }
                     Ok(chunk * 10)
                 },
@@ -298,50 +293,62 @@ mod tests {
         }
     }
 
+    /// Waits until `ready`, or fails after a minute (a hang guard, never the thing tested).
+    fn wait_until(ready: impl Fn() -> bool, what: &str) -> Result<(), String> {
+        let start = Instant::now();
+        while !ready() {
+            if start.elapsed() > Duration::from_secs(60) {
+                return Err(format!("{what}: not after 60 s"));
+            }
+            std::thread::yield_now();
+        }
+        Ok(())
+    }
+
     #[test]
     fn no_lane_runs_far_ahead_of_a_slow_chunk() {
         for lanes in [2, 3, 4] {
-            // The first chunk a lane beside the caller's runs takes 200 ms, the others 1 ms:
-            // while it runs, the caller's lane waits for it, and the other lanes may start no
-            // chunk two a lane past it (before their windows, from three lanes on, the others
-            // ran every other chunk meanwhile).
-            let started = AtomicUsize::new(0);
+            // The first chunk a lane beside the caller's runs is held until every chunk that
+            // may start meanwhile has started: the other lanes run as far ahead of it as they
+            // may. No chunk may start a window (two a lane) or more past the outputs handed
+            // on, which cannot pass the held chunk's. With two lanes only the caller's runs
+            // meanwhile, and it takes a chunk only while fewer than one a lane are taken and
+            // not handed on.
+            let window = 2 * lanes;
+            let reachable = if lanes == 2 { lanes } else { window };
+            let (handed, started) = (AtomicUsize::new(0), AtomicUsize::new(0));
             let slow = Mutex::new(None);
-            let started_by_the_end_of_the_slow_chunk = AtomicUsize::new(0);
-            // The caller's lane runs its chunks only once another lane has started one (for
-            // 10 s at most), so that it cannot run them all before another lane is scheduled.
             let a_lane_started = std::sync::atomic::AtomicBool::new(false);
-            let result: Result<(), ()> = in_lanes(
+            let result = in_lanes(
                 lanes,
                 100,
                 |chunk| {
+                    let handed_then = handed.load(Ordering::SeqCst);
+                    if chunk >= handed_then + window {
+                        return Err(format!("{lanes} lanes: chunk {chunk} started with {handed_then} handed on"));
+                    }
                     started.fetch_add(1, Ordering::SeqCst);
                     let on_a_lane = std::thread::current().name() == Some(LANE_THREAD);
                     if on_a_lane {
                         a_lane_started.store(true, Ordering::SeqCst);
-                    }
-                    let waiting = Instant::now();
-                    while !a_lane_started.load(Ordering::SeqCst) && waiting.elapsed() < Duration::from_secs(10) {
-                        std::thread::sleep(Duration::from_millis(1));
-                    }
-                    let first = on_a_lane && slow.lock().unwrap().get_or_insert(chunk) == &chunk;
-                    if first {
-                        std::thread::sleep(Duration::from_millis(200));
-                        started_by_the_end_of_the_slow_chunk.store(started.load(Ordering::SeqCst), Ordering::SeqCst);
                     } else {
-                        std::thread::sleep(Duration::from_millis(1));
+                        // So that the caller's lane cannot run every chunk before another
+                        // lane is scheduled.
+                        wait_until(|| a_lane_started.load(Ordering::SeqCst), "another lane starting")?;
+                    }
+                    if on_a_lane && *slow.lock().unwrap().get_or_insert(chunk) == chunk {
+                        let all_started = || started.load(Ordering::SeqCst) >= chunk + reachable;
+                        wait_until(all_started, &format!("{lanes} lanes: the chunks up to {chunk} + {reachable}"))?;
                     }
                     Ok(chunk)
                 },
-                |_, _| Ok(()),
+                |_, _| {
+                    handed.fetch_add(1, Ordering::SeqCst);
+                    Ok(())
+                },
             );
             assert_eq!(result, Ok(()));
-            let slow = slow.lock().unwrap().expect("a lane beside the caller's ran a chunk");
-            let ahead = started_by_the_end_of_the_slow_chunk.load(Ordering::SeqCst);
-            assert!(
-                ahead <= slow + 2 * lanes,
-                "{ahead} chunks had started in {lanes} lanes when chunk {slow}, the slow one, ended"
-            );
+            assert!(slow.lock().unwrap().is_some(), "a lane beside the caller's ran a chunk");
         }
     }
 

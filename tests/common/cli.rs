@@ -4,10 +4,15 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-/// The rangesynth binary, with Vulkan validation on.
+/// The rangesynth binary, with Vulkan validation on, and on the device the suite expects
+/// where it expects one (`RANGESYNTH_EXPECT_DEVICE`, which CI sets): the binary is told to
+/// use the device of that name (`RANGESYNTH_DEVICE`), and fails where there is none.
 pub fn rangesynth_command() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_rangesynth"));
     command.env("RANGESYNTH_VALIDATION", "1");
+    if let Ok(expected) = std::env::var("RANGESYNTH_EXPECT_DEVICE") {
+        command.env("RANGESYNTH_DEVICE", expected);
+    }
     command
 }
 
