@@ -272,7 +272,7 @@ mod tests {
             // cannot be, and the first fails (after the hang guard's minute).
             let inside = AtomicUsize::new(0);
             let mut handed = Vec::new();
-            let result = in_lanes(
+            let result: Result<(), String> = in_lanes(
                 lanes,
                 3 * lanes,
                 |chunk| {
@@ -319,7 +319,7 @@ mod tests {
             let (handed, started) = (AtomicUsize::new(0), AtomicUsize::new(0));
             let slow = Mutex::new(None);
             let a_lane_started = std::sync::atomic::AtomicBool::new(false);
-            let result = in_lanes(
+            let result: Result<(), String> = in_lanes(
                 lanes,
                 100,
                 |chunk| {
