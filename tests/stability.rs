@@ -170,7 +170,8 @@ fn depth_mode_is_exact_up_to_the_steepest_theta_and_refuses_beyond() {
 /// on a table, in depth mode, against exact ray casting. Before the shadow view became a
 /// visibility buffer that the mask walks over, 0.12–0.34% of all pixels were wrong (facets
 /// facing away from the camera left lit, facets facing it shadowed near the terminator);
-/// allowed: 0.02% of all pixels, each within the conformance allowance.
+/// now 2 to 14 (at most 0.0053%, with either rasterizer); allowed: 0.01% of all pixels, the
+/// bound docs/sensors-and-shadows.md states, each within the conformance allowance.
 #[test]
 fn a_dense_sphere_on_a_table_shadows_like_exact_ray_casting() {
     for size in [256, 512] {
@@ -181,8 +182,9 @@ fn a_dense_sphere_on_a_table_shadows_like_exact_ray_casting() {
             let name = format!("dense_sphere_{size}_{theta}");
             let diff = shadow_diff_against_reference(&name, &sc);
             let (w, h) = (size as usize, size as usize);
+            eprintln!("{name}: {} wrong pixels of {}", diff.mismatched, w * h);
             assert_eq!(diff.outside_allowance, 0, "{name}");
-            assert!(diff.mismatched * 5000 <= w * h, "{name}: {} wrong pixels, more than 0.02%", diff.mismatched);
+            assert!(diff.mismatched * 10_000 <= w * h, "{name}: {} wrong pixels, more than 0.01%", diff.mismatched);
         }
     }
 }
