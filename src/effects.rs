@@ -1,6 +1,6 @@
 //! Sensor effects beyond the shadow (docs/design.md "Sensor effects"): the scene's `[effects]`
 //! table, or a hypothesis file's `"effects"` object, names them, and only the named ones are
-//! recorded as passes (src/render/stages/effects.rs, shaders/effect_*.comp).
+//! recorded as passes (src/render/stages/effects.rs, shaders/stages/effect_*.comp).
 //!
 //! Each effect is evaluated on the image after shadowing, and every lost pixel carries the
 //! [`Reason`] it was lost for. The losses depend only on the pixel and its neighbourhood, not

@@ -146,3 +146,72 @@ fn anchors_follow_githubs_rule() {
         "four-runs-of-2026-11-26-the-lavapipe-figures-of-performancemd"
     );
 }
+
+/// Every file under `dir` (recursively) whose name ends in one of `extensions`.
+fn files_under(dir: &std::path::Path, extensions: &[&str], out: &mut Vec<PathBuf>) {
+    for entry in fs::read_dir(dir).expect("a readable folder").flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            files_under(&path, extensions, out);
+        } else if path.extension().is_some_and(|e| extensions.iter().any(|x| e == *x)) {
+            out.push(path);
+        }
+    }
+}
+
+/// The repository paths a text names (`src/…`, `shaders/…`, `tests/…`, `tools/…`, `docs/…`),
+/// leaving out patterns (`effect_*.comp`, `effect_NAME.comp`).
+fn paths_named(text: &str) -> Vec<String> {
+    let mut paths = Vec::new();
+    for (at, _) in text.match_indices('/') {
+        let start = text[..at]
+            .char_indices()
+            .rev()
+            .find(|&(_, c)| !(c.is_ascii_alphanumeric() || c == '_'))
+            .map_or(0, |(i, c)| i + c.len_utf8());
+        let before = text[..start].chars().next_back();
+        let root = &text[start..at];
+        if !["src", "shaders", "tests", "tools", "docs"].contains(&root)
+            || before.is_some_and(|c| c == '/' || c == '.' || c.is_alphanumeric())
+        {
+            continue;
+        }
+        let rest: String =
+            text[at..].chars().take_while(|c| c.is_ascii_alphanumeric() || "_./-*".contains(*c)).collect();
+        let path = format!("{root}{}", rest.trim_end_matches(['.', '-']));
+        if !path.contains('*') && !path.contains("NAME") {
+            paths.push(path);
+        }
+    }
+    paths
+}
+
+/// Comments and pages name files by their paths; a file moved or renamed must take them along.
+#[test]
+fn every_repository_path_the_docs_and_comments_name_exists() {
+    let mut texts = pages();
+    texts.push(root().join("build.rs"));
+    for (dir, extensions) in [
+        ("src", &["rs"][..]),
+        ("shaders", &["glsl", "comp", "vert", "frag"]),
+        ("tests", &["rs"]),
+        ("tools", &["rs", "sh", "md"]),
+    ] {
+        files_under(&root().join(dir), extensions, &mut texts);
+    }
+    let mut missing = Vec::new();
+    for file in &texts {
+        let text = fs::read_to_string(file).expect("a readable file");
+        for path in paths_named(&text) {
+            if !root().join(&path).exists() {
+                missing.push(format!("{}: {path}", file.strip_prefix(root()).unwrap().display()));
+            }
+        }
+    }
+    assert!(texts.len() > 100, "the sources were read");
+    assert!(missing.is_empty(), "paths that name no file:\n{}", missing.join("\n"));
+    assert_eq!(
+        paths_named("see src/render/mod.rs, not xsrc/a.rs nor shaders/stages/effect_*.comp."),
+        ["src/render/mod.rs"]
+    );
+}

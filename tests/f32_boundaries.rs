@@ -112,12 +112,12 @@ fn combinations_the_gpus_f32_cannot_hold_are_refused_by_name() {
             scene_text(&sensor(1.0, [1e30, 1e30], 0.0), &box_at(at(1e30, 1e30, 0.0)), ""),
             "origin [1e30, 1e30]",
         ),
-        // The box reaches 2.3e7 pixels: f32 window coordinates are spaced 2 pixels there (was:
+        // The box reaches 4.2e7 pixels from the first: f32 window coordinates are 4 pixels apart (was:
         // 146 pixels where the geometry has 123).
         (
             "seen reach",
             scene_text(&sensor_over(3e-8, (0.4, 0.3), 0.0), &box_at(turned()), ""),
-            "object 1 (builtin:box) reaches",
+            "object 1 (builtin:box) reaches 4.220e7 pixels",
         ),
         // Beside the image, but 5e30 pixels away.
         (
@@ -127,7 +127,7 @@ fn combinations_the_gpus_f32_cannot_hold_are_refused_by_name() {
                 &[("builtin:box", IDENTITY.into()), ("builtin:box", at(5e29, 0.0, 0.0))],
                 "",
             ),
-            "object 2 (builtin:box) reaches",
+            "object 2 (builtin:box) reaches 5.000e30 pixels",
         ),
         (
             "far in depth",
@@ -136,7 +136,17 @@ fn combinations_the_gpus_f32_cannot_hold_are_refused_by_name() {
                 &[("builtin:box", IDENTITY.into()), ("builtin:box", at(5.0, 0.0, 1e31))],
                 "",
             ),
-            "object 2 (builtin:box) reaches",
+            "object 2 (builtin:box) reaches 1.000e31 model units",
+        ),
+        // Beside a small plate (a depth range of 0.014), 1e29 deep: 7e30 depth ranges away.
+        (
+            "many depth ranges away",
+            scene_text(
+                &sensor_over(0.0001, (0.0, 0.0), 0.0),
+                &[("builtin:plane:0.01", IDENTITY.into()), ("builtin:box", at(5.0, 0.0, 1e29))],
+                "",
+            ),
+            "times the range view's depth range from it",
         ),
     ];
     for (name, scene, expected) in cases {
@@ -145,6 +155,28 @@ fn combinations_the_gpus_f32_cannot_hold_are_refused_by_name() {
         refused(&out, name, expected);
         assert!(!dir.exists(), "{name}: no output set is left");
     }
+}
+
+/// What shows nowhere is never refused for what the GPU would compute where it showed: a view
+/// with nothing in it far from the frame's origin, and effects that would overflow only at
+/// depths where nothing is.
+#[test]
+fn what_shows_nowhere_is_not_checked_as_if_it_showed() {
+    let d = fresh_dir("f32_boundaries", "shows_nowhere");
+    // The sensor 1e8 from the origin at θ = 30°: the shadow view's local origin lies 5e7 deep,
+    // where an empty view's depth range about 0 would have no f32 span.
+    let far = scene_text(&sensor_over(10.0, (1e8, 0.0), 30.0), &[("builtin:box", IDENTITY.into())], "");
+    let (out, dir) = render(&d, &far);
+    assert!(out.status.success(), "an empty view far from the origin: {}", stderr(&out));
+    assert!(read_range_image(&dir.join("range.exr"), &Ledger::default()).unwrap().label.iter().all(|&l| l == 0));
+    // Noise whose σ overflows at z ≈ 0 but not near 1e10, where the scene is; a hypothesis
+    // posed beside the image, at z = 0, is no reason to refuse the verification.
+    let noisy = "[effects.noise]\nsigma = 0\ndepth_coefficient = 1e18\ndepth_reference = 1e10\n";
+    let scene = scene_text(&sensor_over(1024.0, (0.0, 0.0), 0.0), &[("builtin:box", at(0.0, 0.0, 1e10))], noisy);
+    let (out, dir) = render(&d, &scene);
+    assert!(out.status.success(), "noise about the scene's depth: {}", stderr(&out));
+    let out = verify(&d, &dir.join("range.exr"), ("builtin:box", &at(1e6, 0.0, 0.0)), "", &[]);
+    assert!(out.status.success(), "a hypothesis out of view: {}", stderr(&out));
 }
 
 #[test]
@@ -213,6 +245,13 @@ fn scenes_at_the_edges_of_the_bounds_render_finite_images_that_verify_accepts() 
             "far origin",
             scene_text(&sensor_over(0.25, (1e6, -1e6), 30.0), &[("builtin:box", at(1e6, -1e6, 0.0))], ""),
             ("builtin:box".into(), at(1e6, -1e6, 0.0)),
+        ),
+        // Shadow mode `exact` rasterizes nothing: a plate reaching 1e7 pixels is cast on the host.
+        (
+            "exact mode, far reach",
+            scene_text(&sensor_over(0.0001, (0.0, 0.0), 30.0), &[(&plane(2000.0), IDENTITY.into())], "")
+                .replace("mode = \"depth\"", "mode = \"exact\""),
+            (plane(2000.0), IDENTITY.into()),
         ),
         // A box far beside the image, 1e22 pixels away, changes nothing.
         (

@@ -276,19 +276,30 @@ fn a_killed_verify_leaves_the_earlier_output_whole() {
                 Ok(())
             });
         }
-        let child = command.spawn().unwrap();
-        // Killed once it has begun to write its output (its temporary file beside the target
-        // exists, `.scores.jsonl.*.tmp`): the kill then lands mid-write, not before it. The
-        // wait's limit is a hang guard only.
-        let writing = || {
-            std::fs::read_dir(&d).unwrap().flatten().any(|e| {
-                let name = e.file_name().to_string_lossy().into_owned();
-                name.starts_with(".scores.jsonl.") && name.ends_with(".tmp")
-            })
+        // A killed run leaves its temporary file behind; the next run's must be its own.
+        let temporary = |d: &Path| -> Vec<PathBuf> {
+            std::fs::read_dir(d)
+                .unwrap()
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| {
+                    let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                    name.starts_with(".scores.jsonl.") && name.ends_with(".tmp")
+                })
+                .collect()
         };
+        temporary(&d).iter().for_each(|p| std::fs::remove_file(p).unwrap());
+        let mut child = command.spawn().unwrap();
+        // Killed once it has written part of its output (its temporary file beside the target
+        // holds bytes): the kill then lands mid-write. The wait's limit is a hang guard only.
         let start = Instant::now();
-        while !writing() {
-            assert!(start.elapsed() < Duration::from_secs(300), "verify began no output in 300 s (a hang)");
+        while !temporary(&d).iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
+            if let Some(status) = child.try_wait().unwrap() {
+                let mut stderr = String::new();
+                child.stderr.take().map(|mut e| e.read_to_string(&mut stderr));
+                panic!("verify ended ({status:?}) before it wrote any output: {stderr}");
+            }
+            assert!(start.elapsed() < Duration::from_secs(300), "verify wrote no output in 300 s (a hang)");
             std::thread::sleep(Duration::from_millis(10));
         }
         // SAFETY: signalling our own child.

@@ -19,8 +19,8 @@ pub mod layout {
 /// Asserts at compile time that the Rust struct `$rust` holds the fields listed where the
 /// shaders' struct `$glsl` (build.rs's reflection) has the members of the same names, that
 /// the list names every member, and that both take the same size (to a 16-byte multiple:
-/// padding may differ at the end). Reordering, renaming, adding or retyping a field on either
-/// side fails the build.
+/// padding may differ at the end). Reordering or renaming a field on either side fails the
+/// build, and so do most additions and retypings (any that move a member or change the size).
 macro_rules! matches_shader_struct {
     ($rust:ty, $glsl:ident { $($field:ident),* $(,)? }) => {
         const _: () = {

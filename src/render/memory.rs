@@ -13,10 +13,11 @@ use crate::render::targets::ViewKind;
 const SHADOWED_LABEL_BYTES: u64 = 4;
 /// Bytes a range pixel's effect outputs take: its loss and its measured z.
 const EFFECT_OUTPUT_BYTES: u64 = 8;
-/// Bytes a render reads back and returns on the host per range pixel: three readback
-/// buffers (label, shadowed label, z: 12) and the returned label, unshadowed label, z and
-/// reason (16); with effects, their losses and measured z once more (8).
-const RETURNED_BYTES: u64 = 28;
+/// Bytes a render reads back and returns on the host per range pixel: two readback buffers
+/// (label and z: 8; the shadowed labels are read where the slot holds them, already counted)
+/// and the returned label, unshadowed label, z and reason (16); with effects, their losses and
+/// measured z once more (8).
+const RETURNED_BYTES: u64 = 24;
 /// Bytes writing a render's files takes per range pixel at its peak: the returned image (16),
 /// the range image's X, Y, Z, label and reason (20), the EXR encoder's copy of them (20), and
 /// the previews (4).

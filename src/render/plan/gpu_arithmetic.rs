@@ -40,10 +40,16 @@ pub(super) fn check_grid(grid: &ViewGrid, view: &str, local: DVec3) -> Result<()
     let first = [grid.origin[0] - local.x, grid.origin[1] - local.y].map(|v| v as f32);
     let [near, far] = [grid.z_range.0 - local.z, grid.z_range.1 - local.z].map(|v| v as f32);
     let span = far - near;
-    if !(dx.is_normal() && dy.is_normal() && first.iter().all(|v| v.is_finite())) {
+    if !(dx.is_normal() && dy.is_normal()) {
         return Err(Error::Scene(format!(
-            "the {view} view's pitch {:?} is not a normal f32 (the shaders divide by it)",
-            grid.pitch
+            "the {view} view's pitch {:?} is not a normal f32 (the shaders divide by it){}",
+            grid.pitch,
+            if view == "shadow" { ": the sensor's pitch divided by [shadow] columns" } else { "" }
+        )));
+    }
+    if !first.iter().all(|v| v.is_finite()) {
+        return Err(Error::Scene(format!(
+            "the {view} view's first pixel lies beyond f32's range from its local origin ({first:?})"
         )));
     }
     if !(span.is_normal() && span > 0.0) {

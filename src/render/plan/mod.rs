@@ -8,7 +8,7 @@ pub(crate) mod gpu_arithmetic;
 use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::sensor::{depth_bounds, Sensor, ViewGrid};
-use crate::shadow::ShadowSettings;
+use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::DVec3;
 
 /// The two views of one render, with the grids they were rendered on.
@@ -71,7 +71,16 @@ pub(crate) fn plan_views(
             let to_shadow = sensor.to_shadow_frame();
             let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
             let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z, shadow.columns)?;
-            let shadow_z = depth_bounds(in_shadow_frame.filter(|&s| seen(&columns, s)));
+            let seen_there: Vec<_> = in_shadow_frame.filter(|&s| seen(&columns, s)).collect();
+            // Where nothing shows, a depth range about the view's local origin: far from the
+            // frame's origin, one about 0 would have no f32 span there.
+            let shadow_z = match seen_there.is_empty() {
+                true => {
+                    let local_z = to_shadow.transform_point3(origin).z;
+                    (local_z - 1.0, local_z + 1.0)
+                }
+                false => depth_bounds(seen_there),
+            };
             Some(ViewGrid { z_range: shadow_z, ..columns })
         }
     };
@@ -86,19 +95,25 @@ pub(crate) fn plan_views(
     let views = Views { origin, range, shadow: shadow_grid };
     let to_shadow = sensor.to_shadow_frame();
     let shadow_view = views.shadow.as_ref().map(|grid| (grid, to_shadow.transform_point3(origin)));
-    gpu_arithmetic::check_grid(&views.range, "range", origin)?;
-    if let Some((grid, local)) = shadow_view {
-        gpu_arithmetic::check_grid(grid, "shadow", local)?;
-    }
-    for (i, &(centre, radius)) in spheres.iter().enumerate() {
-        let in_range = (centre, radius);
-        let seen_in_range = seen(&views.range, in_range);
-        gpu_arithmetic::check_reach(&views.range, "range", origin, in_range, seen_in_range, &name(i))?;
+    // Shadow mode `exact` casts its rays on the host and rasterizes nothing.
+    if shadow.mode != ShadowMode::Exact {
+        gpu_arithmetic::check_grid(&views.range, "range", origin)?;
         if let Some((grid, local)) = shadow_view {
-            let in_shadow = (to_shadow.transform_point3(centre), radius);
-            gpu_arithmetic::check_reach(grid, "shadow", local, in_shadow, seen(grid, in_shadow), &name(i))?;
+            gpu_arithmetic::check_grid(grid, "shadow", local)?;
+        }
+        for (i, &(centre, radius)) in spheres.iter().enumerate() {
+            let in_range = (centre, radius);
+            let seen_in_range = seen(&views.range, in_range);
+            gpu_arithmetic::check_reach(&views.range, "range", origin, in_range, seen_in_range, &name(i))?;
+            if let Some((grid, local)) = shadow_view {
+                let in_shadow = (to_shadow.transform_point3(centre), radius);
+                gpu_arithmetic::check_reach(grid, "shadow", local, in_shadow, seen(grid, in_shadow), &name(i))?;
+            }
         }
     }
-    gpu_arithmetic::check_effects(effects, &views.range, origin)?;
+    // Where nothing shows in the range view, no pixel holds a z for an effect to change.
+    if spheres.iter().any(|&sphere| seen(&views.range, sphere)) {
+        gpu_arithmetic::check_effects(effects, &views.range, origin)?;
+    }
     Ok(views)
 }

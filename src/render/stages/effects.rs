@@ -1,5 +1,5 @@
 //! The sensor-effect passes (src/effects.rs): one compute pipeline per effect
-//! (shaders/effect_*.comp, sharing shaders/stages/effect.glsl), recorded after the shadow mask, in
+//! (shaders/stages/effect_*.comp, sharing shaders/stages/effect.glsl), recorded after the shadow mask, in
 //! [`EFFECT_ORDER`](crate::effects::EFFECT_ORDER), only for the effects named. They write a
 //! slot's losses (a [`Reason`](crate::effects::Reason) code per pixel) and, where an effect
 //! changes z, its measured z; the sink reads both.
