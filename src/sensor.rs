@@ -76,10 +76,10 @@ impl Sensor {
 
     /// The grid as the GPU and the files hold it, in f32 (shaders/raster/draw.glsl's grid,
     /// range.exr's X and Y, the score's areas in src/verify/area.rs): each pitch a normal f32,
-    /// a pixel's squared area (dx·dy)² too (the area of a block divides by it), and every pixel
-    /// centre a finite f32 at most a pitch from its neighbours' values, so that no two columns
-    /// or rows share a coordinate and the local origins the GPU measures from
-    /// (`ViewGrid::local_origin`) stay exact.
+    /// a pixel's squared area (dx·dy)² too (a block's area sums it under a square root, and a
+    /// GPU may flush a subnormal to zero), and every pixel centre a finite f32 at most a pitch
+    /// from its neighbours' values, so that no two columns or rows share a coordinate and the
+    /// local origins the GPU measures from (`ViewGrid::local_origin`) stay exact.
     fn check_in_f32(&self) -> Result<()> {
         let [dx, dy] = self.pitch.map(|p| p as f32);
         let squared_area = (dx * dy) * (dx * dy);
