@@ -40,7 +40,7 @@ pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
 
 /// A renderer for tests: validation on, on the expected device, at most the given Vulkan
 /// version, with the rasterizer `RANGESYNTH_TEST_RASTER` names (`graphics` unless it is set:
-/// tools/test.sh runs the conformance, stability and analytic suites again with `compute`),
+/// tools/test.sh runs the conformance, stability, analytic and exact suites again with `compute`),
 /// covering as many hypotheses a dispatch as `RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH` says
 /// (the device's default unless it is set: tools/test.sh runs the verification suite again
 /// with the compute rasterizer covering four). Panics (fails the test) without a device.
