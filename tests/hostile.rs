@@ -391,8 +391,21 @@ fn a_sensor_that_disagrees_with_the_sensed_header_is_refused_unless_overridden()
         "pitch = [0.2, 0.1] (header: [0.1, 0.1])",
     );
     assert!(!e.contains("origin"), "{e}");
-    let out = verify(&hyps, &exr, &d.join("s.jsonl"), &["--override-sensor"]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    // Overridden, the file's sensor is the one rendered with: columns twice as wide show the
+    // box in half as many pixels as the header's sensor does.
+    let box_pixels = |hyps: &Path, flags: &[&str]| -> u64 {
+        let out = verify(hyps, &exr, &d.join("s.jsonl"), flags);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let line = std::fs::read_to_string(d.join("s.jsonl")).unwrap();
+        let record: serde_json::Value = serde_json::from_str(line.lines().next().unwrap()).unwrap();
+        record["counts"]["surface_population"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).sum()
+    };
+    let overridden = box_pixels(&hyps, &["--override-sensor"]);
+    let header =
+        box_pixels(&write_scene(&d, "plain.json", &hypotheses([("a".to_string(), vec![[1, 1]])]).to_string()), &[]);
+    assert!(header > 50, "the box shows at the header's pitch: {header} pixels");
+    let ratio = overridden as f64 / header as f64;
+    assert!((0.4..=0.6).contains(&ratio), "{overridden} pixels at pitch 0.2, {header} at 0.1");
 }
 
 #[test]
