@@ -141,18 +141,27 @@ fn gpu_counts_and_scores_match_the_cpu_scorer() {
             // Past the image's bottom-right corner: the score pass's last column and row.
             hypothesis("at the corner", "builtin:box", DMat4::from_translation(DVec3::new(2.1, -2.1, 0.0)), &[(1, 1)]),
         ];
-        let results = verify(&sensed, &settings(sensor, mode), &hypotheses);
+        // With the unshadowed image scored as well (`--compare-shadow`), checked the same way.
+        let settings = VerifySettings { compare_shadow: true, ..settings(sensor, mode) };
+        let results = verify(&sensed, &settings, &hypotheses);
         for (h, v) in common::paired(&hypotheses, &results) {
             let synthetic = render(&scene(sensor, mode, &[(h.model.mesh.name.as_str(), h.pose)]));
-            let images = Images::of(&image, &synthetic);
-            let cpu = cpu_counts(&images, TOLERANCE as f32);
             let name = format!("{} ({mode:?}, θ = {theta})", h.id);
-            assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{name}: counts");
-            assert!(cpu.n_s > 0 || h.id == "sphere", "{name}: the model is in view");
-            let expected = cpu_scores(&cpu, &h.bindings);
-            let s = &v.scores;
-            for (k, (gpu, cpu)) in [s.s1, s.s2, s.s3, s.s4, s.s5, s.s6, s.s].iter().zip(expected).enumerate() {
-                assert_close(&format!("{name} score {k}"), *gpu, cpu);
+            let shadowed = Images::of(&image, &synthetic);
+            let unshadowed = Images { synthetic_label: &synthetic.label_unshadowed, ..Images::of(&image, &synthetic) };
+            let shadow_pass = synthetic.shadow_pass;
+            assert!(!shadow_pass || v.unshadowed.is_some(), "{name}: an unshadowed score where a shadow pass ran");
+            let scored = std::iter::once(("", &shadowed, &v.counts, &v.scores))
+                .chain(v.unshadowed.as_ref().map(|(counts, scores)| (" unshadowed", &unshadowed, counts, scores)));
+            for (which, images, counts, scores) in scored {
+                let cpu = cpu_counts(images, TOLERANCE as f32);
+                assert_eq!(as_cpu(counts, &sensed, sensed.valid), cpu, "{name}{which}: counts");
+                assert!(cpu.n_s > 0 || h.id == "sphere", "{name}{which}: the model is in view");
+                let expected = cpu_scores(&cpu, &h.bindings);
+                let s = scores;
+                for (k, (gpu, cpu)) in [s.s1, s.s2, s.s3, s.s4, s.s5, s.s6, s.s].iter().zip(expected).enumerate() {
+                    assert_close(&format!("{name}{which} score {k}"), *gpu, cpu);
+                }
             }
         }
     }
