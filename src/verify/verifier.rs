@@ -82,7 +82,8 @@ pub struct Verification {
     pub id: String,
     pub counts: Counts,
     pub scores: Scores,
-    /// With `compare_shadow` and a shadow pass: the counts and scores without shadowing.
+    /// With `compare_shadow`: the counts and scores without shadowing (where no shadow pass
+    /// runs, mode `none` or θ = 0, the same as `counts` and `scores`).
     pub unshadowed: Option<(Counts, Scores)>,
     /// The rasterizer that rendered it (`Renderer::with_raster`; `auto` picks one a
     /// hypothesis): none where nothing was rendered, its footprint missing the image or shadow
