@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::scorer::{cpu_counts, Images};
+use common::scorer::{as_cpu, cpu_counts, Images};
 use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::effects::Reason;
@@ -317,8 +317,8 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
         let synthetic = render(&step_scene(sensor, h.pose));
         let images = Images::of(&image, &synthetic);
         let cpu = cpu_counts(&images, TOLERANCE as f32);
-        assert_eq!((v.counts.n1_plus, v.counts.n1_minus, v.counts.n0), (cpu.n1_plus, cpu.n1_minus, cpu.n0), "{}", h.id);
-        assert_eq!(v.counts.synthetic_valid(), cpu.n_s, "{}", h.id);
+        // Every count, overlap, population and area, not only the scalars.
+        assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{}", h.id);
     }
     // Without the sensor's effects, the true pose no longer reproduces the sensed image.
     let plain = VerifySettings { effects: Effects::default(), ..verify_settings(sensor) };

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::scorer::{cpu_counts, cpu_scores, CpuCounts, Images};
+use common::scorer::{as_cpu, cpu_counts, cpu_scores, Images};
 use common::*;
 use glam::{DMat4, DVec3};
 use rand::{Rng, SeedableRng};
@@ -14,7 +14,7 @@ use rangesynth::limits::{MemoryBudget, DEFAULT_MEMORY_BUDGET};
 use rangesynth::render::Raster;
 use rangesynth::sensor::Sensor;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
-use rangesynth::verify::{Counts, Hypothesis, Model, SensedImage, Verification, Verifier, VerifySettings};
+use rangesynth::verify::{Hypothesis, Model, SensedImage, Verification, Verifier, VerifySettings};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -83,30 +83,6 @@ fn verify(sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothe
     let out = VERIFIER.verify(sensed, settings, hypotheses, &mut |_| {}).expect("verification runs");
     assert_no_validation_messages();
     out
-}
-
-/// The GPU's counts in the CPU scorer's terms (scene labels instead of dense indices).
-fn as_cpu(c: &Counts, sensed: &SensedImage, n_i: u64) -> CpuCounts {
-    let nonzero = |v: &[u64]| v.iter().enumerate().filter(|(_, &n)| n != 0).map(|(m, &n)| (m as u32 + 1, n)).collect();
-    CpuCounts {
-        n1_plus: c.n1_plus,
-        n1_minus: c.n1_minus,
-        n0: c.n0,
-        n1: c.n1,
-        n_i,
-        n_s: c.synthetic_valid(),
-        overlap: c.overlap.iter().map(|&((k, m), t)| ((sensed.segments[k as usize], m), t)).collect(),
-        scene_population: sensed.segments.iter().zip(&sensed.segment_population).map(|(&s, &n)| (s, n)).collect(),
-        model_population: nonzero(&c.surface_population),
-        scene_area_units: sensed
-            .segments
-            .iter()
-            .zip(&sensed.segment_area_units)
-            .filter(|(_, &a)| a != 0)
-            .map(|(&s, &a)| (s, a))
-            .collect(),
-        model_area_units: nonzero(&c.surface_area_units),
-    }
 }
 
 fn assert_close(name: &str, gpu: f64, cpu: f64) {

@@ -165,3 +165,28 @@ pub fn cpu_scores(c: &CpuCounts, bindings: &[(u32, u32)]) -> [f64; 7] {
     let s = if rejected { 0.0 } else { s1 * s2 * s3 * s4 * s5 * s6 };
     [s1, s2, s3, s4, s5, s6, s]
 }
+
+/// The library's counts in the CPU scorer's terms (scene labels instead of dense indices), to
+/// compare them with its own.
+pub fn as_cpu(c: &rangesynth::verify::Counts, sensed: &rangesynth::verify::SensedImage, n_i: u64) -> CpuCounts {
+    let nonzero = |v: &[u64]| v.iter().enumerate().filter(|(_, &n)| n != 0).map(|(m, &n)| (m as u32 + 1, n)).collect();
+    CpuCounts {
+        n1_plus: c.n1_plus,
+        n1_minus: c.n1_minus,
+        n0: c.n0,
+        n1: c.n1,
+        n_i,
+        n_s: c.synthetic_valid(),
+        overlap: c.overlap.iter().map(|&((k, m), t)| ((sensed.segments[k as usize], m), t)).collect(),
+        scene_population: sensed.segments.iter().zip(&sensed.segment_population).map(|(&s, &n)| (s, n)).collect(),
+        model_population: nonzero(&c.surface_population),
+        scene_area_units: sensed
+            .segments
+            .iter()
+            .zip(&sensed.segment_area_units)
+            .filter(|(_, &a)| a != 0)
+            .map(|(&s, &a)| (s, a))
+            .collect(),
+        model_area_units: nonzero(&c.surface_area_units),
+    }
+}
