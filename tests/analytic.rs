@@ -36,14 +36,11 @@ fn step_shadow_band(theta_deg: f64, mode: ShadowMode) {
             .map(|c| s.pixel_centre(c, row).0)
             .filter(|&x| !(rim_allowed(x) && x < -1.5))
             .collect();
-        let width = shadowed.len() as f64;
-        assert!(
-            (width - expected_width).abs() <= 1.0,
-            "θ = {theta_deg}°, {mode:?}, row {row}: shadow is {width} pixels wide, expected {expected_width:.2} ± 1"
-        );
-        for x in shadowed {
-            assert!(x >= -tan - PITCH && x < 0.0, "shadowed pixel at x = {x} outside [−tan θ, 0] = [{:.3}, 0]", -tan);
-        }
+        // Exactly the pixel centres over the band (none lies on its edges).
+        let expected: Vec<f64> =
+            (0..s.width).map(|c| s.pixel_centre(c, row).0).filter(|&x| -tan < x && x < 0.0).collect();
+        assert!((expected.len() as f64 - expected_width).abs() <= 1.0, "the band is tan θ / dx pixels wide");
+        assert_eq!(shadowed, expected, "θ = {theta_deg}°, {mode:?}, row {row}: the shadowed pixels' centres");
         // Nothing else is shadowed: the high top sees the camera.
         let high_shadowed = (0..s.width)
             .filter(|&c| {
