@@ -65,20 +65,19 @@ pub(crate) fn plan_views(
             z_range.0, z_range.1
         )));
     }
+    // The shadow view's frame, and its local origin: the range view's, rotated.
+    let to_shadow = sensor.to_shadow_frame();
+    let shadow_local = to_shadow.transform_point3(origin);
     let shadow_grid = match shadow.mode.needs_shadow_pass(sensor.theta_deg) {
         false => None,
         true => {
-            let to_shadow = sensor.to_shadow_frame();
             let in_shadow_frame = spheres.iter().map(|&(c, r)| (to_shadow.transform_point3(c), r));
             let columns = sensor.shadow_grid(z_range, (0.0, 0.0), origin.z, shadow.columns)?;
             let seen_there: Vec<_> = in_shadow_frame.filter(|&s| seen(&columns, s)).collect();
             // Where nothing shows, a depth range about the view's local origin: far from the
             // frame's origin, one about 0 would have no f32 span there.
             let shadow_z = match seen_there.is_empty() {
-                true => {
-                    let local_z = to_shadow.transform_point3(origin).z;
-                    (local_z - 1.0, local_z + 1.0)
-                }
+                true => (shadow_local.z - 1.0, shadow_local.z + 1.0),
                 false => depth_bounds(seen_there),
             };
             Some(ViewGrid { z_range: shadow_z, ..columns })
@@ -93,8 +92,7 @@ pub(crate) fn plan_views(
         }
     }
     let views = Views { origin, range, shadow: shadow_grid };
-    let to_shadow = sensor.to_shadow_frame();
-    let shadow_view = views.shadow.as_ref().map(|grid| (grid, to_shadow.transform_point3(origin)));
+    let shadow_view = views.shadow.as_ref().map(|grid| (grid, shadow_local));
     // Shadow mode `exact` casts its rays on the host and rasterizes nothing.
     if shadow.mode != ShadowMode::Exact {
         gpu_arithmetic::check_grid(&views.range, "range", origin)?;
