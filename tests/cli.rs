@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command};
+use common::cli::{fresh_dir, rangesynth_command, text};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -14,10 +14,6 @@ fn rangesynth(args: &[&str]) -> Output {
 
 fn dir(name: &str) -> PathBuf {
     fresh_dir("cli", name)
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 #[test]

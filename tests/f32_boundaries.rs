@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command, refused};
+use common::cli::{fresh_dir, rangesynth_command, refused, text};
 use rangesynth::io::read_range_image;
 use rangesynth::limits::Ledger;
 use std::path::{Path, PathBuf};
@@ -68,10 +68,6 @@ fn verify(dir: &Path, exr: &Path, (model, pose): (&str, &str), extra: &str, flag
     args.extend(["--out", scores.to_str().unwrap()]);
     args.extend(flags);
     run(&args)
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 #[test]
@@ -167,16 +163,16 @@ fn what_shows_nowhere_is_not_checked_as_if_it_showed() {
     // where an empty view's depth range about 0 would have no f32 span.
     let far = scene_text(&sensor_over(10.0, (1e8, 0.0), 30.0), &[("builtin:box", IDENTITY.into())], "");
     let (out, dir) = render(&d, &far);
-    assert!(out.status.success(), "an empty view far from the origin: {}", stderr(&out));
+    assert!(out.status.success(), "an empty view far from the origin: {}", text(&out.stderr));
     assert!(read_range_image(&dir.join("range.exr"), &Ledger::default()).unwrap().label.iter().all(|&l| l == 0));
     // Noise whose σ overflows at z ≈ 0 but not near 1e10, where the scene is; a hypothesis
     // posed beside the image, at z = 0, is no reason to refuse the verification.
     let noisy = "[effects.noise]\nsigma = 0\ndepth_coefficient = 1e18\ndepth_reference = 1e10\n";
     let scene = scene_text(&sensor_over(1024.0, (0.0, 0.0), 0.0), &[("builtin:box", at(0.0, 0.0, 1e10))], noisy);
     let (out, dir) = render(&d, &scene);
-    assert!(out.status.success(), "noise about the scene's depth: {}", stderr(&out));
+    assert!(out.status.success(), "noise about the scene's depth: {}", text(&out.stderr));
     let out = verify(&d, &dir.join("range.exr"), ("builtin:box", &at(1e6, 0.0, 0.0)), "", &[]);
-    assert!(out.status.success(), "a hypothesis out of view: {}", stderr(&out));
+    assert!(out.status.success(), "a hypothesis out of view: {}", text(&out.stderr));
 }
 
 #[test]
@@ -193,7 +189,7 @@ fn effects_a_hypothesis_file_names_are_checked_for_each_hypothesis() {
     let d = fresh_dir("f32_boundaries", "hypothesis_effects");
     let scene = scene_text(&sensor_over(0.1, (0.0, 0.0), 30.0), &[("builtin:box", IDENTITY.into())], "");
     let (out, dir) = render(&d, &scene);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", text(&out.stderr));
     let exr = dir.join("range.exr");
     let effects = "\"effects\": {\"quantize\": {\"z_step\": 2e-38}},";
     let out = verify(&d, &exr, ("builtin:box", &at(0.0, 0.0, 100.0)), effects, &["--override-effects"]);
@@ -267,14 +263,14 @@ fn scenes_at_the_edges_of_the_bounds_render_finite_images_that_verify_accepts() 
     for (name, scene, (model, pose)) in cases {
         let d = fresh_dir("f32_boundaries", &name.replace(' ', "_"));
         let (out, dir) = render(&d, &scene);
-        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
         let exr = dir.join("range.exr");
         let image = read_range_image(&exr, &Ledger::default()).unwrap();
         let valid: Vec<f32> = image.label.iter().zip(&image.z).filter(|(&l, _)| l != 0).map(|(_, &z)| z).collect();
         assert!(!valid.is_empty(), "{name}: the object shows");
         assert!(valid.iter().all(|z| z.is_finite()), "{name}: a valid pixel's z is not finite");
         let out = verify(&d, &exr, (&model, &pose), "\"tolerance\": 1e30,", &[]);
-        assert!(out.status.success(), "{name}: verify refused the image render wrote: {}", stderr(&out));
+        assert!(out.status.success(), "{name}: verify refused the image render wrote: {}", text(&out.stderr));
         let line = std::fs::read_to_string(d.join("scores.jsonl")).unwrap();
         let record: serde_json::Value = serde_json::from_str(line.lines().next().unwrap()).unwrap();
         let counts = &record["counts"];

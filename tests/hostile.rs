@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command, refused};
+use common::cli::{fresh_dir, rangesynth_command, refused, text};
 use glam::DMat4;
 use rangesynth::io::{parse_range_image, read_range_image};
 use rangesynth::limits::Ledger;
@@ -48,10 +48,6 @@ fn finish_within(mut child: Child, limit: Duration, what: &str) -> (ExitStatus, 
 
 fn dir(name: &str) -> PathBuf {
     fresh_dir("hostile", name)
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 const SENSOR: &str = "[sensor]\nkind = \"orthographic\"\nwidth = 32\nheight = 24\npitch = [0.1, 0.1]\norigin = [-1.5, 1.1]\ntheta_deg = 30.0\n[shadow]\nmode = \"depth\"\n";

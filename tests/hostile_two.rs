@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command, refused};
+use common::cli::{fresh_dir, rangesynth_command, refused, text};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::Scene;
 use std::io::Write;
@@ -27,12 +27,8 @@ fn run(args: &[&str], budget: Option<&str>) -> Output {
     command.output().expect("the binary runs")
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
 fn succeeded(out: &Output, what: &str) {
-    assert!(out.status.success(), "{what}: {:?}\n{}", out.status, stderr(out));
+    assert!(out.status.success(), "{what}: {:?}\n{}", out.status, text(&out.stderr));
 }
 
 fn write(path: PathBuf, text: impl AsRef<[u8]>) -> PathBuf {

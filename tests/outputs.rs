@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::cli::{fresh_dir, rangesynth_command};
+use common::cli::{fresh_dir, rangesynth_command, text};
 use std::collections::BTreeMap;
 use std::ffi::CString;
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
@@ -27,10 +27,6 @@ fn run(args: &[&str]) -> Output {
 
 fn dir(name: &str) -> PathBuf {
     fresh_dir("outputs", name)
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 fn s(path: &Path) -> &str {

@@ -25,10 +25,15 @@ pub fn fresh_dir(suite: &str, name: &str) -> PathBuf {
     d
 }
 
+/// A child's output, stdout or stderr, as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
 /// Asserts a clean refusal — exit code 1, an `error: ` message, no panic — whose message holds
 /// `expected`; returns the message.
 pub fn refused(out: &Output, what: &str, expected: &str) -> String {
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{what}: expected exit code 1, got {:?}:\n{stderr}", out.status);
     assert!(stderr.starts_with("error: ") && !stderr.contains("panicked"), "{what}: {stderr}");
     assert!(stderr.contains(expected), "{what}: expected {expected:?} in:\n{stderr}");
