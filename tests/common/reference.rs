@@ -22,6 +22,9 @@ pub struct Reference {
     /// triangle's and those of triangles sharing a vertex with it that come within
     /// [`SNAP_PIXELS`] of the centre (Vulkan's minimum sub-pixel precision is 4 bits).
     pub z_bracket: Vec<(f64, f64)>,
+    /// The same over the planes of the hit's surface alone: the z a rasterizer that shows the
+    /// reference's label there may hold.
+    pub z_bracket_surface: Vec<(f64, f64)>,
     /// Exact triangulation shadow: whether the camera cannot see the point, because a surface
     /// lies along d_cam from it or because the side of its surface the projector lights (+z)
     /// turns away from the camera (n · d_cam ≤ 0, however thin the surface).
@@ -154,6 +157,12 @@ impl VerticalCaster {
     }
 }
 
+/// |∂z/∂x|, |∂z/∂y| of the triangle's plane (the triangle not seen edge-on).
+fn plane_slope(c: &[DVec3; 3]) -> DVec2 {
+    let n = (c[1] - c[0]).cross(c[2] - c[0]);
+    DVec2::new(-n.x / n.z, -n.y / n.z).abs()
+}
+
 /// z of the triangle's plane over p when p lies inside its xy projection (edges included);
 /// None outside or for a triangle seen edge-on.
 fn height_at(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
@@ -212,6 +221,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
         z: vec![0.0; width * height],
         normal_z: vec![0.0; width * height],
         z_bracket: vec![(0.0, 0.0); width * height],
+        z_bracket_surface: vec![(0.0, 0.0); width * height],
         occluded: vec![false; width * height],
         camera_label: vec![0; width * height],
         near_camera_edge: vec![false; width * height],
@@ -233,10 +243,16 @@ pub fn reference_render(scene: &Scene) -> Reference {
             reference.normal_z[i] = normal.z.abs();
             let lit_side = normal * normal.z.signum();
             let snap = SNAP_PIXELS * s.pitch[0].min(s.pitch[1]);
-            reference.z_bracket[i] = range
+            let planes: Vec<(f64, u32)> = range
                 .near(DVec2::new(x, y), snap)
                 .filter(|(_, n)| n.vertices.iter().any(|v| t.vertices.contains(v)))
-                .fold((z, z), |(lo, hi), (zn, _)| (lo.min(zn), hi.max(zn)));
+                .map(|(zn, n)| (zn, n.label))
+                .collect();
+            let bracket = |planes: &mut dyn Iterator<Item = &(f64, u32)>| {
+                planes.fold((z, z), |(lo, hi), &(zn, _)| (lo.min(zn), hi.max(zn)))
+            };
+            reference.z_bracket[i] = bracket(&mut planes.iter());
+            reference.z_bracket_surface[i] = bracket(&mut planes.iter().filter(|p| p.1 == label));
             let p = to_camera.transform_point3(DVec3::new(x, y, z));
             reference.occluded[i] = lit_side.dot(d_cam) <= FACING_TOLERANCE
                 || camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
@@ -246,4 +262,158 @@ pub fn reference_render(scene: &Scene) -> Reference {
         }
     }
     reference
+}
+
+/// The label test as rangesynth runs it (docs/design.md "The shadow test"), evaluated on the
+/// reference's exact geometry: p' = R_y(−θ)·p of each range pixel's point; the shadow view's
+/// pixels on the lattice of `Sensor::shadow_grid` (the range view's rows; columns `pitch /
+/// columns` apart through the rotated range origin at the local origin's depth); each shadow
+/// pixel showing the label of the front surface the camera sees at its centre; a range pixel
+/// kept where the nearest shadow pixel (or, with `2x2`, any of the four around p') shows its
+/// label. It shares with the GPU's test only the documented lattice.
+pub struct LabelTest {
+    /// The labels the test keeps (0 where it shadows), wherever it is decided.
+    pub label: Vec<u32>,
+    /// Where it is not decided by exact geometry but by rounding: p' within the f32 error of its
+    /// z and arithmetic of a boundary between shadow pixels, or a shadow pixel read whose
+    /// centre lies within a rasterizer's sub-pixel snapping of a change of label (or on
+    /// coincident faces) — unless every way it may go gives the same answer.
+    pub undecided: Vec<bool>,
+}
+
+/// How far, in shadow pixels, the GPU's f32 arithmetic may move p' (offsets from the local
+/// origin of at most a few hundred pixels, a few roundings each: ~1e-5), with a margin.
+const LATTICE_SLACK_PIXELS: f64 = 1e-4;
+
+/// Relative error of the range view's z the conformance suite allows (its `Z_TOLERANCE`):
+/// how far along the camera's rays the GPU's p' may lie from the reference's.
+const Z_SLACK_RELATIVE: f64 = 1e-5;
+
+/// The label test of `scene`'s shadow settings on the reference's geometry ([`LabelTest`]).
+pub fn label_test(scene: &Scene, reference: &Reference) -> LabelTest {
+    use rangesynth::shadow::Neighbourhood;
+    let s = &scene.sensor;
+    let theta = s.theta_deg.to_radians();
+    let (c, sn) = (theta.cos(), theta.sin());
+    let to_camera = DMat4::from_rotation_y(-theta);
+    let camera = VerticalCaster::new(posed_triangles(scene, to_camera));
+    let scale = camera.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    let tie = TIE_RELATIVE * scale;
+    let (w, h) = (reference.width, reference.height);
+
+    // The lattice: through the rotated range origin at the depth of the range view's local
+    // origin, itself the centre of the depth bounds of the objects the range view can show.
+    let full_range = s.range_grid((0.0, 0.0));
+    let spheres = scene.objects.iter().map(|o| {
+        let (centre, radius) = o.mesh.bounding_sphere();
+        (o.pose.transform_point3(centre), radius)
+    });
+    let seen = spheres.filter(|&(centre, radius)| full_range.footprint(centre, radius, 1).is_some());
+    let lattice_z = s.range_grid(rangesynth::sensor::depth_bounds(seen)).local_origin().z;
+    let anchor = c * s.origin[0] - sn * lattice_z;
+    let dx = s.pitch[0] / f64::from(scene.shadow.columns);
+    let dy = s.pitch[1];
+
+    // The labels a shadow pixel may show, once a rasterizer has snapped the corners of the
+    // triangles about its centre: those of the triangles that may cover the centre and may
+    // then lie in front of every triangle that surely covers it (covers the whole square of
+    // the snapping), each plane's z there uncertain by its slope times the snapping; and no
+    // surface (0) where none surely covers it.
+    let shows = |column: i64, row: i64| -> Vec<u32> {
+        let centre = DVec2::new(anchor + column as f64 * dx, s.origin[1] - row as f64 * dy);
+        let snap = DVec2::new(dx, dy) * SNAP_PIXELS;
+        let square =
+            [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)].map(|(kx, ky)| centre + snap * DVec2::new(kx, ky));
+        let candidates: Vec<(f64, f64, u32, bool)> = camera
+            .near(centre, snap.length())
+            .map(|(z, t)| {
+                let slope = plane_slope(&t.corners);
+                let e = slope.x * snap.x + slope.y * snap.y + tie;
+                let covers = square.iter().all(|&p| height_at(&t.corners, p).is_some());
+                (z - e, z + e, t.label, covers)
+            })
+            .collect();
+        let front = candidates.iter().filter(|c| c.3).map(|c| c.0).max_by(f64::total_cmp);
+        let mut labels: Vec<u32> = candidates.iter().filter(|c| front.is_none_or(|f| c.1 >= f)).map(|c| c.2).collect();
+        if front.is_none() {
+            labels.push(0);
+        }
+        labels.sort_unstable();
+        labels.dedup();
+        labels
+    };
+    // Some(true) where a shadow pixel surely shows `label`, Some(false) where it surely does not.
+    // Rows outside the image are outside the shadow view, which shows nothing there.
+    let surely_shows = |column: i64, row: i64, label: u32| {
+        if !(0..h as i64).contains(&row) {
+            return Some(false);
+        }
+        let labels = shows(column, row);
+        match (labels.contains(&label), labels.len()) {
+            (true, 1) => Some(true),
+            (false, _) => Some(false),
+            _ => None,
+        }
+    };
+    // The answers every way the test may go agree: that answer, else None.
+    let agreed = |answers: &mut dyn Iterator<Item = Option<bool>>| {
+        let mut all = None;
+        for a in answers {
+            match (a, all) {
+                (None, _) => return None,
+                (Some(a), Some(b)) if a != b => return None,
+                (Some(a), _) => all = Some(a),
+            }
+        }
+        all
+    };
+
+    let mut test = LabelTest { label: vec![0; w * h], undecided: vec![false; w * h] };
+    for row in 0..h {
+        for col in 0..w {
+            let i = row * w + col;
+            let label = reference.label[i];
+            if label == 0 {
+                continue;
+            }
+            let x = s.origin[0] + col as f64 * s.pitch[0];
+            // The shadow-frame column p' may fall on, over the z the GPU may rightly hold where
+            // it shows the reference's surface (the only pixels the test is checked on).
+            let (lo, hi) = reference.z_bracket_surface[i];
+            let slack = Z_SLACK_RELATIVE * reference.z[i].abs().max(1.0);
+            let at = |z: f64| (c * x - sn * z - anchor) / dx;
+            let (u0, u1) = (at(hi + slack), at(lo - slack));
+            let (u0, u1) = (u0.min(u1) - LATTICE_SLACK_PIXELS, u0.max(u1) + LATTICE_SLACK_PIXELS);
+            let row = row as i64;
+            let lit = match scene.shadow.neighbourhood {
+                Neighbourhood::Nearest => {
+                    let columns = (u0 + 0.5).floor() as i64..=(u1 + 0.5).floor() as i64;
+                    agreed(&mut columns.map(|k| surely_shows(k, row, label)))
+                }
+                // The four around p': its row lies on a row of centres, so the GPU's f32 row
+                // may put the square's first row at either.
+                Neighbourhood::Square2 => {
+                    let corners = (u0.floor() as i64..=u1.floor() as i64)
+                        .flat_map(|k| [(k, row - 1), (k, row)])
+                        .collect::<Vec<_>>();
+                    agreed(&mut corners.into_iter().map(|(k, r)| {
+                        let four =
+                            [(k, r), (k + 1, r), (k, r + 1), (k + 1, r + 1)].map(|(k, r)| surely_shows(k, r, label));
+                        if four.contains(&Some(true)) {
+                            Some(true)
+                        } else if four.iter().all(|&a| a == Some(false)) {
+                            Some(false)
+                        } else {
+                            None
+                        }
+                    }))
+                }
+            };
+            match lit {
+                Some(lit) => test.label[i] = if lit { label } else { 0 },
+                None => test.undecided[i] = true,
+            }
+        }
+    }
+    test
 }
