@@ -1,12 +1,15 @@
 //! `rangesynth accuracy` end to end (validation on): the quick sweep with a scene of the
-//! user's, its CSV parsed and checked against itself and against the tests' independent CPU
-//! reference, its plot decoded, and an output path that names an input refused.
+//! user's, its CSV parsed and checked against itself and, on the user's scene, every
+//! setting's row against the tests' independent CPU reference; its plot decoded, and an
+//! output path that names an input refused.
 
 mod common;
 
 use common::cli::{fresh_dir, rangesynth_command};
+use common::paired;
 use common::reference::reference_render;
 use rangesynth::limits::Ledger;
+use rangesynth::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
 use rangesynth::Scene;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -106,6 +109,25 @@ fn the_quick_sweep_writes_a_csv_that_parses_and_a_plot() {
     let row = |setting: &str| &rows[&(setting.to_string(), "box on table".to_string())];
     assert_eq!(row("none").wrong_pixels, shadowed);
     assert_eq!(row("depth x1").wrong_pixels, 0);
+    // Every setting's wrong pixels are its pixels that differ from exact shadowing as the
+    // reference casts it (exact mode's row included), not from exact mode's image.
+    let expected = reference.label_shadowed();
+    let of = ShadowSettings::of;
+    let columns = |mode, columns| ShadowSettings { columns, ..of(mode) };
+    let square = ShadowSettings { neighbourhood: Neighbourhood::Square2, ..of(ShadowMode::Label) };
+    for (setting, shadow) in [
+        ("none", of(ShadowMode::None)),
+        ("label x1", of(ShadowMode::Label)),
+        ("label x2", columns(ShadowMode::Label, 2)),
+        ("depth x1", of(ShadowMode::Depth)),
+        ("depth x2", columns(ShadowMode::Depth, 2)),
+        ("label 2x2 x1", square),
+        ("exact", of(ShadowMode::Exact)),
+    ] {
+        let out = common::render(&Scene { shadow, ..scene.clone() });
+        let wrong = paired(&out.label, &expected).filter(|(a, b)| a != b).count() as u64;
+        assert_eq!(row(setting).wrong_pixels, wrong, "{setting} on the box on a table");
+    }
     let step = &rows[&("none".to_string(), "step".to_string())];
     assert!(step.score_abs_error > 0.0, "ignoring the step's shadow on itself changes its correct score");
     assert!(stdout.contains("box on table") && stdout.contains("ms/pose"), "the table is printed:\n{stdout}");

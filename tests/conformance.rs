@@ -96,9 +96,9 @@ fn check(name: &str, scene: &Scene, out: &RenderOutput, reference: &Reference) -
             let (lo, hi) = reference.z_bracket[i];
             let z = f64::from(out.z[i]);
             let error = (lo - z).max(z - hi).max(0.0) / reference.z[i].abs().max(1.0);
-            let perpendicular = error * reference.normal_z[i];
+            let perpendicular = error * reference.lit_normal[i].z;
             assert!(perpendicular <= Z_TOLERANCE, "{name}: pixel {i}: z error across the surface {perpendicular:e}");
-            if reference.normal_z[i] >= FACE_ON_ENOUGH {
+            if reference.lit_normal[i].z >= FACE_ON_ENOUGH {
                 max_z_error = max_z_error.max(error);
             }
         }

@@ -142,6 +142,62 @@ fn dropout_loses_the_asked_fraction() {
     assert_ne!(b.label, a.label, "another seed, other losses");
 }
 
+/// pcg4d (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020), from the paper:
+/// the hash the effects draw from (shaders/stages/random.glsl).
+fn pcg4d(mut v: [u32; 4]) -> [u32; 4] {
+    for x in &mut v {
+        *x = x.wrapping_mul(1664525).wrapping_add(1013904223);
+    }
+    let mix = |v: &mut [u32; 4]| {
+        v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
+        v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+        v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+        v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
+    };
+    mix(&mut v);
+    for x in &mut v {
+        *x ^= *x >> 16;
+    }
+    mix(&mut v);
+    v
+}
+
+/// Dropout's draw at a pixel: the first of its two uniform variates (24 bits) for (seed,
+/// pixel, stream 1), as docs/effects.md states the rule.
+fn dropout_draw(seed: u32, col: u32, row: u32) -> f32 {
+    (pcg4d([col, row, seed, 1])[0] >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Dropout loses exactly the measured points whose draw falls below the probability, on a
+/// scene with background and shadows: no neighbour's, no shadowed or empty pixel's.
+#[test]
+fn dropout_loses_exactly_the_points_its_draws_pick() {
+    let base = cluttered(160);
+    let before = render(&base);
+    let (p, seed) = (0.3f32, 7u32);
+    let out = render(&with(&base, &format!("[dropout]\nprobability = {p}\nseed = {seed}")));
+    let mut lost = 0;
+    for row in 0..160u32 {
+        for col in 0..160u32 {
+            let i = (row * 160 + col) as usize;
+            let picked = dropout_draw(seed, col, row) < p;
+            match before.reason[i] {
+                Reason::Valid => {
+                    let expected = if picked { Reason::Dropout } else { Reason::Valid };
+                    assert_eq!(out.reason[i], expected, "pixel ({col}, {row})");
+                    lost += usize::from(picked);
+                }
+                earlier => assert!(
+                    out.reason[i] == earlier || (picked && out.reason[i] == Reason::Dropout),
+                    "pixel ({col}, {row}): {earlier:?} became {:?}",
+                    out.reason[i]
+                ),
+            }
+        }
+    }
+    assert!(lost > 1000, "{lost} points lost");
+}
+
 /// The demo's stepped block and cylinder on a table at θ = 45°, depth-mode shadows.
 fn cluttered(size: u32) -> Scene {
     let s = centred_sensor(size, size, 5.0 / f64::from(size), [-0.5, 0.0], 45.0);

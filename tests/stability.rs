@@ -9,7 +9,9 @@
 //!
 //! Allowances, as in tests/conformance.rs: a mismatch is allowed only within one pixel
 //! (8-neighbourhood) of a change of label in the reference's hit labels or in the expected
-//! shadowed labels.
+//! shadowed labels, and only as many as each case's cap: the count measured when the cap was
+//! set (the same with either rasterizer, on lavapipe) plus a quarter, and at least 2, so that
+//! a boundary moved or widened by a pixel along its length fails.
 
 mod common;
 
@@ -62,9 +64,31 @@ fn sliver_box(strips: u32) -> (Mesh, Vec<DVec3>) {
     (mesh, faces.iter().map(|f| f.2).collect())
 }
 
-/// Renders one convex mesh in depth mode and checks its shadow against the convex-body
-/// oracle; returns (wrong pixels outside the allowance, pixels of the image).
-fn convex_shadow_errors(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, size: u32, theta: f64) -> usize {
+// Caps (measured plus a quarter, at least 2: the module doc).
+const CAP_SLIVER_1: usize = 2; // measured 0
+const CAP_SLIVER_1000: usize = 2; // 0
+const CAP_FAR_BOX: usize = 2; // 0
+/// (step, clutter) at each θ: measured (0, 2), (0, 2), (0, 11), (0, 3).
+const CAPS_85: (usize, usize) = (2, 3);
+const CAPS_88: (usize, usize) = (2, 3);
+const CAPS_89: (usize, usize) = (2, 14);
+const CAPS_MINUS_89: (usize, usize) = (2, 4);
+const CAP_COINCIDENT_HITS: usize = 2; // 0
+/// Shadowed labels of the coincident tops, by mode: measured 49 in `label` (the paper's test
+/// is compared with, whose rim lies in the allowance), 0 in `depth`.
+const CAP_COINCIDENT_LABEL: usize = 62;
+const CAP_COINCIDENT_DEPTH: usize = 2;
+const CAP_EDGE_ON_PLATE: usize = 2; // 0
+const CAP_FAR_DEPTH: usize = 2; // 1
+
+/// Asserts a comparison found no mismatch outside its allowance and at most `cap` inside it.
+fn assert_capped(name: &str, diff: LabelDiff, cap: usize) {
+    assert_eq!(diff.outside_allowance, 0, "{name}: {diff:?} mismatches outside the allowance");
+    assert!(diff.mismatched <= cap, "{name}: {} mismatches in the allowance, more than {cap}", diff.mismatched);
+}
+
+/// Renders one convex mesh in depth mode and compares its shadow with the convex-body oracle.
+fn convex_shadow_diff(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, size: u32, theta: f64) -> LabelDiff {
     let (centre, radius) = mesh.bounding_sphere();
     let at = pose.transform_point3(centre);
     let s = centred_sensor(size, size, 2.4 * radius / f64::from(size), [at.x, at.y], theta);
@@ -86,7 +110,7 @@ fn convex_shadow_errors(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, 
     let allowed: Vec<bool> = (0..w * h).map(|i| hit_edges[i] || boundaries[i]).collect();
     let diff = compare_labels(name, w, h, &out.label, &expected, &allowed);
     eprintln!("{name}: {diff:?}");
-    diff.outside_allowance
+    diff
 }
 
 /// A rotation about z and a 10° tilt about x, as a recognizer's pose would have.
@@ -96,11 +120,10 @@ fn turned_and_tilted() -> DMat4 {
 
 #[test]
 fn sliver_triangles_shadow_like_their_faces() {
-    for strips in [1, 1000] {
+    for (strips, cap) in [(1, CAP_SLIVER_1), (1000, CAP_SLIVER_1000)] {
         let (mesh, normals) = sliver_box(strips);
-        let wrong =
-            convex_shadow_errors(&format!("sliver_box_{strips}"), mesh, &normals, turned_and_tilted(), 128, 45.0);
-        assert_eq!(wrong, 0, "{strips} strips a face: {wrong} pixels wrongly shadowed or lit");
+        let name = format!("sliver_box_{strips}");
+        assert_capped(&name, convex_shadow_diff(&name, mesh, &normals, turned_and_tilted(), 128, 45.0), cap);
     }
 }
 
@@ -122,11 +145,6 @@ fn shadow_diff_against_reference(name: &str, scene: &Scene) -> LabelDiff {
     diff
 }
 
-/// As [`shadow_diff_against_reference`]: the wrong pixels outside the allowance.
-fn shadow_errors_against_reference(name: &str, scene: &Scene) -> usize {
-    shadow_diff_against_reference(name, scene).outside_allowance
-}
-
 #[test]
 fn an_object_far_away_in_depth_beside_the_image_does_not_widen_the_shadow_view() {
     // A box beside the image at z = 1000 can put no point into it; the stepped block in view
@@ -134,17 +152,18 @@ fn an_object_far_away_in_depth_beside_the_image_does_not_widen_the_shadow_view()
     let s = centred_sensor(128, 128, 4.4 / 128.0, [0.0, 0.0], 45.0);
     let far = DMat4::from_translation(DVec3::new(40.0, 0.0, 1000.0));
     let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY), ("builtin:box", far)]);
-    assert_eq!(shadow_errors_against_reference("far_box_beside", &sc), 0);
+    assert_capped("far_box_beside", shadow_diff_against_reference("far_box_beside", &sc), CAP_FAR_BOX);
 }
 
 #[test]
 fn depth_mode_is_exact_up_to_the_steepest_theta_and_refuses_beyond() {
     use rangesynth::sensor::MAX_THETA_DEG;
     assert_eq!(MAX_THETA_DEG, 89.0);
-    for theta in [85.0, 88.0, 89.0, -89.0] {
+    for (theta, caps) in [(85.0, CAPS_85), (88.0, CAPS_88), (89.0, CAPS_89), (-89.0, CAPS_MINUS_89)] {
         let s = centred_sensor(256, 256, 4.4 / 256.0, [0.0, 0.0], theta);
         let sc = scene(s, ShadowMode::Depth, &[("builtin:step", DMat4::IDENTITY)]);
-        assert_eq!(shadow_errors_against_reference(&format!("step_{theta}"), &sc), 0, "step at θ = {theta}");
+        let name = format!("step_{theta}");
+        assert_capped(&name, shadow_diff_against_reference(&name, &sc), caps.0);
         let s = centred_sensor(256, 256, 5.0 / 256.0, [0.0, 0.0], theta);
         let on_table =
             |x: f64, y: f64, turn: f64| DMat4::from_translation(DVec3::new(x, y, 0.0)) * DMat4::from_rotation_z(turn);
@@ -157,7 +176,8 @@ fn depth_mode_is_exact_up_to_the_steepest_theta_and_refuses_beyond() {
             ("builtin:box", DMat4::from_translation(DVec3::new(-1.4, 1.3, 0.8)) * turned_and_tilted()),
         ];
         let sc = scene(s, ShadowMode::Depth, &objects);
-        assert_eq!(shadow_errors_against_reference(&format!("clutter_{theta}"), &sc), 0, "clutter at θ = {theta}");
+        let name = format!("clutter_{theta}");
+        assert_capped(&name, shadow_diff_against_reference(&name, &sc), caps.1);
     }
     // Beyond the limit (where a table clutter at 89.5° had 993 wrong pixels), a clear refusal.
     for theta in [89.5, 89.99, -89.5] {
@@ -191,9 +211,9 @@ fn a_dense_sphere_on_a_table_shadows_like_exact_ray_casting() {
 
 /// Two boxes whose top faces lie in one plane and overlap, posed together: where they overlap,
 /// the lower label (the object listed first) must win, whichever is listed first, and label
-/// mode must not shadow either top. Returns (range labels, shadowed labels) wrong outside the
-/// allowance (within one pixel of a change of the expected labels).
-fn coincident_tops_errors(mode: ShadowMode, first_is_turned: bool) -> (usize, usize) {
+/// mode must not shadow either top. Compares range labels and shadowed labels with the
+/// reference's, with the allowance (within one pixel of a change of the expected labels).
+fn coincident_tops_diffs(mode: ShadowMode, first_is_turned: bool) -> (String, LabelDiff, LabelDiff) {
     let lean = turned_and_tilted();
     let plain = lean;
     let turned = lean * DMat4::from_translation(DVec3::new(0.45, 0.3, 0.0)) * DMat4::from_rotation_z(0.3);
@@ -218,15 +238,16 @@ fn coincident_tops_errors(mode: ShadowMode, first_is_turned: bool) -> (usize, us
         (0..w * h).map(|i| near_hit_change[i] || boundaries[i] || reference.near_camera_edge[i]).collect();
     let shadowed = compare_labels(&name, w, h, &out.label, &expected, &allowed);
     eprintln!("{name}: hits {hits:?}, shadowed {shadowed:?}");
-    (hits.outside_allowance, shadowed.outside_allowance)
+    (name, hits, shadowed)
 }
 
 #[test]
 fn coincident_faces_go_to_the_lower_label_in_any_order_and_cast_no_shadow() {
-    for mode in [ShadowMode::Label, ShadowMode::Depth] {
+    for (mode, cap) in [(ShadowMode::Label, CAP_COINCIDENT_LABEL), (ShadowMode::Depth, CAP_COINCIDENT_DEPTH)] {
         for first_is_turned in [false, true] {
-            let (hits, shadowed) = coincident_tops_errors(mode, first_is_turned);
-            assert_eq!((hits, shadowed), (0, 0), "{mode:?}, turned box first: {first_is_turned}");
+            let (name, hits, shadowed) = coincident_tops_diffs(mode, first_is_turned);
+            assert_capped(&format!("{name}_hits"), hits, CAP_COINCIDENT_HITS);
+            assert_capped(&name, shadowed, cap);
         }
     }
 }
@@ -310,8 +331,8 @@ fn a_plate_seen_edge_on_by_the_camera_casts_no_shadow_line() {
             * DMat4::from_rotation_y((theta - 90.0f64).to_radians());
         let s = centred_sensor(128, 128, 3.0 / 128.0, [0.0, 0.0], theta);
         let sc = scene(s, ShadowMode::Depth, &[("builtin:plane:4", DMat4::IDENTITY), ("builtin:plane:1", edge_on)]);
-        let wrong = shadow_errors_against_reference(&format!("edge_on_plate_{theta}"), &sc);
-        assert_eq!(wrong, 0, "θ = {theta}");
+        let name = format!("edge_on_plate_{theta}");
+        assert_capped(&name, shadow_diff_against_reference(&name, &sc), CAP_EDGE_ON_PLATE);
     }
 }
 
@@ -339,7 +360,7 @@ fn far_from_the_origin_the_same_geometry_renders_the_same_image() {
         let far = scene(far_sensor, mode, &objects(offset));
         let name = format!("far_{}", mode.as_str());
         if mode == ShadowMode::Depth {
-            assert_eq!(shadow_errors_against_reference(&name, &far), 0, "{name} against exact ray casting");
+            assert_capped(&name, shadow_diff_against_reference(&name, &far), CAP_FAR_DEPTH);
         }
         let (near_out, far_out) = (render(&near), render(&far));
         let differ = |a: &[u32], b: &[u32]| common::paired(a, b).filter(|(a, b)| a != b).count();

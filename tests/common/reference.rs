@@ -16,8 +16,9 @@ pub struct Reference {
     pub label: Vec<u32>,
     /// z of the first hit (range frame).
     pub z: Vec<f64>,
-    /// |n_z| of the hit triangle's unit normal: 1 face-on, 0 edge-on.
-    pub normal_z: Vec<f64>,
+    /// The hit triangle's unit normal on the side the projector lights (n_z ≥ 0): n_z is 1
+    /// face-on, 0 edge-on.
+    pub lit_normal: Vec<DVec3>,
     /// Range of z over the planes a rasterizer may rightly pick at the pixel centre: the hit
     /// triangle's and those of triangles sharing a vertex with it that come within
     /// [`SNAP_PIXELS`] of the centre (Vulkan's minimum sub-pixel precision is 4 bits).
@@ -219,7 +220,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
         height,
         label: vec![0; width * height],
         z: vec![0.0; width * height],
-        normal_z: vec![0.0; width * height],
+        lit_normal: vec![DVec3::ZERO; width * height],
         z_bracket: vec![(0.0, 0.0); width * height],
         z_bracket_surface: vec![(0.0, 0.0); width * height],
         occluded: vec![false; width * height],
@@ -240,8 +241,8 @@ pub fn reference_render(scene: &Scene) -> Reference {
             reference.tied[i] = range.hits(DVec2::new(x, y)).filter(|h| h.0 >= z - tie).count() > 1;
             let [a, b, c] = t.corners;
             let normal = (b - a).cross(c - a).normalize();
-            reference.normal_z[i] = normal.z.abs();
             let lit_side = normal * normal.z.signum();
+            reference.lit_normal[i] = lit_side;
             let snap = SNAP_PIXELS * s.pitch[0].min(s.pitch[1]);
             let planes: Vec<(f64, u32)> = range
                 .near(DVec2::new(x, y), snap)
