@@ -105,6 +105,21 @@ fn s4_at_ratios_exactly_1_and_2_and_beyond() {
     assert!(beyond.rejected.as_deref().unwrap().contains("> 2"), "{:?}", beyond.rejected);
 }
 
+/// s4 leaves out a binding where neither the segment nor the surface has a 2×2 block (A_S =
+/// A_M = 0: no ratio), and rejects one whose surface has no block where its segment has one
+/// (r = ∞).
+#[test]
+fn s4_leaves_out_a_binding_without_blocks_and_rejects_one_whose_surface_has_none() {
+    let blockless = sensed(&[&[10, 10, 10, 10]]); // A_S = 0
+    let neither = score(&one_binding_counts(0, 4), &blockless, &[(10, 1)]);
+    assert_eq!((neither.s4, neither.rejected.clone()), (1.0, None), "left out: s4 stays 1");
+    assert!(neither.notes.iter().any(|n| n.contains("left out of s4")), "{:?}", neither.notes);
+    let s = sensed(&[&[10, 10], &[10, 10]]); // A_S = 1 pixel area
+    let surface_only_thin = score(&one_binding_counts(0, 4), &s, &[(10, 1)]);
+    assert_eq!(surface_only_thin.s4, 0.0);
+    assert!(surface_only_thin.rejected.as_deref().unwrap().contains("∞"), "{:?}", surface_only_thin.rejected);
+}
+
 #[test]
 fn s5_at_ratio_exactly_2_and_beyond() {
     let s = sensed(&[&[10, 10], &[10, 10]]); // N_i = 4
@@ -140,8 +155,15 @@ fn empty_images_and_missing_bindings_give_defined_scores_and_reasons() {
     assert_eq!(r.s, 0.0);
     assert!(r.rejected.as_deref().unwrap().contains("no valid pixel"));
 
-    // No bindings: s3 = 0 with a note; nothing is NaN.
+    // One image empty, the other not: s6 = 0 with a note, either way round.
     let s = sensed(&[&[10, 10], &[10, 10]]);
+    for (counts, sensed) in [(&nothing, &s), (&one_binding_counts(units(1), 4), &empty)] {
+        let r = score(counts, sensed, &[(10, 1)]);
+        assert_eq!(r.s6, 0.0, "{r:?}");
+        assert!(r.notes.iter().any(|n| n.contains("s6 = 0")), "{:?}", r.notes);
+    }
+
+    // No bindings: s3 = 0 with a note; nothing is NaN.
     let r = score(&one_binding_counts(units(1), 4), &s, &[]);
     assert_eq!(r.s3, 0.0);
     assert!(r.notes.iter().any(|n| n.contains("no bindings")));
