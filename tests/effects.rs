@@ -376,6 +376,21 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
         // Every count, overlap, population and area, not only the scalars.
         assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{}", h.id);
     }
+    // The unshadowed score sees every loss the effects found at the range view's surface
+    // pixels, so it scores the image the same effects give without a shadow pass; but for the
+    // edge filter, which loses pixels beside the shadowed image's holes, and is left out here.
+    let no_edges = Effects { edges: None, ..effects(EFFECTS) };
+    let settings = VerifySettings { effects: no_edges, ..verify_settings(sensor) };
+    let results = VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |_| {}).unwrap();
+    assert_no_validation_messages();
+    for (h, v) in common::paired(&hypotheses, &results) {
+        let unshadowed_scene =
+            Scene { shadow: ShadowSettings::of(ShadowMode::None), effects: no_edges, ..step_scene(sensor, h.pose) };
+        let synthetic = render(&unshadowed_scene);
+        let cpu = cpu_counts(&Images::of(&image, &synthetic), TOLERANCE as f32);
+        let (counts, _) = v.unshadowed.as_ref().expect("compare_shadow scores the unshadowed image");
+        assert_eq!(as_cpu(counts, &sensed, sensed.valid), cpu, "{}: unshadowed", h.id);
+    }
     // Without the sensor's effects, the true pose no longer reproduces the sensed image.
     let plain = VerifySettings { effects: Effects::default(), ..verify_settings(sensor) };
     let without = VERIFIER.verify(&sensed, &plain, &hypotheses[..1], &mut |_| {}).unwrap();
