@@ -231,7 +231,8 @@ mod tests {
         assert_eq!(ledger.held(), 600, "a refused charge takes nothing");
         ledger.charge("the model m.obj", 400).unwrap();
         assert_eq!((ledger.held(), ledger.available()), (1000, 0));
-        assert!(ledger.check("one more byte", 1).is_err());
+        let e = ledger.check("one more byte", 1).unwrap_err().to_string();
+        assert!(e.starts_with("one more byte needs about 1 bytes"), "{e}");
     }
 
     #[test]

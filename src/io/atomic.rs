@@ -345,7 +345,8 @@ mod tests {
             f.write_all(b"partial").unwrap();
             Err(Error::Scene("failed halfway".into()))
         });
-        assert!(result.is_err());
+        let e = result.unwrap_err().to_string();
+        assert!(e.contains("failed halfway"), "the writer's own error is returned: {e}");
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "the temporary file was left behind");
         write_atomically(&path, |f| f.write_all(b"new").map_err(|e| Error::io("x", e))).unwrap();
