@@ -91,3 +91,30 @@ impl Counts {
         self.surface_population.iter().sum()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every word lands where the table above says, an area's high word included (a surface
+    /// of more than 65,536 pixel areas: 2^32 units).
+    #[test]
+    fn decode_reads_every_word_where_the_layout_puts_it() {
+        let layout = CountsLayout { surfaces: 2, segments: 2 };
+        let words = [7, 1, 2, 4, 3, 0, 5, 2, 0, 9, 0, 3, 6];
+        assert_eq!(layout.words(), words.len());
+        let counts = layout.decode(&words, 20);
+        assert_eq!(
+            counts,
+            Counts {
+                n1_plus: 7,
+                n1_minus: 1,
+                n0: 2,
+                n1: 20 - 7,
+                surface_population: vec![4, 3],
+                overlap: vec![((0, 2), 5), ((1, 1), 2)],
+                surface_area_units: vec![9, 6 << 32 | 3],
+            }
+        );
+    }
+}
