@@ -42,3 +42,23 @@ pub fn check_rigid(pose: &DMat4, owner: &str) -> Result<()> {
 pub fn pose_rows(pose: &DMat4) -> [[f64; 4]; 4] {
     pose.transpose().to_cols_array_2d()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sheared(by: f64) -> [[f64; 4]; 4] {
+        [[1.0, by, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    }
+
+    /// The tolerance is inclusive: a shear of exactly RIGIDITY_TOLERANCE (RᵀR − I then has
+    /// exactly that entry, its others 1e-12) passes, twice that is refused, as is a mirror.
+    #[test]
+    fn a_pose_may_stray_from_rigid_by_the_tolerance_and_no_more() {
+        assert!(pose_from_rows(sheared(RIGIDITY_TOLERANCE), "object 1").is_ok());
+        let e = pose_from_rows(sheared(2.0 * RIGIDITY_TOLERANCE), "object 1").unwrap_err().to_string();
+        assert!(e.contains("object 1: pose [[1.0, 2e-6") && e.contains("is not a rigid transform"), "{e}");
+        let mirror = [[-1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+        assert!(pose_from_rows(mirror, "object 1").is_err(), "a mirror is orthonormal, but not a rotation");
+    }
+}

@@ -168,3 +168,42 @@ impl ShadowMode {
         self == ShadowMode::Exact || self.needs_shadow_pass(theta_deg)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A shadow view is rendered in modes `label` and `depth` at θ ≠ 0 only; images carry
+    /// shadows then, and in mode `exact` at any θ.
+    #[test]
+    fn which_modes_render_a_shadow_view_and_which_images_carry_shadows() {
+        use ShadowMode::*;
+        for (mode, theta, pass, shadows) in [
+            (None, 45.0, false, false),
+            (Label, 0.0, false, false),
+            (Label, 45.0, true, true),
+            (Depth, -30.0, true, true),
+            (Depth, 0.0, false, false),
+            (Exact, 45.0, false, true),
+            (Exact, 0.0, false, true),
+        ] {
+            assert_eq!(mode.needs_shadow_pass(theta), pass, "{mode:?} at θ = {theta}");
+            assert_eq!(mode.shadows(theta), shadows, "{mode:?} at θ = {theta}");
+        }
+    }
+
+    /// The settings a header records (src/io/exr_file.rs) leave out only the defaults, and
+    /// read back as they were.
+    #[test]
+    fn settings_written_leave_out_defaults_and_read_back_whole() {
+        let paper = ShadowSettings::of(ShadowMode::Label);
+        assert_eq!(toml::to_string(&paper).unwrap().trim(), "mode = \"label\"");
+        let finest = ShadowSettings { columns: 2, neighbourhood: Neighbourhood::Square2, ..paper };
+        let text = toml::to_string(&finest).unwrap();
+        assert!(text.contains("columns = 2") && text.contains("neighbourhood = \"2x2\""), "{text}");
+        for settings in [paper, finest] {
+            let text = toml::to_string(&settings).unwrap();
+            assert_eq!(toml::from_str::<ShadowSettings>(&text).unwrap(), settings, "{text}");
+        }
+    }
+}
