@@ -57,6 +57,23 @@ mod tests {
         assert!((units_to_area(total, 0.02, 0.03) - 0.02 * 0.03).abs() < 1e-9);
     }
 
+    /// On the plane z = αx + βy, a block's two triangles each cover half a pixel's footprint
+    /// times √(1 + α² + β²): worked out here in f64 for slopes along x, along y and both.
+    #[test]
+    fn each_triangle_of_a_block_on_a_sloped_plane_has_its_share_of_the_plane_s_area() {
+        let (dx, dy) = (0.25f32, 0.5f32);
+        for (alpha, beta) in [(0.5, 0.0), (0.0, -0.75), (0.5, -0.25), (-1.5, 2.0)] {
+            // Row r + 1 lies dy lower in y.
+            let (z00, z10, z01) = (1.0, 1.0 + alpha * dx, 1.0 - beta * dy);
+            let z11 = 1.0 + alpha * dx - beta * dy;
+            let units = block_area_units(z00, z10, z01, z11, dx, dy, unit_scale(dx, dy));
+            let share = 0.5 * f64::from(AREA_UNITS_PER_PIXEL) * (1.0 + f64::from(alpha * alpha + beta * beta)).sqrt();
+            for u in units {
+                assert!((f64::from(u) - share).abs() <= 1.0, "α {alpha}, β {beta}: {u} units, expected {share}");
+            }
+        }
+    }
+
     #[test]
     fn a_plane_tilted_45_degrees_has_sqrt_2_times_the_area() {
         // z rises by dx per column: the plane z = x, whose area is √2 × its footprint.
