@@ -359,6 +359,15 @@ mod tests {
         assert_eq!(parse("[noise]\nsigma = 0\n").passes().collect::<Vec<_>>(), [Effect::Noise]);
     }
 
+    /// Keys left out take the defaults docs/effects.md states: a surface without a
+    /// reflectivity of its own is fully reflective; the edge filter is one pixel wide.
+    #[test]
+    fn left_out_keys_take_their_documented_defaults() {
+        let reflectivity = parse("[reflectivity]\nthreshold = 0.5").reflectivity.unwrap();
+        assert_eq!((reflectivity.threshold, reflectivity.default), (0.5, 1.0));
+        assert_eq!(parse("[edges]\njump = 0.2").edges.unwrap().width_px, 1);
+    }
+
     #[test]
     fn out_of_range_parameters_are_refused_by_name() {
         for (text, key) in [
