@@ -368,6 +368,17 @@ mod tests {
         assert_eq!(parse("[edges]\njump = 0.2").edges.unwrap().width_px, 1);
     }
 
+    /// The settings a header records (src/io/exr_file.rs) leave out only the noise terms that
+    /// are 0, and read back as they were.
+    #[test]
+    fn settings_written_leave_out_zero_noise_terms_and_read_back_whole() {
+        let effects = parse("[noise]\nsigma = 0.01\ndepth_coefficient = 0.002\ndepth_reference = 0.4");
+        let text = toml::to_string(&effects).unwrap();
+        assert!(text.contains("depth_coefficient = 0.002") && text.contains("depth_reference = 0.4"), "{text}");
+        assert!(!text.contains("incidence_coefficient"), "{text}");
+        assert_eq!(toml::from_str::<Effects>(&text).unwrap(), effects, "{text}");
+    }
+
     #[test]
     fn out_of_range_parameters_are_refused_by_name() {
         for (text, key) in [
