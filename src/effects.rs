@@ -391,6 +391,7 @@ mod tests {
             ("[grazing]\nmax_incidence_deg = 90.5", "grazing.max_incidence_deg"),
             ("[edges]\njump = 0.1\nwidth_px = 0", "edges.width_px"),
             ("[edges]\njump = -1", "edges.jump"),
+            ("[edges]\njump = 0", "edges.jump"),
             ("[range]\nmin_z = 2\nmax_z = 1", "range.min_z"),
             ("[range]", "effects.range needs"),
             ("[reflectivity]\nthreshold = 2", "reflectivity.threshold"),
