@@ -224,6 +224,7 @@ mod tests {
     #[test]
     fn a_run_is_refused_once_its_charges_together_cross_the_budget() {
         let ledger = Ledger::new(MemoryBudget::new(1000));
+        assert_eq!(ledger.budget(), MemoryBudget::new(1000));
         ledger.charge("the scene", 600).unwrap();
         ledger.check("a render", 400).unwrap();
         let e = ledger.charge("the model m.obj", 401).unwrap_err().to_string();
@@ -233,6 +234,15 @@ mod tests {
         assert_eq!((ledger.held(), ledger.available()), (1000, 0));
         let e = ledger.check("one more byte", 1).unwrap_err().to_string();
         assert!(e.starts_with("one more byte needs about 1 bytes"), "{e}");
+    }
+
+    /// The budget is inclusive: a need of exactly the budget passes, one byte more does not.
+    #[test]
+    fn a_need_of_exactly_the_budget_passes() {
+        let budget = MemoryBudget::new(1000);
+        budget.check("the scene", 1000).unwrap();
+        let e = budget.check("the scene", 1001).unwrap_err().to_string();
+        assert!(e.starts_with("the scene needs about 1001 bytes"), "{e}");
     }
 
     #[test]
