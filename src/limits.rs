@@ -216,6 +216,7 @@ mod tests {
         assert_eq!(parse("4G"), Some(4 << 30));
         assert_eq!(parse("512MiB"), Some(512 << 20));
         assert_eq!(parse("0.5k"), Some(512));
+        assert_eq!(parse("2T"), Some(2 << 40));
         for bad in ["", "-1G", "0", "nan", "4X", "1e30T"] {
             assert_eq!(parse(bad), None, "{bad:?}");
         }
