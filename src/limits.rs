@@ -217,7 +217,8 @@ mod tests {
         assert_eq!(parse("512MiB"), Some(512 << 20));
         assert_eq!(parse("0.5k"), Some(512));
         assert_eq!(parse("2T"), Some(2 << 40));
-        for bad in ["", "-1G", "0", "nan", "4X", "1e30T"] {
+        // 16777216T is 2^64 bytes, one more than a u64 holds.
+        for bad in ["", "-1G", "0", "nan", "4X", "1e30T", "16777216T"] {
             assert_eq!(parse(bad), None, "{bad:?}");
         }
     }
