@@ -372,6 +372,19 @@ mod tests {
         write_atomically(path, |f| f.write_all(text.as_bytes()).map_err(|e| Error::io(path, e)))
     }
 
+    /// A path whose file cannot be looked at (a loop of links) is refused, naming it, and left
+    /// as it was: it is not known to be nothing.
+    #[test]
+    fn an_output_that_cannot_be_looked_at_is_refused() {
+        let dir = crate::io::scratch_dir("atomic-loop");
+        let looped = dir.join("loop");
+        std::os::unix::fs::symlink(&looped, &looped).unwrap();
+        let e = write(&looped, "new").unwrap_err().to_string();
+        assert!(e.contains(&looped.display().to_string()), "{e}");
+        assert_eq!(std::fs::read_link(&looped).unwrap(), looped, "the link is left as it was");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "a temporary file was left behind");
+    }
+
     #[test]
     fn only_a_regular_file_or_nothing_is_replaced() {
         let dir = crate::io::scratch_dir("atomic-kinds");
