@@ -426,6 +426,26 @@ mod tests {
         names
     }
 
+    /// Where the old set has a link under one of the set's names, a dangling one is replaced
+    /// like nothing, and one that cannot be followed (a loop) is refused, naming it.
+    #[test]
+    fn a_set_replaces_a_dangling_link_under_its_name_and_refuses_a_loop() {
+        let parent = crate::io::scratch_dir("atomic-set-links");
+        let target = parent.join("set");
+        std::fs::create_dir(&target).unwrap();
+        std::os::unix::fs::symlink(parent.join("nothing"), target.join("a.txt")).unwrap();
+        let set = StagedSet::new(&target, &["a.txt"], &[]).unwrap();
+        write(&set.staged("a.txt"), "new").unwrap();
+        set.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(target.join("a.txt")).unwrap(), "new");
+        let looped = target.join("a.txt");
+        std::fs::remove_file(&looped).unwrap();
+        std::os::unix::fs::symlink(&looped, &looped).unwrap();
+        let e =
+            StagedSet::new(&target, &["a.txt"], &[]).err().expect("a loop under a set's name is refused").to_string();
+        assert!(e.contains(&looped.display().to_string()), "{e}");
+    }
+
     #[test]
     fn a_set_replaces_its_directory_whole_and_carries_what_else_was_there() {
         use std::os::unix::fs::{MetadataExt, PermissionsExt};
