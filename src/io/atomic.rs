@@ -427,7 +427,8 @@ mod tests {
     }
 
     /// Where the old set has a link under one of the set's names, a dangling one is replaced
-    /// like nothing, and one that cannot be followed (a loop) is refused, naming it.
+    /// like nothing, and one that cannot be followed (a loop) is refused, naming it; so is a
+    /// target that is a loop itself.
     #[test]
     fn a_set_replaces_a_dangling_link_under_its_name_and_refuses_a_loop() {
         let parent = crate::io::scratch_dir("atomic-set-links");
@@ -444,6 +445,11 @@ mod tests {
         let e =
             StagedSet::new(&target, &["a.txt"], &[]).err().expect("a loop under a set's name is refused").to_string();
         assert!(e.contains(&looped.display().to_string()), "{e}");
+        // A target that is itself a loop cannot be resolved: it cannot be accessed.
+        let looped_target = parent.join("looped set");
+        std::os::unix::fs::symlink(&looped_target, &looped_target).unwrap();
+        let e = StagedSet::new(&looped_target, &["a.txt"], &[]).err().expect("a looped target is refused").to_string();
+        assert!(e.starts_with("cannot access") && e.contains("looped set"), "{e}");
     }
 
     #[test]
