@@ -336,6 +336,20 @@ fn an_experiment_rerun_replaces_the_directory_whole() {
 }
 
 #[test]
+fn a_render_into_a_new_directory_named_bare_lands_in_the_working_directory() {
+    let d = dir("render_bare");
+    let work = d.join("work");
+    std::fs::create_dir(&work).unwrap();
+    scene(&work, "box.toml", "builtin:box");
+    let out = rangesynth().args(["render", "box.toml", "--out", "fresh"]).current_dir(&work).output().unwrap();
+    succeeded(&out, "a bare name");
+    let mut expected: Vec<&str> = rangesynth::render_set::RENDER_FILES.to_vec();
+    expected.sort();
+    assert_eq!(names(&work.join("fresh")), expected);
+    assert_eq!(names(&work), ["box.toml", "fresh"]);
+}
+
+#[test]
 fn a_render_into_the_working_directory_replaces_it_and_keeps_its_other_files() {
     let d = dir("render_dot");
     let work = d.join("work");
