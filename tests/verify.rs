@@ -143,6 +143,17 @@ fn gpu_counts_and_scores_match_the_cpu_scorer() {
     }
 }
 
+/// A sensed image's debug text says whether a verification has put a copy of it on the
+/// device, and names that copy without its contents.
+#[test]
+fn a_sensed_images_debug_text_shows_its_device_copy_once_made() {
+    let sensor = test_sensor(45.0);
+    let (_, sensed) = sensed(sensor);
+    assert!(!format!("{sensed:?}").contains("SensedGpu"), "no copy yet");
+    verify(&sensed, &settings(sensor, ShadowMode::Label), &[correct()]);
+    assert!(format!("{sensed:?}").contains("SensedGpu"), "the copy a verification made");
+}
+
 #[test]
 fn correct_hypothesis_outscores_a_wrong_model_and_a_wrong_pose_and_shadowing_raises_it() {
     let sensor = test_sensor(45.0);
