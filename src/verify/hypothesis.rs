@@ -117,3 +117,47 @@ impl HypothesisFile {
         Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, effects: raw.effects, hypotheses })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::limits::MemoryBudget;
+
+    const EMPTY: &str = r#"{"hypotheses": []}"#;
+
+    /// A file without a tolerance takes the documented default, 0.1.
+    #[test]
+    fn a_file_without_a_tolerance_takes_the_default() {
+        let file = HypothesisFile::from_json(EMPTY, &Ledger::default()).unwrap();
+        assert_eq!(file.tolerance, 0.1);
+    }
+
+    /// A negative tolerance is refused by name.
+    #[test]
+    fn a_negative_tolerance_is_refused() {
+        let e = HypothesisFile::from_json(r#"{"tolerance": -1, "hypotheses": []}"#, &Ledger::default()).unwrap_err();
+        assert!(e.to_string().contains("tolerance -1 must be a finite number ≥ 0"), "{e}");
+    }
+
+    /// A binding with label 0 on either side is refused: 0 means "no data".
+    #[test]
+    fn a_binding_to_label_0_on_either_side_is_refused() {
+        for binding in ["[0, 1]", "[1, 0]"] {
+            let text = format!(
+                r#"{{"hypotheses": [{{"id": "h", "model": "builtin:box",
+                "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "bindings": [{binding}]}}]}}"#
+            );
+            let e = HypothesisFile::from_json(&text, &Ledger::default()).unwrap_err().to_string();
+            assert!(e.contains("uses label 0"), "{binding}: {e}");
+        }
+    }
+
+    /// Parsing is charged JSON_EXPANSION bytes a byte of text: a budget one byte short refuses it.
+    #[test]
+    fn parsing_is_charged_its_expansion() {
+        let needed = EMPTY.len() as u64 * JSON_EXPANSION;
+        HypothesisFile::from_json(EMPTY, &Ledger::new(MemoryBudget::new(needed))).unwrap();
+        let e = HypothesisFile::from_json(EMPTY, &Ledger::new(MemoryBudget::new(needed - 1))).unwrap_err();
+        assert!(e.to_string().contains("parsing the hypothesis file"), "{e}");
+    }
+}
