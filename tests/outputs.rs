@@ -335,12 +335,18 @@ fn an_experiment_rerun_replaces_the_directory_whole() {
     assert_eq!(names(&d), left, "the old directory or the staging one was left behind");
 }
 
-#[test]
-fn a_render_into_a_new_directory_named_bare_lands_in_the_working_directory() {
-    let d = dir("render_bare");
+/// A test's directory and, in it, a working directory `work` holding the scene `box.toml`.
+fn working_directory_with_a_box(name: &str) -> (PathBuf, PathBuf) {
+    let d = dir(name);
     let work = d.join("work");
     std::fs::create_dir(&work).unwrap();
     scene(&work, "box.toml", "builtin:box");
+    (d, work)
+}
+
+#[test]
+fn a_render_into_a_new_directory_named_bare_lands_in_the_working_directory() {
+    let (_, work) = working_directory_with_a_box("render_bare");
     let out = rangesynth().args(["render", "box.toml", "--out", "fresh"]).current_dir(&work).output().unwrap();
     succeeded(&out, "a bare name");
     let mut expected: Vec<&str> = rangesynth::render_set::RENDER_FILES.to_vec();
@@ -351,10 +357,7 @@ fn a_render_into_a_new_directory_named_bare_lands_in_the_working_directory() {
 
 #[test]
 fn a_render_into_the_working_directory_replaces_it_and_keeps_its_other_files() {
-    let d = dir("render_dot");
-    let work = d.join("work");
-    std::fs::create_dir(&work).unwrap();
-    scene(&work, "box.toml", "builtin:box");
+    let (d, work) = working_directory_with_a_box("render_dot");
     for round in 0..2 {
         let out = rangesynth().args(["render", "box.toml", "--out", "."]).current_dir(&work).output().unwrap();
         succeeded(&out, &format!("round {round}"));

@@ -43,6 +43,8 @@ pub struct Reference {
     /// tolerance): the pixel centre lies on an edge or a vertex, or on coincident faces, and
     /// which triangle's plane it takes is a matter of rule.
     pub tied: Vec<bool>,
+    /// The scene in the camera's frame (R_y(−θ)), for the tests that read what it sees.
+    camera: VerticalCaster,
 }
 
 impl Reference {
@@ -210,7 +212,6 @@ pub fn reference_render(scene: &Scene) -> Reference {
     let theta = s.theta_deg.to_radians();
     let range = VerticalCaster::new(posed_triangles(scene, DMat4::IDENTITY));
     let to_camera = DMat4::from_rotation_y(-theta);
-    let camera = VerticalCaster::new(posed_triangles(scene, to_camera));
     let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     let self_hit = 1e-9 * scale;
     let d_cam = s.camera_direction();
@@ -227,9 +228,10 @@ pub fn reference_render(scene: &Scene) -> Reference {
         camera_label: vec![0; width * height],
         near_camera_edge: vec![false; width * height],
         tied: vec![false; width * height],
+        camera: VerticalCaster::new(posed_triangles(scene, to_camera)),
     };
     let tie = TIE_RELATIVE * scale;
-    let first_seen = |p: DVec2| camera.front(p, tie).map_or(0, |(_, l, _)| l);
+    let first_seen = |p: DVec2| reference.camera.front(p, tie).map_or(0, |(_, l, _)| l);
     for row in 0..height {
         for col in 0..width {
             let i = row * width + col;
@@ -256,7 +258,7 @@ pub fn reference_render(scene: &Scene) -> Reference {
             reference.z_bracket_surface[i] = bracket(&mut planes.iter().filter(|p| p.1 == label));
             let p = to_camera.transform_point3(DVec3::new(x, y, z));
             reference.occluded[i] = lit_side.dot(d_cam) <= FACING_TOLERANCE
-                || camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
+                || reference.camera.hits(p.truncate()).any(|(zc, _, _)| zc > p.z + self_hit);
             let seen = [-1.0, 0.0, 1.0].map(|k| first_seen(p.truncate() + DVec2::new(k * s.pitch[0], 0.0)));
             reference.camera_label[i] = seen[1];
             reference.near_camera_edge[i] = seen.iter().any(|&l| l != seen[0]);
@@ -301,8 +303,7 @@ pub fn label_test(scene: &Scene, reference: &Reference) -> LabelTest {
     let s = &scene.sensor;
     let theta = s.theta_deg.to_radians();
     let (c, sn) = (theta.cos(), theta.sin());
-    let to_camera = DMat4::from_rotation_y(-theta);
-    let camera = VerticalCaster::new(posed_triangles(scene, to_camera));
+    let camera = &reference.camera;
     let scale = camera.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     // The GPU's ties (shaders/raster/draw.glsl tie_depth) give a surface up to TIE_RELATIVE of
     // the view's scale behind the nearest to the lower label: both may show, with a margin.
