@@ -188,3 +188,58 @@ pub fn model_key(reference: &str, base_dir: &Path) -> Result<ModelKey> {
         std::fs::metadata(&path).map(file).map_err(|e| Error::io(path, e))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::limits::MemoryBudget;
+
+    const SENSOR: &str = "[sensor]\nkind = \"orthographic\"\nwidth = 8\nheight = 8\npitch = [0.1, 0.1]\n\
+                          origin = [0.0, 0.0]\ntheta_deg = 30.0\n";
+
+    fn two_boxes() -> String {
+        format!("{SENSOR}[[object]]\nmodel = \"builtin:box\"\n[[object]]\nmodel = \"builtin:box\"\n")
+    }
+
+    /// What parsing two boxes charges before its second object: the text, the box built once,
+    /// and the first object with its six labels.
+    fn charged_before_the_second_box(text: &str) -> u64 {
+        text.len() as u64 * TOML_EXPANSION
+            + builtin_bytes("builtin:box").unwrap()
+            + BYTES_PER_OBJECT
+            + 6 * BYTES_PER_LABEL
+    }
+
+    #[test]
+    fn a_scene_charges_its_text_each_model_once_and_each_object_with_its_labels() {
+        let text = two_boxes();
+        let ledger = Ledger::default();
+        Scene::from_toml(&text, Path::new("."), &ledger).unwrap();
+        assert_eq!(ledger.held(), charged_before_the_second_box(&text) + BYTES_PER_OBJECT + 6 * BYTES_PER_LABEL);
+    }
+
+    #[test]
+    fn a_refused_object_is_named_with_its_number_and_the_labels_so_far() {
+        let text = two_boxes();
+        let budget = charged_before_the_second_box(&text) + BYTES_PER_OBJECT + 6 * BYTES_PER_LABEL - 1;
+        let e = Scene::from_toml(&text, Path::new("."), &Ledger::new(MemoryBudget::new(budget))).unwrap_err();
+        let message = e.to_string();
+        assert!(message.contains("object 2 (\"builtin:box\", 12 labels so far)"), "{message}");
+    }
+
+    #[test]
+    fn labels_are_numbered_across_objects_in_order_and_reflectivities_follow_them() {
+        let text = format!(
+            "{SENSOR}[[object]]\nmodel = \"builtin:box\"\nreflectivity = 0.25\n[[object]]\nmodel = \"builtin:step\"\n\
+             [[object]]\nmodel = \"builtin:box\"\n"
+        );
+        let scene = Scene::from_toml(&text, Path::new("."), &Ledger::default()).unwrap();
+        let step = builtin_mesh("builtin:step").unwrap().surface_count();
+        assert_eq!(scene.label_bases().unwrap(), [0, 6, 6 + step]);
+        // Label 0 (no surface), the first box's own reflectivity, then the default for the
+        // built-ins, which have no materials.
+        let mut expected = vec![0.0, 0.25, 0.25, 0.25, 0.25, 0.25, 0.25];
+        expected.extend(vec![0.6; step as usize + 6]);
+        assert_eq!(scene.reflectivity_table(0.6), expected);
+    }
+}

@@ -328,6 +328,114 @@ mod tests {
     }
 
     #[test]
+    fn sides_pitches_origins_and_angles_are_accepted_exactly_within_their_limits() {
+        let base = Sensor::square(16, 1.0, 0.0);
+        // Each refusal is the check's own: a pitch of 0 must not pass for positive and be
+        // refused only later as no normal f32.
+        let cases = [
+            (Sensor { width: 0, ..base }, Some("at least 1")),
+            (Sensor { height: 0, ..base }, Some("at least 1")),
+            (Sensor { width: MAX_IMAGE_SIDE, pitch: [1e-3, 1e-3], ..base }, None),
+            (Sensor { width: MAX_IMAGE_SIDE + 1, pitch: [1e-3, 1e-3], ..base }, Some("limited to 16384")),
+            (Sensor { height: MAX_IMAGE_SIDE + 1, pitch: [1e-3, 1e-3], ..base }, Some("limited to 16384")),
+            (Sensor { pitch: [0.0, 0.1], ..base }, Some("two positive finite numbers")),
+            (Sensor { pitch: [0.1, -0.1], ..base }, Some("two positive finite numbers")),
+            (Sensor { pitch: [0.1, f64::NAN], ..base }, Some("two positive finite numbers")),
+            (Sensor { pitch: [f64::INFINITY, 0.1], ..base }, Some("two positive finite numbers")),
+            (Sensor { origin: [f64::NAN, 0.0], ..base }, Some("must be finite")),
+            (Sensor { origin: [0.0, f64::INFINITY], ..base }, Some("must be finite")),
+            (Sensor { theta_deg: 89.0, ..base }, None),
+            (Sensor { theta_deg: -89.0, ..base }, None),
+            (Sensor { theta_deg: 89.001, ..base }, Some("theta_deg")),
+            (Sensor { theta_deg: -89.001, ..base }, Some("theta_deg")),
+            (Sensor { theta_deg: f64::NAN, ..base }, Some("theta_deg")),
+            (Sensor { theta_deg: f64::INFINITY, ..base }, Some("theta_deg")),
+        ];
+        for (sensor, refusal) in cases {
+            match (sensor.validate(), refusal) {
+                (Ok(()), None) => {}
+                (Err(e), Some(expected)) => assert!(e.to_string().contains(expected), "{sensor:?}: {e}"),
+                (result, _) => panic!("{sensor:?}: {result:?}, expected {refusal:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn the_camera_lies_toward_plus_x_and_the_shadow_frame_turns_it_onto_plus_z() {
+        let s = Sensor::square(4, 1.0, 30.0);
+        let d = s.camera_direction();
+        assert!((d - DVec3::new(0.5, 0.0, 3f64.sqrt() / 2.0)).length() < 1e-15, "{d}");
+        let turned = s.to_shadow_frame().transform_vector3(d);
+        assert!((turned - DVec3::Z).length() < 1e-15, "{turned}");
+    }
+
+    #[test]
+    fn pixel_centres_step_right_and_down_from_the_origin() {
+        let s = Sensor { origin: [1.0, 2.0], pitch: [0.1, 0.2], ..Sensor::square(8, 1.0, 0.0) };
+        let (x, y) = s.pixel_centre(3, 4);
+        assert!((x - 1.3).abs() < 1e-12 && (y - 1.2).abs() < 1e-12, "({x}, {y})");
+        let g = s.range_grid((-1.0, 2.0));
+        assert_eq!(g, ViewGrid { origin: [1.0, 2.0], pitch: [0.1, 0.2], width: 8, height: 8, z_range: (-1.0, 2.0) });
+    }
+
+    /// θ with cos θ = 0.6 and sin θ = 0.8; a range row of 4 pixels of pitch 1 from x = 0, so
+    /// x spans [−0.5, 3.5], and depths in [0, 1]: shadow-frame x = 0.6x − 0.8z spans
+    /// [−1.1, 2.1].
+    #[test]
+    fn the_shadow_grids_columns_cover_the_rotated_footprint_on_their_lattice() {
+        let s = Sensor {
+            origin: [0.0, 5.0],
+            pitch: [1.0, 0.5],
+            theta_deg: 0.8f64.asin().to_degrees(),
+            ..Sensor::square(4, 4.0, 0.0)
+        };
+        let shadow_z = (-3.0, 3.0);
+        let grid = |lattice_z: f64, columns: u32| {
+            let g = s.shadow_grid((0.0, 1.0), shadow_z, lattice_z, columns).unwrap();
+            assert_eq!((g.pitch[1], g.height, g.origin[1], g.z_range), (0.5, 4, 5.0, shadow_z));
+            (g.origin[0], g.pitch[0], g.width)
+        };
+        let close = |(x, dx, w): (f64, f64, u32), expected: (f64, f64, u32)| {
+            assert!((x - expected.0).abs() < 1e-12 && dx == expected.1 && w == expected.2, "{:?}", (x, dx, w));
+        };
+        // Lattice through x = 0: columns −1..=2 (the first reaches −1.5, the last 2.5).
+        close(grid(0.0, 1), (-1.0, 1.0, 4));
+        // Half-pixel columns: −2..=4 at 0.5 apart.
+        close(grid(0.0, 2), (-1.0, 0.5, 7));
+        // Lattice through the origin rotated at depth 1 (x = −0.8): columns 0..=3 from −0.8.
+        close(grid(1.0, 1), (-0.8, 1.0, 4));
+        // Too deep for 16384 columns, or a depth range that overflowed: refused.
+        for z_range in [(0.0, 1e5), (0.0, f64::INFINITY)] {
+            let e = s.shadow_grid(z_range, shadow_z, 0.0, 1).unwrap_err().to_string();
+            assert!(e.contains("columns"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_local_origin_is_the_grids_centre_on_a_lattice_of_its_extent() {
+        // Centre (1001.5, 1999.5, 11), extent 4 (the width): the multiples of 4 nearest.
+        let far = ViewGrid { origin: [1000.0, 2000.0], pitch: [1.0, 1.0], width: 4, height: 2, z_range: (10.0, 12.0) };
+        assert_eq!(far.local_origin(), DVec3::new(1000.0, 2000.0, 12.0));
+        // A grid about the frame's origin keeps it.
+        assert_eq!(grid().local_origin(), DVec3::ZERO);
+    }
+
+    #[test]
+    fn a_spheres_reach_counts_pixels_along_the_farther_axis() {
+        // Centre (2, −1), radius 0.35, pitch 0.1: 23.5 columns, 13.5 rows from pixel (0, 0).
+        assert!((grid().reach(DVec3::new(2.0, -1.0, 0.0), 0.35) - 23.5).abs() < 1e-9);
+        assert!((grid().reach(DVec3::new(1.0, -3.0, 0.0), 0.35) - 33.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn depth_bounds_widen_the_spheres_extent_by_its_hundredth_and_a_millionth() {
+        let (lo, hi) = depth_bounds([(DVec3::new(0.0, 0.0, 1.0), 1.0), (DVec3::new(3.0, 0.0, 5.0), 0.5)]);
+        let margin = 0.055 + 1e-6 * 6.5;
+        assert!((lo + margin).abs() < 1e-12 && (hi - 5.5 - margin).abs() < 1e-12, "({lo}, {hi})");
+        assert_eq!(depth_bounds([]), (-1.0, 1.0));
+    }
+
+    #[test]
     fn a_footprint_covers_the_sphere_with_its_margin() {
         // Centre (2, −1) is pixel (20, 10); radius 0.35 spans 3.5 pixels each way.
         let r = grid().footprint(DVec3::new(2.0, -1.0, 0.0), 0.35, 1).unwrap();

@@ -309,7 +309,7 @@ fn an_open_mesh_shows_its_inside_to_the_compute_rasterizer() {
     // the camera, yet the camera sees it through the opening. Only a solid's triangles facing
     // away may be skipped (src/mesh/solid.rs); this mesh is open, so none are.
     let positions =
-        (0..8).map(|i| [(i & 1) as f32 - 0.5, ((i >> 1) & 1) as f32 - 0.5, ((i >> 2) & 1) as f32]).collect();
+        (0..8).map(|i| [(i & 1) as f64 - 0.5, ((i >> 1) & 1) as f64 - 0.5, ((i >> 2) & 1) as f64]).collect();
     let (floor, walls) = ([[0, 2, 3, 1]], [[0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]);
     let quads = floor.iter().map(|q| (1, q)).chain(walls.iter().map(|q| (2, q)));
     let (mut triangles, mut surfaces) = (Vec::new(), Vec::new());
@@ -356,7 +356,8 @@ fn spikes(count: u32, tip: f32) -> (Scene, RenderOutput) {
         // Bases spread over the view by a low-discrepancy sequence.
         let (u, v) = ((i as f32 * 0.618_034).fract(), (i as f32 * 0.754_877_7).fract());
         let (x, y, z) = (-0.9 + 1.4 * u, -0.9 + 1.8 * v, 0.001 * i as f32);
-        positions.extend([[tip, 3.0 * y, z], [x, y - 0.03, z], [x, y + 0.03, z]]);
+        let corners: [[f32; 3]; 3] = [[tip, 3.0 * y, z], [x, y - 0.03, z], [x, y + 0.03, z]];
+        positions.extend(corners.map(|c| c.map(f64::from)));
         triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
     }
     let surfaces = vec![1; triangles.len()];

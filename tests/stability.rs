@@ -44,8 +44,8 @@ fn sliver_box(strips: u32) -> (Mesh, Vec<DVec3>) {
     let mut triangles = Vec::new();
     let mut surfaces = Vec::new();
     for (s, (_, [a, b, c, d], _)) in faces.iter().enumerate() {
-        let vertex = |p: DVec3, positions: &mut Vec<[f32; 3]>| {
-            positions.push([p.x as f32, p.y as f32, p.z as f32]);
+        let vertex = |p: DVec3, positions: &mut Vec<[f64; 3]>| {
+            positions.push(p.to_array());
             positions.len() as u32 - 1
         };
         for k in 0..strips {
@@ -371,6 +371,54 @@ fn far_from_the_origin_the_same_geometry_renders_the_same_image() {
                 let error = (f64::from(*zf) - (f64::from(*zn) + offset.z)).abs();
                 assert!(error <= HALF_ULP_AT_1E5 + 1e-6, "{name}: pixel {i}: z {zf} for {zn} + 10^5");
             }
+        }
+    }
+}
+
+/// `mesh` with every vertex moved by `offset` in its own frame, as CAD exported in assembly or
+/// machine coordinates has them (the offset is added in f64 and the sum given to the mesh as
+/// it would be read from a file).
+fn moved_in_its_own_frame(mesh: &Mesh, offset: DVec3) -> Mesh {
+    let positions = (0..mesh.positions.len() as u32).map(|i| (mesh.vertex(i) + offset).to_array()).collect();
+    let name = format!("{} moved by {offset}", mesh.name);
+    Mesh::new(name, positions, mesh.triangles.clone(), mesh.triangle_surfaces.clone(), mesh.surface_names.clone())
+        .unwrap()
+}
+
+/// The same scene built from models whose vertices lie 10^4 or 10^5 units from their own
+/// origin (in x, or in every axis), each posed back to where the centred models sit: the
+/// geometry is the same (the models' coordinates are exact in f64, so moving them is too),
+/// and so must its image be, label for label, with z equal up to f32 arithmetic on the scene's
+/// own scale. Sent to the GPU as f32 model coordinates, the models' vertices were off by up to
+/// 2^-10 at 10^4 (2^-7 at 10^5), and depth mode falsely shadowed whole faces.
+#[test]
+fn far_model_coordinates_posed_back_render_the_image_of_the_centred_models() {
+    let objects = [
+        ("builtin:plane:4", DMat4::IDENTITY),
+        ("builtin:step", DMat4::from_translation(DVec3::new(-0.5, 0.3, 0.0)) * DMat4::from_rotation_z(0.4)),
+        ("builtin:sphere:48", DMat4::from_translation(DVec3::new(0.7, -0.4, 0.0))),
+        ("builtin:box", DMat4::from_translation(DVec3::new(0.5, 0.8, 0.0)) * turned_and_tilted()),
+    ];
+    let s = centred_sensor(128, 128, 3.0 / 128.0, [0.1, 0.2], 45.0);
+    for offset in [DVec3::new(1e4, 0.0, 0.0), DVec3::new(1e5, -1e5, 1e5)] {
+        for mode in [ShadowMode::Label, ShadowMode::Depth] {
+            let near = scene(s, mode, &objects);
+            let mut far = near.clone();
+            for o in &mut far.objects {
+                o.mesh = Arc::new(moved_in_its_own_frame(&o.mesh, offset));
+                o.pose *= DMat4::from_translation(-offset);
+            }
+            let name = format!("far_model_{}_{}", offset.x, mode.as_str());
+            let (near_out, far_out) = (render(&near), render(&far));
+            let differ = |a: &[u32], b: &[u32]| common::paired(a, b).filter(|(a, b)| a != b).count();
+            assert_eq!(differ(&near_out.label_unshadowed, &far_out.label_unshadowed), 0, "{name}: surfaces hit");
+            assert_eq!(differ(&near_out.label, &far_out.label), 0, "{name}: shadowed labels");
+            let worst = common::paired(&near_out.z, &far_out.z)
+                .zip(&near_out.label_unshadowed)
+                .filter(|(_, &label)| label != 0)
+                .map(|((zn, zf), _)| (zn - zf).abs())
+                .fold(0.0, f32::max);
+            assert!(worst <= 1e-5, "{name}: z differs by up to {worst}");
         }
     }
 }

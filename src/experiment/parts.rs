@@ -98,7 +98,7 @@ impl Prism {
     }
 
     fn mesh(&self, name: &str) -> Result<Mesh> {
-        let mut positions: Vec<[f32; 3]> = Vec::new();
+        let mut positions: Vec<[f64; 3]> = Vec::new();
         let mut triangles = Vec::new();
         let mut surfaces = Vec::new();
         let mut names: Vec<String> = Vec::new();
@@ -111,7 +111,7 @@ impl Prism {
                 }
             };
             let first = positions.len() as u32;
-            positions.extend(corners.map(|c| [c.x as f32, c.y as f32, c.z as f32]));
+            positions.extend(corners.map(|c| c.to_array()));
             triangles.push([first, first + 1, first + 2]);
             surfaces.push(id);
         };
@@ -153,7 +153,7 @@ impl Prism {
 /// Writes `mesh` as an OBJ file: its vertices, then one `g` group per surface, in order.
 pub fn write_obj(path: &Path, mesh: &Mesh) -> Result<()> {
     let mut text = format!("# {} (rangesynth experiment)\n", mesh.name);
-    for [x, y, z] in &mesh.positions {
+    for [x, y, z] in (0..mesh.positions.len() as u32).map(|v| mesh.vertex(v).to_array()) {
         writeln!(text, "v {x} {y} {z}").expect("writing to a String");
     }
     for (s, name) in (1..).zip(&mesh.surface_names) {
@@ -208,7 +208,7 @@ mod tests {
         assert_eq!(part("stairs").surface_count(), 2 + 8);
         assert_eq!(part("disc").surface_count(), 3, "caps and one curved side");
         for (name, mesh) in &parts {
-            let lowest = mesh.positions.iter().map(|p| p[2]).fold(f32::INFINITY, f32::min);
+            let lowest = (0..mesh.positions.len() as u32).map(|v| mesh.vertex(v).z).fold(f64::INFINITY, f64::min);
             assert_eq!(lowest, 0.0, "{name} rests on the table");
         }
     }

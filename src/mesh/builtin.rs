@@ -88,10 +88,10 @@ pub fn canonical_builtin_name(name: &str) -> Result<String> {
 }
 
 /// Bytes building a built-in model holds at most, per triangle: the builder's corners (three
-/// vertices of its own each), its indices and surface ids with room for their vectors'
-/// doubling, then the mesh's derived tables (measured by tests/memory.rs: 88 for the largest
-/// sphere and cylinder).
-const BYTES_PER_TRIANGLE: u64 = 112;
+/// f64 vertices of its own each), its indices and surface ids with room for their vectors'
+/// doubling, then the mesh's stored positions and derived tables (measured by
+/// tests/memory.rs: 168 for the largest sphere and cylinder).
+const BYTES_PER_TRIANGLE: u64 = 208;
 
 /// Bytes building the built-in model `name` holds at most, to charge before building it.
 pub fn builtin_bytes(name: &str) -> Result<u64> {
@@ -125,7 +125,7 @@ pub fn builtin_mesh(name: &str) -> Result<Mesh> {
 
 #[derive(Default)]
 struct Builder {
-    positions: Vec<[f32; 3]>,
+    positions: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
     triangle_surfaces: Vec<u32>,
     surface_names: Vec<String>,
@@ -144,8 +144,7 @@ impl Builder {
     }
 
     fn vertex(&mut self, p: impl Into<DVec3>) -> u32 {
-        let p = p.into();
-        self.positions.push([p.x as f32, p.y as f32, p.z as f32]);
+        self.positions.push(p.into().to_array());
         self.positions.len() as u32 - 1
     }
 

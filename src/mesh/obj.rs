@@ -26,7 +26,7 @@
 //! budget refuses stops the load. Text parsed without a path reads no library.
 
 use super::mtl::{checked_library, parse_checked_library};
-use super::{is_degenerate, merge_coplanar_surfaces, text_lines, Mesh};
+use super::{is_degenerate, merge_coplanar_surfaces, stored_positions, text_lines, Mesh};
 use crate::error::{guard_parser, Error, Result};
 use crate::io::{read_identified_file, read_input_file};
 use crate::limits::{FileId, Ledger};
@@ -39,7 +39,7 @@ use std::path::Path;
 /// per-model copy of positions, the triangles, their surfaces and materials, the mesh), per
 /// face, and per group statement (its name, tobj's model, the surface's entries).
 const BYTES_PER_TEXT_BYTE: u64 = 3;
-const BYTES_PER_VERTEX: u64 = 32;
+const BYTES_PER_VERTEX: u64 = 64;
 const BYTES_PER_CORNER: u64 = 128;
 const BYTES_PER_FACE: u64 = 64;
 const BYTES_PER_STATEMENT: u64 = 320;
@@ -273,13 +273,16 @@ fn parse(checked: &Checked, name: &str, libraries: &[Option<(String, String)>]) 
             triangle_reflectivity.push(material);
         }
     }
-    // Aligned with the triangles Mesh::new keeps.
-    let kept_reflectivity: Vec<Option<f32>> = triangles
-        .iter()
-        .zip(triangle_reflectivity)
-        .filter(|(tri, _)| !is_degenerate(&positions, tri))
-        .map(|(_, r)| r)
-        .collect();
+    // Aligned with the triangles Mesh::new keeps, which it decides on the positions it stores.
+    let kept_reflectivity: Vec<Option<f32>> = {
+        let (_, stored) = stored_positions(&positions);
+        triangles
+            .iter()
+            .zip(triangle_reflectivity)
+            .filter(|(tri, _)| !is_degenerate(&stored, tri))
+            .map(|(_, r)| r)
+            .collect()
+    };
     let single_surface = surface_names.len() <= 1;
     let mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
     let mut mesh = if single_surface { merge_coplanar_surfaces(mesh) } else { mesh };
@@ -297,7 +300,7 @@ fn parse(checked: &Checked, name: &str, libraries: &[Option<(String, String)>]) 
 /// A material's reflectivity: the mean of its diffuse colour `Kd`, within [0, 1].
 fn reflectivity(material: &tobj::Material) -> Option<f32> {
     let kd = material.diffuse?;
-    let mean = kd.iter().sum::<f32>() / 3.0;
+    let mean = kd.iter().map(|&k| k as f32).sum::<f32>() / 3.0;
     mean.is_finite().then(|| mean.clamp(0.0, 1.0))
 }
 

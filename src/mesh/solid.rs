@@ -111,7 +111,8 @@ mod tests {
     /// Both meshes' triangles in one mesh.
     fn join(a: &Mesh, b: &Mesh) -> Mesh {
         let offset = a.positions.len() as u32;
-        let positions = a.positions.iter().chain(&b.positions).copied().collect();
+        let vertices = |m: &Mesh| (0..m.positions.len() as u32).map(|v| m.vertex(v).to_array()).collect::<Vec<_>>();
+        let positions = [vertices(a), vertices(b)].concat();
         let triangles: Vec<[u32; 3]> =
             a.triangles.iter().copied().chain(b.triangles.iter().map(|t| t.map(|v| v + offset))).collect();
         let surfaces = vec![1; triangles.len()];
@@ -134,7 +135,7 @@ mod tests {
 
     /// The unit cube's 12 triangles, counter-clockwise seen from outside.
     fn cube() -> Mesh {
-        let positions = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
+        let positions = (0..8).map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64]).collect();
         let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
         let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
         Mesh::new("cube", positions, triangles, vec![1; 12], vec!["s".into()]).unwrap()

@@ -1,7 +1,8 @@
-//! A mesh uploaded once into device-local memory: vertex positions and triangle indices (the
-//! graphics pipeline's vertex input), a record of each triangle's corners and unit normal,
-//! per-triangle surface ids and edge links; and whether the mesh bounds a solid, found once
-//! here, so that both rasterizers may skip the triangles facing away. The shaders read them
+//! A mesh uploaded once into device-local memory: vertex positions (offsets from the mesh's
+//! origin, `Mesh::origin`) and triangle indices (the graphics pipeline's vertex input), a
+//! record of each triangle's corners and unit normal, per-triangle surface ids and edge links;
+//! and whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
+//! triangles facing away. The shaders read them
 //! through buffer device addresses, indexed by triangle (gl_PrimitiveID in the fragment
 //! shader), to label the pixel and evaluate its triangle's plane exactly.
 //!
@@ -21,6 +22,7 @@ use crate::gpu::shaders::matches_shader_struct;
 use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
+use glam::DVec3;
 use std::sync::Arc;
 
 pub struct GpuMesh {
@@ -37,6 +39,9 @@ pub struct GpuMesh {
     /// Its longest edge, in model units: no triangle's projection spans more, in any view
     /// (orthographic), which tells the compute rasterizer whether its boxes fit one tile.
     pub(crate) longest_edge: f64,
+    /// The model-frame point the stored positions are offsets from (`Mesh::origin`): each
+    /// draw folds it into its pose, in f64.
+    pub(crate) origin: DVec3,
 }
 
 impl GpuMesh {
@@ -93,6 +98,7 @@ impl GpuMesh {
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&links),
             longest_edge: longest_edge(mesh),
+            origin: mesh.origin,
         })
     }
 }

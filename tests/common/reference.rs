@@ -193,10 +193,7 @@ fn posed_triangles(scene: &Scene, frame: DMat4) -> Vec<Triangle> {
     for (k, (object, base)) in scene.objects.iter().zip(bases).enumerate() {
         let m = frame * object.pose;
         for (tri, &surface) in object.mesh.triangles.iter().zip(&object.mesh.triangle_surfaces) {
-            let corners = tri.map(|v| {
-                let [x, y, z] = object.mesh.positions[v as usize];
-                m.transform_point3(DVec3::new(x.into(), y.into(), z.into()))
-            });
+            let corners = tri.map(|v| m.transform_point3(object.mesh.vertex(v)));
             let lo = corners.iter().fold(DVec2::splat(f64::INFINITY), |m, c| m.min(c.truncate()));
             let hi = corners.iter().fold(DVec2::splat(f64::NEG_INFINITY), |m, c| m.max(c.truncate()));
             let vertices = tri.map(|v| (k, object.mesh.positions[v as usize].map(f32::to_bits)));

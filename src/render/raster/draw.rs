@@ -76,7 +76,9 @@ pub struct Draw<'a> {
 
 impl DrawConstants {
     /// Composes, in f64, the move to the view's local origin (`origin`, range frame:
-    /// `ViewGrid::local_origin`) ∘ view rotation ∘ pose, and rounds once to f32; the grid and
+    /// `ViewGrid::local_origin`) ∘ view rotation ∘ pose ∘ the move from the mesh's origin
+    /// (`Mesh::origin`, which its stored positions are offsets from), and rounds once to f32;
+    /// the grid and
     /// depth range are offsets from that origin too. `draw_index` is the draw's entry in the
     /// draw table; `viewport_half_side` the device's (`GpuContext::viewport_half_side`).
     pub fn new(
@@ -88,7 +90,8 @@ impl DrawConstants {
         viewport_half_side: f32,
     ) -> Self {
         let local = view_from_range.transform_point3(origin);
-        let view_from_model = DMat4::from_translation(-local) * view_from_range * draw.pose;
+        let view_from_model =
+            DMat4::from_translation(-local) * view_from_range * draw.pose * DMat4::from_translation(draw.mesh.origin);
         let row = |i| view_from_model.row(i).as_vec4().to_array();
         let [x0, y0] = grid.origin;
         let viewport = ViewportFrame::new(grid, viewport_half_side);
