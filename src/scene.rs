@@ -6,7 +6,7 @@ use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::{parse_toml, read_input_text};
 use crate::limits::{FileId, Ledger};
-use crate::mesh::{builtin_bytes, builtin_mesh, canonical_builtin_name, load_obj, Mesh};
+use crate::mesh::{builtin_bytes, builtin_mesh, canonical_builtin_name, load_model_file, Mesh};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -149,15 +149,15 @@ impl Scene {
     }
 }
 
-/// Loads `builtin:…` by name, anything else as an OBJ path relative to `base_dir`, charged to
-/// `ledger`.
+/// Loads `builtin:…` by name, anything else as a model file (OBJ, PLY or STL, by its
+/// extension: `load_model_file`) relative to `base_dir`, charged to `ledger`.
 pub fn load_model(reference: &str, base_dir: &Path, ledger: &Ledger) -> Result<Mesh> {
     if reference.starts_with("builtin:") {
         ledger.charge(format_args!("building {}", quoted(reference)), builtin_bytes(reference)?)?;
         builtin_mesh(reference)
     } else {
         let path: PathBuf = base_dir.join(reference);
-        load_obj(&path, ledger)
+        load_model_file(&path, ledger)
     }
 }
 

@@ -316,6 +316,12 @@ mod tests {
             ([0.06, 0.06], [1e6, 0.0], false),
             ([0.0625, 0.0625], [0.0, -1e6], true),
             ([0.06, 0.06], [0.0, -1e6], false),
+            // 16 pixels of 1/16 reach 2^20 (where f32 values are 1/8 apart) from 2^20 − 1, one
+            // pitch beyond the last centre, rightward along a row or downward along a column.
+            ([0.0625, 0.0625], [1_048_574.937_5, 0.0], true),
+            ([0.0625, 0.0625], [1_048_575.0, 0.0], false),
+            ([0.0625, 0.0625], [0.0, -1_048_574.937_5], true),
+            ([0.0625, 0.0625], [0.0, -1_048_575.0], false),
             ([1.0, 1.0], [3.4e38, 0.0], false),
         ] {
             let result = with(pitch, origin).validate();
@@ -336,6 +342,7 @@ mod tests {
             (Sensor { width: 0, ..base }, Some("at least 1")),
             (Sensor { height: 0, ..base }, Some("at least 1")),
             (Sensor { width: MAX_IMAGE_SIDE, pitch: [1e-3, 1e-3], ..base }, None),
+            (Sensor { height: MAX_IMAGE_SIDE, pitch: [1e-3, 1e-3], ..base }, None),
             (Sensor { width: MAX_IMAGE_SIDE + 1, pitch: [1e-3, 1e-3], ..base }, Some("limited to 16384")),
             (Sensor { height: MAX_IMAGE_SIDE + 1, pitch: [1e-3, 1e-3], ..base }, Some("limited to 16384")),
             (Sensor { pitch: [0.0, 0.1], ..base }, Some("two positive finite numbers")),
@@ -358,6 +365,12 @@ mod tests {
                 (result, _) => panic!("{sensor:?}: {result:?}, expected {refusal:?}"),
             }
         }
+    }
+
+    #[test]
+    fn a_square_sensor_is_centred_on_the_origin() {
+        let s = Sensor::square(4, 2.0, 10.0);
+        assert_eq!((s.width, s.height, s.pitch, s.origin, s.theta_deg), (4, 4, [0.5, 0.5], [-0.75, 0.75], 10.0));
     }
 
     #[test]
@@ -404,6 +417,15 @@ mod tests {
         close(grid(0.0, 2), (-1.0, 0.5, 7));
         // Lattice through the origin rotated at depth 1 (x = −0.8): columns 0..=3 from −0.8.
         close(grid(1.0, 1), (-0.8, 1.0, 4));
+        // Seven pixels of pitch 0.4 from x = 1.1 span [0.9, 3.7]: shadow-frame x spans
+        // [−0.26, 2.22], and the lattice through 0.6 · 1.1 = 0.66 has columns −2..=4.
+        let off = Sensor { origin: [1.1, 0.0], pitch: [0.4, 0.4], width: 7, height: 3, ..s };
+        let g = off.shadow_grid((0.0, 1.0), shadow_z, 0.0, 1).unwrap();
+        assert!((g.origin[0] + 0.14).abs() < 1e-12 && g.width == 7, "{g:?}");
+        // Facing the range view (θ = 0), the shadow view is the range view's columns: the
+        // largest image has the largest shadow view.
+        let widest = Sensor { origin: [0.0, 0.0], pitch: [0.5, 0.5], ..Sensor::square(MAX_IMAGE_SIDE, 1.0, 0.0) };
+        assert_eq!(widest.shadow_grid((0.0, 1.0), shadow_z, 0.0, 1).unwrap().width, MAX_IMAGE_SIDE);
         // Too deep for 16384 columns, or a depth range that overflowed: refused.
         for z_range in [(0.0, 1e5), (0.0, f64::INFINITY)] {
             let e = s.shadow_grid(z_range, shadow_z, 0.0, 1).unwrap_err().to_string();
@@ -425,6 +447,40 @@ mod tests {
         // Centre (2, −1), radius 0.35, pitch 0.1: 23.5 columns, 13.5 rows from pixel (0, 0).
         assert!((grid().reach(DVec3::new(2.0, -1.0, 0.0), 0.35) - 23.5).abs() < 1e-9);
         assert!((grid().reach(DVec3::new(1.0, -3.0, 0.0), 0.35) - 33.5).abs() < 1e-9);
+        // From a first pixel at (1, 2): 11.5 columns or 43.5 rows.
+        let moved = ViewGrid { origin: [1.0, 2.0], ..grid() };
+        assert!((moved.reach(DVec3::new(2.0, -2.0, 0.0), 0.35) - 43.5).abs() < 1e-9);
+        assert!((moved.reach(DVec3::new(5.0, 1.0, 0.0), 0.35) - 43.5).abs() < 1e-9);
+        assert!((moved.reach(DVec3::new(4.0, 1.5, 0.0), 0.35) - 33.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_footprint_is_measured_from_the_grids_first_pixel() {
+        // The first pixel at (1, 2): centre (3, 1) is pixel (20, 10), as (2, −1) is from (0, 0).
+        let moved = ViewGrid { origin: [1.0, 2.0], ..grid() };
+        let r = moved.footprint(DVec3::new(3.0, 1.0, 0.0), 0.35, 1).unwrap();
+        assert_eq!(r, PixelRect { col: 15, row: 5, width: 11, height: 11 });
+    }
+
+    proptest::proptest! {
+        /// Wherever a grid lies, its local origin is a multiple of the power of two at least
+        /// its extent, within half of it of the grid's centre on every axis.
+        #[test]
+        fn a_local_origin_lies_on_its_lattice_beside_the_centre(
+            x0 in -1e4f64..1e4, y0 in -1e4f64..1e4, z0 in -1e4f64..1e4,
+            dx in 1e-3f64..1.0, dy in 1e-3f64..1.0, depth in 1e-3f64..10.0,
+            width in 1u32..2000, height in 1u32..2000,
+        ) {
+            let g = ViewGrid { origin: [x0, y0], pitch: [dx, dy], width, height, z_range: (z0, z0 + depth) };
+            let (w, h) = (f64::from(width), f64::from(height));
+            let centre = DVec3::new(x0 + (w - 1.0) / 2.0 * dx, y0 - (h - 1.0) / 2.0 * dy, z0 + depth / 2.0);
+            let step = (w * dx).max(h * dy).max(depth).log2().ceil().exp2();
+            let local = g.local_origin();
+            for axis in 0..3 {
+                proptest::prop_assert_eq!((local[axis] / step).fract(), 0.0);
+                proptest::prop_assert!((local[axis] - centre[axis]).abs() <= step / 2.0 + 1e-9 * step);
+            }
+        }
     }
 
     #[test]

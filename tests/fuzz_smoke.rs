@@ -62,6 +62,20 @@ const TOKENS: &[&[u8]] = &[
     b"\nd\n",
     b"\nillum\n",
     b"#",
+    b"\nelement vertex 4294967295\n",
+    b"\nelement face 1\nproperty list uint int vertex_indices\n",
+    b"\nproperty list uchar float vertex_indices\n",
+    b"\nproperty double x\n",
+    b"\nproperty int surface\n",
+    b"\nelement edge 2\nproperty list uchar int vertex_indices\n",
+    b"\ncomment \n",
+    b"end_header\n",
+    b"format binary_big_endian 1.0\n",
+    b"format ascii 1.0\n",
+    b"\n255 0 1 2\n",
+    b"\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n",
+    b"endsolid",
+    b"solid ",
 ];
 
 fn seeds(target: &str) -> Vec<Vec<u8>> {
@@ -197,6 +211,16 @@ fn fuzz_smoke_obj() {
 #[test]
 fn fuzz_smoke_mtl() {
     smoke("mtl", "fuzz_smoke_mtl");
+}
+
+#[test]
+fn fuzz_smoke_ply() {
+    smoke("ply", "fuzz_smoke_ply");
+}
+
+#[test]
+fn fuzz_smoke_stl() {
+    smoke("stl", "fuzz_smoke_stl");
 }
 
 #[test]

@@ -5,7 +5,7 @@
 //! input; docs/limits.md gives the factors and these measurements.
 
 use rangesynth::limits::{Ledger, MemoryBudget};
-use rangesynth::mesh::parse_obj;
+use rangesynth::mesh::{parse_obj, parse_ply, parse_stl, Mesh};
 use rangesynth::scene::load_model;
 use rangesynth::verify::HypothesisFile;
 use rangesynth::Scene;
@@ -121,6 +121,65 @@ fn obj_parsing_holds_no_more_than_it_charges() {
     obj("a face a group", &format!("{triangle}{}", "g\nf 1 2 3\n".repeat(N)));
     obj("a material a face", &format!("{triangle}g a\n{}", "usemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n".repeat(N / 2)));
     obj("one surface, merged", &grid(150));
+}
+
+/// A binary or text model file parsed by `parse`, as `assert_charged` measures text.
+fn model_file(what: &str, bytes: &[u8], parse: fn(&[u8], &str, &Ledger) -> rangesynth::Result<Mesh>) {
+    let (peak, charged) = measure(bytes.len(), |ledger| {
+        let _ = parse(bytes, what, ledger).expect(what);
+    });
+    println!("{what}: {} bytes, {peak} bytes at most, {charged} charged", bytes.len());
+    assert!(peak as u64 <= charged, "{what}: parsing held {peak} bytes but charged only {charged}");
+}
+
+/// A PLY header of `vertices` f32 vertices and `faces` faces of int indices.
+fn ply_header(format: &str, vertices: usize, faces: usize, extra: &str) -> String {
+    format!(
+        "ply\nformat {format} 1.0\n{extra}element vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+}
+
+#[test]
+fn ply_and_stl_parsing_hold_no_more_than_they_charge() {
+    let triangle = "0 0 0\n1 0 0\n0 1 0\n";
+    let ascii = |vertices: usize, faces: usize, extra: &str, body: String| {
+        (ply_header("ascii", vertices, faces, extra) + &body).into_bytes()
+    };
+    model_file(
+        "PLY text vertices",
+        &ascii(N + 3, 1, "", "0 0 0\n".repeat(N) + triangle + &format!("3 {N} {} {}\n", N + 1, N + 2)),
+        parse_ply,
+    );
+    model_file("PLY text faces", &ascii(3, N, "", triangle.to_string() + &"3 0 1 2\n".repeat(N)), parse_ply);
+    let polygon = format!("100 0 {}\n", (1..100).map(|i| (1 + i % 2).to_string()).collect::<Vec<_>>().join(" "));
+    model_file("PLY text polygons", &ascii(3, N / 50, "", triangle.to_string() + &polygon.repeat(N / 50)), parse_ply);
+    model_file("PLY comments", &ascii(3, 1, &"comment\n".repeat(N), triangle.to_string() + "3 0 1 2\n"), parse_ply);
+    let le = |v: &[f32]| v.iter().flat_map(|c| c.to_le_bytes()).collect::<Vec<u8>>();
+    let face = [&[3u8][..], &[0i32, 1, 2].map(i32::to_le_bytes).concat()].concat();
+    let binary = |vertices: usize, faces: usize, body: Vec<u8>| {
+        [ply_header("binary_little_endian", vertices, faces, "").into_bytes(), body].concat()
+    };
+    let corners = le(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    let last_face = [&[3u8][..], &[N as i32, N as i32 + 1, N as i32 + 2].map(i32::to_le_bytes).concat()].concat();
+    model_file(
+        "PLY binary vertices",
+        &binary(N + 3, 1, [le(&[0.5; 3]).repeat(N), corners.clone(), last_face].concat()),
+        parse_ply,
+    );
+    model_file("PLY binary faces", &binary(3, N, [corners.clone(), face.repeat(N)].concat()), parse_ply);
+    // A grid of triangles, one surface to split into its planar faces.
+    let mut stl = vec![0u8; 80];
+    stl.extend((N as u32).to_le_bytes());
+    for t in 0..N {
+        let (x, y) = ((t % 300) as f32, (t / 300) as f32);
+        stl.extend([0u8; 12]);
+        stl.extend(le(&[x, y, 0.0, x + 1.0, y, 0.0, x, y + 1.0, (t % 7) as f32]));
+        stl.extend([0u8; 2]);
+    }
+    model_file("STL binary", &stl, parse_stl);
+    let facet = "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+    model_file("STL text", format!("solid s\n{}endsolid s\n", facet.repeat(N)).as_bytes(), parse_stl);
 }
 
 #[test]

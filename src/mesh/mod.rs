@@ -20,14 +20,18 @@ mod adjacency;
 mod builtin;
 mod mtl;
 mod obj;
+mod ply;
 mod solid;
+mod stl;
 mod surfaces;
 
 pub use adjacency::NO_NEIGHBOUR;
 pub(crate) use adjacency::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY, MAX_LINKED_TRIANGLES};
 pub use builtin::{builtin_bytes, builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
 pub use obj::{load_obj, parse_obj};
+pub use ply::{load_ply, parse_ply};
 pub use solid::Solidity;
+pub use stl::{load_stl, parse_stl};
 pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
 
 use crate::error::{Error, Result};
@@ -168,6 +172,17 @@ impl Mesh {
         let centre = (lo + hi) * 0.5;
         let radius = (0..self.positions.len() as u32).map(|i| self.vertex(i).distance(centre)).fold(0.0, f64::max);
         (centre, radius)
+    }
+}
+
+/// Loads a model file by its extension, in any case: `.ply` as PLY, `.stl` as STL, anything
+/// else as OBJ.
+pub fn load_model_file(path: &std::path::Path, ledger: &crate::limits::Ledger) -> Result<Mesh> {
+    let extension = path.extension().map(|e| e.to_ascii_lowercase());
+    match extension.as_ref().and_then(|e| e.to_str()) {
+        Some("ply") => load_ply(path, ledger),
+        Some("stl") => load_stl(path, ledger),
+        _ => load_obj(path, ledger),
     }
 }
 

@@ -7,7 +7,7 @@
 
 use rangesynth::io::parse_range_image;
 use rangesynth::limits::{Ledger, MemoryBudget};
-use rangesynth::mesh::{load_obj, parse_obj};
+use rangesynth::mesh::{load_obj, parse_obj, parse_ply, parse_stl};
 use rangesynth::verify::HypothesisFile;
 use rangesynth::{Error, Scene};
 use std::path::Path;
@@ -50,6 +50,14 @@ pub fn mtl(data: &[u8]) {
     });
 }
 
+pub fn ply(data: &[u8]) {
+    no_parser_panic(parse_ply(data, "fuzz.ply", &Ledger::new(BUDGET)));
+}
+
+pub fn stl(data: &[u8]) {
+    no_parser_panic(parse_stl(data, "fuzz.stl", &Ledger::new(BUDGET)));
+}
+
 pub fn range_exr(data: &[u8]) {
     no_parser_panic(parse_range_image(data, Path::new("fuzz.exr"), &Ledger::new(BUDGET)));
 }
@@ -65,10 +73,12 @@ fn no_parser_panic<T>(result: rangesynth::Result<T>) {
 pub type Target = fn(&[u8]);
 
 /// Every target by name.
-pub const TARGETS: [(&str, Target); 5] = [
+pub const TARGETS: [(&str, Target); 7] = [
     ("scene_toml", scene_toml),
     ("hypothesis_json", hypothesis_json),
     ("obj", obj),
     ("mtl", mtl),
+    ("ply", ply),
+    ("stl", stl),
     ("range_exr", range_exr),
 ];

@@ -1,0 +1,304 @@
+//! Model files in PLY (ASCII, binary little- and big-endian) and STL (ASCII, binary): the same
+//! model in each format is the same mesh and renders the same image as its OBJ; bad files are
+//! refused with a message naming the file and the problem, before anything their headers
+//! claim is allocated. The files are written here byte by byte, not by the crates that read
+//! them.
+
+mod common;
+
+use common::*;
+use glam::DMat4;
+use rangesynth::limits::{Ledger, MemoryBudget};
+use rangesynth::mesh::{builtin_mesh, load_model_file, parse_ply, parse_stl, Mesh};
+use rangesynth::scene::SceneObject;
+use rangesynth::shadow::ShadowMode;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+fn dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model_formats");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The model every format with surfaces writes: the built-in stepped block, eight surfaces.
+fn model() -> Mesh {
+    builtin_mesh("builtin:step").unwrap()
+}
+
+/// The model STL writes, whose planar faces are its surfaces: the built-in box (the stepped
+/// block's sides are each two faces meeting at a T-junction, so they are not edge-adjacent).
+fn box_model() -> Mesh {
+    builtin_mesh("builtin:box").unwrap()
+}
+
+fn vertices(mesh: &Mesh) -> Vec<[f32; 3]> {
+    (0..mesh.positions.len() as u32).map(|v| mesh.vertex(v).as_vec3().to_array()).collect()
+}
+
+/// OBJ with one group per surface, in surface order.
+fn obj_text(mesh: &Mesh) -> Vec<u8> {
+    let mut text = String::new();
+    for [x, y, z] in vertices(mesh) {
+        text += &format!("v {x} {y} {z}\n");
+    }
+    for (s, name) in (1..).zip(&mesh.surface_names) {
+        text += &format!("g {name}\n");
+        for (t, _) in mesh.triangles.iter().zip(&mesh.triangle_surfaces).filter(|(_, &id)| id == s) {
+            text += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+        }
+    }
+    text.into_bytes()
+}
+
+#[derive(Clone, Copy)]
+enum Encoding {
+    Ascii,
+    Little,
+    Big,
+}
+
+/// PLY with f32 vertices, int index lists (uchar counts) and an int face property
+/// `surface` (the surface id times 10, so names show the value, not the id).
+fn ply_bytes(mesh: &Mesh, encoding: Encoding) -> Vec<u8> {
+    let format = match encoding {
+        Encoding::Ascii => "ascii",
+        Encoding::Little => "binary_little_endian",
+        Encoding::Big => "binary_big_endian",
+    };
+    let mut out = format!(
+        "ply\nformat {format} 1.0\ncomment written by tests/model_formats.rs\nelement vertex {}\nproperty float x\n\
+         property float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\n\
+         property int surface\nend_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    )
+    .into_bytes();
+    let f32_bytes = |v: f32| match encoding {
+        Encoding::Big => v.to_be_bytes(),
+        _ => v.to_le_bytes(),
+    };
+    let i32_bytes = |v: i32| match encoding {
+        Encoding::Big => v.to_be_bytes(),
+        _ => v.to_le_bytes(),
+    };
+    for p in vertices(mesh) {
+        match encoding {
+            Encoding::Ascii => out.extend(format!("{} {} {}\n", p[0], p[1], p[2]).bytes()),
+            _ => p.iter().for_each(|&c| out.extend(f32_bytes(c))),
+        }
+    }
+    for (t, &s) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
+        let surface = 10 * s as i32;
+        match encoding {
+            Encoding::Ascii => out.extend(format!("3 {} {} {} {surface}\n", t[0], t[1], t[2]).bytes()),
+            _ => {
+                out.push(3);
+                t.iter().for_each(|&v| out.extend(i32_bytes(v as i32)));
+                out.extend(i32_bytes(surface));
+            }
+        }
+    }
+    out
+}
+
+fn stl_bytes(mesh: &Mesh, binary: bool) -> Vec<u8> {
+    let corners = |t: &[u32; 3]| t.map(|v| mesh.vertex(v).as_vec3().to_array());
+    if binary {
+        let mut out = vec![0u8; 80];
+        out.extend((mesh.triangles.len() as u32).to_le_bytes());
+        for t in &mesh.triangles {
+            out.extend([0u8; 12]); // the normal, which readers recompute
+            corners(t).iter().flatten().for_each(|c| out.extend(c.to_le_bytes()));
+            out.extend([0u8; 2]);
+        }
+        out
+    } else {
+        let mut text = "solid model\n".to_string();
+        for t in &mesh.triangles {
+            text += "facet normal 0 0 0\nouter loop\n";
+            for [x, y, z] in corners(t) {
+                text += &format!("vertex {x:e} {y:e} {z:e}\n");
+            }
+            text += "endloop\nendfacet\n";
+        }
+        text += "endsolid model\n";
+        text.into_bytes()
+    }
+}
+
+fn written(name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+fn load(path: &Path) -> Mesh {
+    load_model_file(path, &Ledger::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The triangles as corner positions (bits), with their surface ids: meshes that list the
+/// same triangles with the same surfaces compare equal however their vertices are indexed.
+fn triangles(mesh: &Mesh) -> Vec<([[u32; 3]; 3], u32)> {
+    mesh.triangles
+        .iter()
+        .zip(&mesh.triangle_surfaces)
+        .map(|(t, &s)| (t.map(|v| mesh.vertex(v).as_vec3().to_array().map(f32::to_bits)), s))
+        .collect()
+}
+
+#[test]
+fn every_ply_encoding_and_the_obj_give_the_same_mesh() {
+    let obj = load(&written("step.obj", &obj_text(&model())));
+    for (encoding, name) in [(Encoding::Ascii, "ascii"), (Encoding::Little, "little"), (Encoding::Big, "big")] {
+        let ply = load(&written(&format!("step_{name}.PLY"), &ply_bytes(&model(), encoding)));
+        assert_eq!(triangles(&ply), triangles(&obj), "{name}");
+        let expected: Vec<String> = (1..=8).map(|s| format!("surface {}", 10 * s)).collect();
+        assert_eq!(ply.surface_names, expected, "{name}: named by the property's values");
+    }
+}
+
+#[test]
+fn ascii_and_binary_stl_give_the_same_mesh_with_its_planar_faces() {
+    let ascii = load(&written("box_ascii.stl", &stl_bytes(&box_model(), false)));
+    let binary = load(&written("box_binary.stl", &stl_bytes(&box_model(), true)));
+    assert_eq!(triangles(&ascii), triangles(&binary));
+    assert_eq!(triangles(&binary), triangles(&box_model()), "the box's triangles, its faces numbered alike");
+}
+
+/// The OBJ, a PLY and an STL of one model render the same labels, z bits and shadowed labels
+/// (the STL's surfaces are its planar faces, which number as the OBJ's groups do, in order of
+/// their first triangle).
+#[test]
+fn a_model_renders_the_same_image_from_obj_ply_and_stl() {
+    let paths = [
+        written("render.obj", &obj_text(&box_model())),
+        written("render.ply", &ply_bytes(&box_model(), Encoding::Little)),
+        written("render.stl", &stl_bytes(&box_model(), true)),
+    ];
+    let pose = DMat4::from_rotation_x(0.3) * DMat4::from_rotation_z(0.5);
+    let outputs: Vec<_> = paths
+        .iter()
+        .map(|path| {
+            let mut sc = scene(centred_sensor(96, 96, 2.0 / 96.0, [0.0, 0.0], 40.0), ShadowMode::Depth, &[]);
+            sc.objects.push(SceneObject {
+                model_ref: path.display().to_string(),
+                mesh: Arc::new(load(path)),
+                pose,
+                reflectivity: None,
+            });
+            render(&sc)
+        })
+        .collect();
+    assert!(outputs[0].label_unshadowed.iter().filter(|&&l| l != 0).count() > 1000, "the model in view");
+    assert!(outputs[0].shadowed_pixels() > 50, "it casts a shadow");
+    for (path, out) in paths.iter().zip(&outputs).skip(1) {
+        assert_eq!(out.label_unshadowed, outputs[0].label_unshadowed, "{}", path.display());
+        assert_eq!(out.label, outputs[0].label, "{}", path.display());
+        let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&out.z), bits(&outputs[0].z), "{}", path.display());
+    }
+}
+
+fn ply_refusal(bytes: &[u8]) -> String {
+    parse_ply(bytes, "bad.ply", &Ledger::new(MemoryBudget::new(64 << 20))).unwrap_err().to_string()
+}
+
+const TRIANGLE_HEADER: &str =
+    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+
+#[test]
+fn bad_ply_files_are_refused_naming_the_problem() {
+    let with_faces = |faces: &str| format!("{TRIANGLE_HEADER}{faces}end_header\n0 0 0\n1 0 0\n0 1 0\n");
+    let face_list = "element face 1\nproperty list uchar int vertex_indices\n";
+    for (bytes, expected) in [
+        // A header claiming a billion vertices in a file of a hundred bytes: refused before
+        // anything is reserved for them.
+        (
+            format!(
+                "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\nproperty float y\n\
+                 property float z\n{face_list}end_header\n{}",
+                "\0".repeat(64)
+            ),
+            "claims 1000000000 elements \"vertex\"",
+        ),
+        (format!("{TRIANGLE_HEADER}{face_list}"), "no line `end_header`"),
+        (format!("{}\n3 0 1 2\n", with_faces("")), "no element \"face\""),
+        (format!("{}3 0 1 -2\n", with_faces(face_list)), "face 0 lists a negative vertex index"),
+        (format!("{}2 0 1\n", with_faces(face_list)), "face 0 lists 2 vertices"),
+        (format!("{}3 0 1 7\n", with_faces(face_list)), "refers to vertex 7"),
+        (
+            format!("{}3 0 1 2\n", with_faces("element face 1\nproperty list uchar float vertex_indices\n")),
+            "not integers",
+        ),
+        (format!("{}3 0 1 2\n", with_faces("element face 1\nproperty int vertex_indices\n")), "not a list"),
+        (
+            format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n{face_list}end_header\n"
+            ),
+            "no property z",
+        ),
+        ("solid not a ply\n end_header\n".to_string(), "not a readable PLY header"),
+    ] {
+        let message = ply_refusal(bytes.as_bytes());
+        assert!(message.contains("bad.ply") && message.contains(expected), "expected {expected:?}: {message}");
+    }
+    let nan_vertex = [
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+            .as_bytes(),
+        &[0.0, 0.0, 0.0, 1.0, f32::NAN, 0.0, 0.0, 1.0, 0.0].map(f32::to_le_bytes).concat(),
+    ]
+    .concat();
+    let message = ply_refusal(&nan_vertex);
+    assert!(message.contains("vertex 1 has a non-finite coordinate"), "{message}");
+}
+
+#[test]
+fn bad_stl_files_are_refused_naming_the_problem() {
+    let binary = stl_bytes(&box_model(), true);
+    let mut claims_more = binary.clone();
+    claims_more[80..84].copy_from_slice(&u32::MAX.to_le_bytes());
+    for (bytes, expected) in [
+        (binary[..binary.len() - 10].to_vec(), "unreadable"),
+        (claims_more, "unreadable"),
+        (b"solid x\nfacet normal 0 0 0\nouter loop\nvertex 0 0\n".to_vec(), "triangle 0 unreadable"),
+        (vec![0u8; 84], "no (non-degenerate) triangles"),
+    ] {
+        let e = parse_stl(&bytes, "bad.stl", &Ledger::default()).unwrap_err().to_string();
+        assert!(e.contains("bad.stl") && e.contains(expected), "expected {expected:?}: {e}");
+    }
+}
+
+#[test]
+fn a_model_file_is_charged_to_the_budget_before_it_is_parsed() {
+    let ply = ply_bytes(&model(), Encoding::Little);
+    let stl = stl_bytes(&model(), true);
+    for (name, parse) in [
+        ("ply", Box::new(|l: &Ledger| parse_ply(&ply, "tight.ply", l).map(drop)) as Box<dyn Fn(&Ledger) -> _>),
+        ("stl", Box::new(|l: &Ledger| parse_stl(&stl, "tight.stl", l).map(drop))),
+    ] {
+        let e = parse(&Ledger::new(MemoryBudget::new(1024))).unwrap_err().to_string();
+        assert!(e.contains("tight") && e.contains("budget"), "{name}: {e}");
+        parse(&Ledger::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+/// The fuzz targets' seeds (tools/fuzz/seeds/) are the formats' variants, and each loads: a
+/// text PLY of doubles with a quad, `uint` indices under `vertex_index`, its surfaces from a
+/// `segment` property, an extra vertex property and an extra element; a tetrahedron in binary
+/// PLY of both byte orders (surfaces from `surface`) and in text and binary STL.
+#[test]
+fn the_fuzz_seeds_load_as_the_models_they_are() {
+    let seed = |name: &str| load(&PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tools/fuzz/seeds").join(name));
+    let corner = seed("ply/ascii_segments.ply");
+    assert_eq!(corner.triangles.len(), 4, "the quad is two triangles");
+    assert_eq!(corner.surface_names, ["surface 7", "surface 8"]);
+    assert_eq!(corner.triangle_surfaces, [1, 1, 2, 2]);
+    let little = seed("ply/binary_little_endian.ply");
+    assert_eq!(triangles(&seed("ply/binary_big_endian.ply")), triangles(&little));
+    assert_eq!(little.surface_names, ["surface 0", "surface 1", "surface 2", "surface 3"]);
+    let stl = seed("stl/binary.stl");
+    assert_eq!(triangles(&seed("stl/ascii.stl")), triangles(&stl));
+    assert_eq!((stl.triangles.len(), stl.surface_count()), (4, 4), "a tetrahedron's four faces");
+}
