@@ -440,6 +440,14 @@ mod tests {
         assert_eq!(far.local_origin(), DVec3::new(1000.0, 2000.0, 12.0));
         // A grid about the frame's origin keeps it.
         assert_eq!(grid().local_origin(), DVec3::ZERO);
+        // Two rows of pitch 1 from y = 9.7: the centre's y, 9.2, is 4.6 steps of 2 (the
+        // extent), nearer 10 than 8.
+        let rows = ViewGrid { origin: [0.0, 9.7], pitch: [1.0, 1.0], width: 1, height: 2, z_range: (0.0, 1.0) };
+        assert_eq!(rows.local_origin(), DVec3::new(0.0, 10.0, 0.0));
+        // A pixel 20 deep: the depth is the extent (step 32), and the centre (5, 7, 20) is
+        // nearest (0, 0, 32).
+        let deep = ViewGrid { origin: [5.0, 7.0], pitch: [1.0, 1.0], width: 1, height: 1, z_range: (10.0, 30.0) };
+        assert_eq!(deep.local_origin(), DVec3::new(0.0, 0.0, 32.0));
     }
 
     #[test]
@@ -485,9 +493,13 @@ mod tests {
 
     #[test]
     fn depth_bounds_widen_the_spheres_extent_by_its_hundredth_and_a_millionth() {
-        let (lo, hi) = depth_bounds([(DVec3::new(0.0, 0.0, 1.0), 1.0), (DVec3::new(3.0, 0.0, 5.0), 0.5)]);
-        let margin = 0.055 + 1e-6 * 6.5;
-        assert!((lo + margin).abs() < 1e-12 && (hi - 5.5 - margin).abs() < 1e-12, "({lo}, {hi})");
+        // Depths 1 to 5.5: a margin of 0.045 and 6.5e-6.
+        let (lo, hi) = depth_bounds([(DVec3::new(0.0, 0.0, 2.0), 1.0), (DVec3::new(3.0, 0.0, 5.0), 0.5)]);
+        let margin = 0.045 + 1e-6 * 6.5;
+        assert!((lo - 1.0 + margin).abs() < 1e-12 && (hi - 5.5 - margin).abs() < 1e-12, "({lo}, {hi})");
+        // A point: the absolute margin alone.
+        let (lo, hi) = depth_bounds([(DVec3::new(0.0, 0.0, 5.0), 0.0)]);
+        assert!((lo - 5.0 + 6e-6).abs() < 1e-12 && (hi - 5.0 - 6e-6).abs() < 1e-12, "({lo}, {hi})");
         assert_eq!(depth_bounds([]), (-1.0, 1.0));
     }
 
