@@ -5,6 +5,12 @@
 
 use std::fmt::Write;
 
+/// A dependency parser's error as a message may carry it: it may quote the input it failed
+/// on (a line, a token), so it is escaped and cut like any string from an input.
+pub fn parser_error(error: impl std::fmt::Display) -> String {
+    escaped(&error.to_string(), 300)
+}
+
 /// `text` with its control characters (C0, DEL, C1, and the Unicode format characters that
 /// reorder or hide text) written as escapes, cut after `limit` characters with a note of how
 /// much was left out.

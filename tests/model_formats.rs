@@ -238,7 +238,7 @@ fn bad_ply_files_are_refused_naming_the_problem() {
             ),
             "no property z",
         ),
-        ("solid not a ply\n end_header\n".to_string(), "not a readable PLY header"),
+        ("solid not a ply\nend_header\n".to_string(), "not a readable PLY header"),
     ] {
         let message = ply_refusal(bytes.as_bytes());
         assert!(message.contains("bad.ply") && message.contains(expected), "expected {expected:?}: {message}");
@@ -252,6 +252,20 @@ fn bad_ply_files_are_refused_naming_the_problem() {
     .concat();
     let message = ply_refusal(&nan_vertex);
     assert!(message.contains("vertex 1 has a non-finite coordinate"), "{message}");
+    // The parser's error quotes the line; a terminal escape in it is shown escaped.
+    let escape = format!("{TRIANGLE_HEADER}{face_list}end_header\n0 0 0\n1 \u{1b}[2J 0\n0 1 0\n3 0 1 2\n");
+    let message = ply_refusal(escape.as_bytes());
+    assert!(message.contains("unreadable") && !message.contains('\u{1b}'), "{message:?}");
+}
+
+/// A comment that mentions `end_header` does not end the header: the whole header, here a
+/// megabyte of comments after it, is charged before it is parsed.
+#[test]
+fn a_ply_header_is_charged_through_its_real_end() {
+    let header = format!("ply\nformat ascii 1.0\ncomment end_header\n{}", "comment padding\n".repeat(65_536));
+    let text = format!("{header}element vertex 0\nelement face 0\nend_header\n");
+    let e = parse_ply(text.as_bytes(), "long.ply", &Ledger::new(MemoryBudget::new(8 << 20))).unwrap_err();
+    assert!(e.to_string().contains("parsing the PLY header of long.ply"), "{e}");
 }
 
 #[test]

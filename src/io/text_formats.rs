@@ -4,7 +4,7 @@
 //! megabytes long and fill with terminal escapes.
 
 use crate::error::{guard_parser, Error, Result};
-use crate::untrusted::escaped;
+use crate::untrusted::{escaped, parser_error};
 use serde::de::DeserializeOwned;
 
 /// TOML text parsed into `T`; errors are `Error::Scene`, with the line.
@@ -20,7 +20,7 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str) -> Result<T> {
 /// JSON text parsed into `T`; errors are `Error::Scene`, with the line and column.
 pub fn parse_json<T: DeserializeOwned>(text: &str) -> Result<T> {
     guard_parser("the JSON text", "serde_json", || {
-        serde_json::from_str(text).map_err(|e| Error::Scene(escaped(&e.to_string(), 300)))
+        serde_json::from_str(text).map_err(|e| Error::Scene(parser_error(e)))
     })
 }
 

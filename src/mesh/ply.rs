@@ -19,7 +19,7 @@ use super::{merge_coplanar_surfaces, Mesh};
 use crate::error::{guard_parser, Error, Result};
 use crate::io::read_input_file;
 use crate::limits::Ledger;
-use crate::untrusted::quoted;
+use crate::untrusted::{parser_error, quoted};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
     ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
@@ -56,7 +56,7 @@ pub fn parse_ply(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
     let header = guard_parser(name, "ply-rs-bw's PLY parser", || {
         Parser::<Skipped>::new()
             .read_header(&mut reader)
-            .map_err(|e| invalid(format!("not a readable PLY header ({e})")))
+            .map_err(|e| invalid(format!("not a readable PLY header ({})", parser_error(e))))
     })?;
     let payload = bytes.len() as u64 - reader.get_ref().position();
     let layout = Layout::of(&header).map_err(invalid)?;
@@ -77,7 +77,7 @@ pub fn parse_ply(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
         let (mut vertices, mut faces) = (Vec::new(), Vec::new());
         for element in header.elements.values() {
             let read = |e: ply_rs_bw::parser::ParseError| {
-                invalid(format!("element {} unreadable ({e})", quoted(&element.name)))
+                invalid(format!("element {} unreadable ({})", quoted(&element.name), parser_error(e)))
             };
             if element.name == layout.vertices.name {
                 vertices =
@@ -93,9 +93,11 @@ pub fn parse_ply(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
     build(name, vertices, faces, layout.surface.is_some())
 }
 
-/// The length of the header, through its `end_header` line; `None` without one.
+/// The length of the header, through the first line that starts with `end_header` (a
+/// comment that mentions it does not end the header, so it cannot make the header's charge
+/// short); `None` without one.
 fn header_length(bytes: &[u8]) -> Option<usize> {
-    let marker = b"end_header";
+    let marker = b"\nend_header";
     let at = bytes.windows(marker.len()).position(|w| w == marker)?;
     let rest = &bytes[at + marker.len()..];
     let line_end = rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |n| n + 1);

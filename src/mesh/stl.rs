@@ -12,6 +12,7 @@ use super::{merge_coplanar_surfaces, Mesh};
 use crate::error::{guard_parser, Error, Result};
 use crate::io::read_input_file;
 use crate::limits::Ledger;
+use crate::untrusted::parser_error;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -31,11 +32,11 @@ pub fn parse_stl(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
     ledger.charge(format_args!("parsing {name}"), bytes.len() as u64 * BYTES_PER_FILE_BYTE)?;
     let positions = guard_parser(name, "stl_io's STL parser", || {
         let mut cursor = Cursor::new(bytes);
-        let triangles =
-            stl_io::create_stl_reader(&mut cursor).map_err(|e| invalid(format!("not a readable STL file ({e})")))?;
+        let triangles = stl_io::create_stl_reader(&mut cursor)
+            .map_err(|e| invalid(format!("not a readable STL file ({})", parser_error(e))))?;
         let mut positions: Vec<[f64; 3]> = Vec::new();
         for (t, triangle) in triangles.enumerate() {
-            let triangle = triangle.map_err(|e| invalid(format!("triangle {t} unreadable ({e})")))?;
+            let triangle = triangle.map_err(|e| invalid(format!("triangle {t} unreadable ({})", parser_error(e))))?;
             positions.extend(triangle.vertices.map(|v| v.0.map(f64::from)));
         }
         Ok(positions)
