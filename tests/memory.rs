@@ -168,6 +168,9 @@ fn ply_and_stl_parsing_hold_no_more_than_they_charge() {
         parse_ply,
     );
     model_file("PLY binary faces", &binary(3, N, [corners.clone(), face.repeat(N)].concat()), parse_ply);
+    let surfaces_header = ply_header("ascii", 3, N, "").replace("end_header", "property int surface\nend_header");
+    let a_surface_a_face: String = (0..N).map(|s| format!("3 0 1 2 {s}\n")).collect();
+    model_file("PLY a surface a face", (surfaces_header + triangle + &a_surface_a_face).as_bytes(), parse_ply);
     // A grid of triangles, one surface to split into its planar faces.
     let mut stl = vec![0u8; 80];
     stl.extend((N as u32).to_le_bytes());

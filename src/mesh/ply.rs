@@ -24,6 +24,7 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
     ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
 };
+use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -208,15 +209,16 @@ fn build(name: &str, vertices: Vec<Vertex>, faces: Vec<Face>, has_surfaces: bool
     }
     let mut triangles = Vec::new();
     let mut triangle_surfaces = Vec::new();
+    // Each surface value's id, and the values in order of first appearance.
+    let mut surface_ids: HashMap<i64, u32> = HashMap::new();
     let mut surface_values: Vec<i64> = Vec::new();
     for face in &faces {
-        let surface = match surface_values.iter().position(|&v| v == face.surface) {
-            _ if !has_surfaces => 1,
-            Some(i) => i as u32 + 1,
-            None => {
+        let surface = match has_surfaces {
+            false => 1,
+            true => *surface_ids.entry(face.surface).or_insert_with(|| {
                 surface_values.push(face.surface);
                 surface_values.len() as u32
-            }
+            }),
         };
         for k in 1..face.indices.len() - 1 {
             triangles.push([face.indices[0], face.indices[k], face.indices[k + 1]]);
