@@ -197,7 +197,7 @@ impl Verifier {
         &self.renderer
     }
 
-    /// The model named `reference` (a `builtin:` name, or an OBJ path relative to
+    /// The model named `reference` (a `builtin:` name, or an OBJ, PLY or STL path relative to
     /// `base_dir`), loaded and uploaded on first use.
     pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
         let key = model_key(reference, base_dir)?;
