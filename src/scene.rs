@@ -56,6 +56,9 @@ struct ObjectEntry {
     #[serde(default = "identity_rows", deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
     reflectivity: Option<f64>,
+    /// Model units to scene units, applied in the model's frame before the pose.
+    #[serde(default = "crate::mesh::default_model_scale")]
+    scale: f64,
 }
 
 fn identity_rows() -> [[f64; 4]; 4] {
@@ -84,16 +87,17 @@ impl Scene {
         let file: SceneFile = parse_toml(text)?;
         file.sensor.validate()?;
         file.effects.validate()?;
-        let mut loaded: HashMap<ModelKey, Arc<Mesh>> = HashMap::new();
+        // Each model at each scale, once.
+        let mut loaded: HashMap<(ModelKey, u64), Arc<Mesh>> = HashMap::new();
         let mut objects = Vec::with_capacity(file.object.len());
         let mut labels: u64 = 0;
         for entry in file.object {
             let object = objects.len() + 1;
-            let key = model_key(&entry.model, base_dir)?;
+            let key = (model_key(&entry.model, base_dir)?, entry.scale.to_bits());
             let mesh = match loaded.get(&key) {
                 Some(mesh) => mesh.clone(),
                 None => {
-                    let mesh = Arc::new(load_model(&entry.model, base_dir, ledger)?);
+                    let mesh = Arc::new(load_model(&entry.model, base_dir, ledger)?.scaled(entry.scale, ledger)?);
                     loaded.insert(key, mesh.clone());
                     mesh
                 }

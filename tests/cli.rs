@@ -446,3 +446,44 @@ fn verify_takes_the_effects_from_the_sensed_header_and_refuses_a_mismatch() {
     let (out, _) = s_of("bad", r#""effects": {"noise": {"sigma": -2}}, "#);
     assert!(text(&out.stderr).contains("effects.noise.sigma = -2"), "{}", text(&out.stderr));
 }
+
+/// A hypothesis' `"scale"` reads a millimetre model into the metre scene: the millimetre box
+/// at scale 0.001 scores exactly as the metre box does, and without the scale it does not.
+#[test]
+fn verify_reads_a_hypothesis_models_scale() {
+    let d = dir("verify_scale");
+    let corners: Vec<[f64; 3]> =
+        (0..8).map(|i| [(i & 1) as f64 - 0.5, ((i >> 1) & 1) as f64 - 0.5, ((i >> 2) & 1) as f64]).collect();
+    let faces = "g bottom\nf 1 3 4 2\ng top\nf 5 6 8 7\ng front\nf 1 2 6 5\ng back\nf 3 7 8 4\ng left\nf 1 5 7 3\ng right\nf 2 4 8 6\n";
+    for (name, unit) in [("box_m.obj", 1.0), ("box_mm.obj", 1000.0)] {
+        let vertices: String =
+            corners.iter().map(|c| format!("v {} {} {}\n", c[0] * unit, c[1] * unit, c[2] * unit)).collect();
+        std::fs::write(d.join(name), vertices + faces).unwrap();
+    }
+    let pose = "[[0.8,-0.6,0,0.1],[0.6,0.8,0,0],[0,0,1,0],[0,0,0,1]]";
+    let scene = write_scene(&d, &format!("{SENSOR}[[object]]\nmodel = \"box_m.obj\"\npose = {pose}\n"));
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("sensed").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let bindings = "[[1,1],[2,2],[3,3],[4,4],[5,5],[6,6]]";
+    let hypothesis = |id: &str, model: &str, scale: &str| {
+        format!(r#"{{"id": "{id}", "model": "{model}", {scale}"pose": {pose}, "bindings": {bindings}}}"#)
+    };
+    let hyps = d.join("hypotheses.json");
+    let list = [
+        hypothesis("metre", "box_m.obj", ""),
+        hypothesis("millimetre", "box_mm.obj", r#""scale": 0.001, "#),
+        hypothesis("unscaled", "box_mm.obj", ""),
+    ];
+    std::fs::write(&hyps, format!(r#"{{"hypotheses": [{}]}}"#, list.join(","))).unwrap();
+    let scores = d.join("scores.jsonl");
+    let out = verify(&hyps, &d.join("sensed/range.exr"), &scores, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let lines: Vec<serde_json::Value> =
+        std::fs::read_to_string(&scores).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let by_id = |id: &str| lines.iter().find(|l| l["id"] == id).unwrap_or_else(|| panic!("{id} scored"));
+    for key in ["s1", "s2", "s3", "s4", "s5", "s6", "s", "counts"] {
+        assert_eq!(by_id("millimetre")[key], by_id("metre")[key], "{key}");
+    }
+    assert!(by_id("metre")["s"].as_f64().unwrap() > 0.9, "{}", by_id("metre"));
+    assert_ne!(by_id("unscaled")["counts"], by_id("metre")["counts"]);
+}

@@ -218,6 +218,18 @@ fn scene_and_hypothesis_parsing_hold_no_more_than_they_charge() {
     json("an array under an unknown key", format!("{{\"x\":[{}1],\"hypotheses\":[]}}", "1,".repeat(N)));
 }
 
+/// Scaling a model (`[[object]] scale`) is charged before the scaled copy is made: building
+/// the largest sphere and scaling it hold no more than the two charges.
+#[test]
+fn scaling_a_model_holds_no_more_than_it_charges() {
+    let (peak, charged) = measure(0, |ledger| {
+        let mesh = load_model("builtin:sphere:1024", Path::new("."), ledger).expect("built");
+        let _ = mesh.scaled(0.001, ledger).expect("scaled");
+    });
+    println!("scaling: {peak} bytes at most, {charged} charged");
+    assert!(peak as u64 <= charged, "scaling held {peak} bytes but charged only {charged}");
+}
+
 /// A built-in model is charged before it is built, per triangle (the largest sphere, a million
 /// triangles, and a cylinder), as a model file's parse is.
 #[test]

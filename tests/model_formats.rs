@@ -316,3 +316,41 @@ fn the_fuzz_seeds_load_as_the_models_they_are() {
     assert_eq!(triangles(&seed("stl/ascii.stl")), triangles(&stl));
     assert_eq!((stl.triangles.len(), stl.surface_count()), (4, 4), "a tetrahedron's four faces");
 }
+
+/// The unit box written in millimetres (its coordinates times 1000) and read with `scale =
+/// 0.001` is the metre box: the same image in a scene, and the same vertices as a
+/// hypothesis' model; a scale that is not a positive number is refused by name.
+#[test]
+fn a_millimetre_model_at_scale_one_thousandth_is_the_metre_model() {
+    let mut millimetres = box_model();
+    millimetres.positions.iter_mut().for_each(|p| *p = p.map(|c| c * 1000.0));
+    let d = dir();
+    std::fs::write(d.join("box_mm.obj"), obj_text(&millimetres)).unwrap();
+    std::fs::write(d.join("box_m.obj"), obj_text(&box_model())).unwrap();
+    let scene_of = |model: &str, scale: &str| {
+        let text = format!(
+            "[sensor]\nkind = \"orthographic\"\nwidth = 64\nheight = 64\npitch = [0.03, 0.03]\n\
+             origin = [-0.945, 0.945]\ntheta_deg = 35.0\n[shadow]\nmode = \"depth\"\n[[object]]\n\
+             model = \"{model}\"\n{scale}pose = [[0.8, -0.6, 0.0, 0.0], [0.6, 0.8, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], \
+             [0.0, 0.0, 0.0, 1.0]]\n[[object]]\nmodel = \"builtin:plane:4\"\n"
+        );
+        rangesynth::Scene::from_toml(&text, &d, &Ledger::default())
+    };
+    let metre = render(&scene_of("box_m.obj", "").unwrap());
+    let scaled = render(&scene_of("box_mm.obj", "scale = 0.001\n").unwrap());
+    assert!(metre.shadowed_pixels() > 20 && metre.label.iter().filter(|&&l| l != 0).count() > 500);
+    assert_eq!(scaled.label_unshadowed, metre.label_unshadowed);
+    assert_eq!(scaled.label, metre.label);
+    let worst = paired(&scaled.z, &metre.z).map(|(a, b)| (a - b).abs()).filter(|e| !e.is_nan()).fold(0.0, f32::max);
+    assert!(worst <= 1e-6, "z differs by {worst}");
+    for bad in ["0.0", "-0.001", "nan", "inf"] {
+        let e = scene_of("box_mm.obj", &format!("scale = {bad}\n")).unwrap_err().to_string();
+        assert!(e.contains("box_mm.obj") && e.contains("scale = ") && e.contains("positive finite"), "{bad}: {e}");
+    }
+    let model = VERIFIER.scaled_model("box_mm.obj", &d, 0.001).unwrap();
+    let unscaled = VERIFIER.model("box_mm.obj", &d).unwrap();
+    for v in 0..box_model().positions.len() as u32 {
+        assert!((model.mesh.vertex(v) - box_model().vertex(v)).length() < 1e-12, "vertex {v}");
+        assert!((unscaled.mesh.vertex(v) - 1000.0 * box_model().vertex(v)).length() < 1e-9, "vertex {v}");
+    }
+}

@@ -132,7 +132,9 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
         .hypotheses
         .into_iter()
         .map(|h| {
-            let model = verifier.model(&h.model, base_dir).with_context(|| format!("hypothesis {}", quoted(&h.id)))?;
+            let model = verifier
+                .scaled_model(&h.model, base_dir, h.scale)
+                .with_context(|| format!("hypothesis {}", quoted(&h.id)))?;
             if warned.insert(h.model.clone()) {
                 warn_degenerate(&model.mesh);
             }

@@ -38,6 +38,8 @@ pub struct HypothesisFile {
 pub struct HypothesisEntry {
     pub id: String,
     pub model: String,
+    /// Model units to scene units (`Mesh::scaled`), 1 unless the file gives `"scale"`.
+    pub scale: f64,
     pub pose: DMat4,
     /// (scene label, model surface) pairs.
     pub bindings: Vec<(u32, u32)>,
@@ -59,6 +61,8 @@ struct RawFile {
 struct RawHypothesis {
     id: String,
     model: String,
+    #[serde(default = "crate::mesh::default_model_scale")]
+    scale: f64,
     #[serde(deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
     #[serde(default)]
@@ -111,7 +115,7 @@ impl HypothesisFile {
                         quoted(&h.id)
                     )));
                 }
-                Ok(HypothesisEntry { id: h.id, model: h.model, pose, bindings: h.bindings })
+                Ok(HypothesisEntry { id: h.id, model: h.model, scale: h.scale, pose, bindings: h.bindings })
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, effects: raw.effects, hypotheses })
@@ -130,6 +134,16 @@ mod tests {
     fn a_file_without_a_tolerance_takes_the_default() {
         let file = HypothesisFile::from_json(EMPTY, &Ledger::default()).unwrap();
         assert_eq!(file.tolerance, 0.1);
+    }
+
+    /// A hypothesis' model is at scale 1 unless it gives `"scale"`.
+    #[test]
+    fn a_hypothesis_takes_its_scale_or_one() {
+        let text = r#"{"hypotheses": [
+            {"id": "a", "model": "m.ply", "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+            {"id": "b", "model": "m.ply", "scale": 0.001, "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#;
+        let file = HypothesisFile::from_json(text, &Ledger::default()).unwrap();
+        assert_eq!(file.hypotheses.iter().map(|h| h.scale).collect::<Vec<_>>(), [1.0, 0.001]);
     }
 
     /// A negative tolerance is refused by name.

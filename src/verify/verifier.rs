@@ -120,7 +120,7 @@ pub struct Verifier {
     // Dropped before the renderer, whose context it was made on (it holds the context too).
     score_pass: ScorePass,
     renderer: Renderer,
-    models: Mutex<HashMap<ModelKey, Arc<Model>>>,
+    models: Mutex<HashMap<(ModelKey, u64), Arc<Model>>>,
     /// Most render-target slots a batch keeps (with_slots).
     slots: usize,
     /// Most chunks in flight at once (with_chunks_in_flight).
@@ -200,11 +200,18 @@ impl Verifier {
     /// The model named `reference` (a `builtin:` name, or an OBJ, PLY or STL path relative to
     /// `base_dir`), loaded and uploaded on first use.
     pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
-        let key = model_key(reference, base_dir)?;
+        self.scaled_model(reference, base_dir, 1.0)
+    }
+
+    /// [`Verifier::model`] with its vertices multiplied by `scale` (model units to scene
+    /// units: `Mesh::scaled`); each scale of a model is loaded and uploaded once.
+    pub fn scaled_model(&self, reference: &str, base_dir: &Path, scale: f64) -> Result<Arc<Model>> {
+        let key = (model_key(reference, base_dir)?, scale.to_bits());
         if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(model.clone());
         }
-        let mesh = Arc::new(load_model(reference, base_dir, self.renderer.ledger())?);
+        let ledger = self.renderer.ledger();
+        let mesh = Arc::new(load_model(reference, base_dir, ledger)?.scaled(scale, ledger)?);
         let model = Arc::new(Model {
             gpu: GpuMesh::upload(self.renderer.context(), &mesh)?,
             sphere: mesh.bounding_sphere(),
