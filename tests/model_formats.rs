@@ -6,6 +6,7 @@
 
 mod common;
 
+use common::cli::fresh_dir;
 use common::*;
 use glam::DMat4;
 use rangesynth::limits::{Ledger, MemoryBudget};
@@ -14,12 +15,6 @@ use rangesynth::scene::SceneObject;
 use rangesynth::shadow::ShadowMode;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-fn dir() -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model_formats");
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The model every format with surfaces writes: the built-in stepped block, eight surfaces.
 fn model() -> Mesh {
@@ -127,8 +122,9 @@ fn stl_bytes(mesh: &Mesh, binary: bool) -> Vec<u8> {
     }
 }
 
-fn written(name: &str, bytes: &[u8]) -> PathBuf {
-    let path = dir().join(name);
+/// `bytes` written as `name` in the test's own directory `d`.
+fn written(d: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = d.join(name);
     std::fs::write(&path, bytes).unwrap();
     path
 }
@@ -149,9 +145,10 @@ fn triangles(mesh: &Mesh) -> Vec<([[u32; 3]; 3], u32)> {
 
 #[test]
 fn every_ply_encoding_and_the_obj_give_the_same_mesh() {
-    let obj = load(&written("step.obj", &obj_text(&model())));
+    let d = fresh_dir("model_formats", "encodings");
+    let obj = load(&written(&d, "step.obj", &obj_text(&model())));
     for (encoding, name) in [(Encoding::Ascii, "ascii"), (Encoding::Little, "little"), (Encoding::Big, "big")] {
-        let ply = load(&written(&format!("step_{name}.PLY"), &ply_bytes(&model(), encoding)));
+        let ply = load(&written(&d, &format!("step_{name}.PLY"), &ply_bytes(&model(), encoding)));
         assert_eq!(triangles(&ply), triangles(&obj), "{name}");
         let expected: Vec<String> = (1..=8).map(|s| format!("surface {}", 10 * s)).collect();
         assert_eq!(ply.surface_names, expected, "{name}: named by the property's values");
@@ -160,8 +157,9 @@ fn every_ply_encoding_and_the_obj_give_the_same_mesh() {
 
 #[test]
 fn ascii_and_binary_stl_give_the_same_mesh_with_its_planar_faces() {
-    let ascii = load(&written("box_ascii.stl", &stl_bytes(&box_model(), false)));
-    let binary = load(&written("box_binary.stl", &stl_bytes(&box_model(), true)));
+    let d = fresh_dir("model_formats", "stl");
+    let ascii = load(&written(&d, "box_ascii.stl", &stl_bytes(&box_model(), false)));
+    let binary = load(&written(&d, "box_binary.stl", &stl_bytes(&box_model(), true)));
     assert_eq!(triangles(&ascii), triangles(&binary));
     assert_eq!(triangles(&binary), triangles(&box_model()), "the box's triangles, its faces numbered alike");
 }
@@ -171,10 +169,11 @@ fn ascii_and_binary_stl_give_the_same_mesh_with_its_planar_faces() {
 /// their first triangle).
 #[test]
 fn a_model_renders_the_same_image_from_obj_ply_and_stl() {
+    let d = fresh_dir("model_formats", "render");
     let paths = [
-        written("render.obj", &obj_text(&box_model())),
-        written("render.ply", &ply_bytes(&box_model(), Encoding::Little)),
-        written("render.stl", &stl_bytes(&box_model(), true)),
+        written(&d, "render.obj", &obj_text(&box_model())),
+        written(&d, "render.ply", &ply_bytes(&box_model(), Encoding::Little)),
+        written(&d, "render.stl", &stl_bytes(&box_model(), true)),
     ];
     let pose = DMat4::from_rotation_x(0.3) * DMat4::from_rotation_z(0.5);
     let outputs: Vec<_> = paths
@@ -324,7 +323,7 @@ fn the_fuzz_seeds_load_as_the_models_they_are() {
 fn a_millimetre_model_at_scale_one_thousandth_is_the_metre_model() {
     let mut millimetres = box_model();
     millimetres.positions.iter_mut().for_each(|p| *p = p.map(|c| c * 1000.0));
-    let d = dir();
+    let d = fresh_dir("model_formats", "scale");
     std::fs::write(d.join("box_mm.obj"), obj_text(&millimetres)).unwrap();
     std::fs::write(d.join("box_m.obj"), obj_text(&box_model())).unwrap();
     let scene_of = |model: &str, scale: &str| {
