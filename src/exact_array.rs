@@ -21,6 +21,22 @@ pub fn matrix<'de, D: Deserializer<'de>, const R: usize, const C: usize>(
     exact(rows, "a matrix")
 }
 
+/// `#[serde(default, deserialize_with = "exact_array::optional_array")]` for an optional key's
+/// `Option<[f64; N]>`.
+pub fn optional_array<'de, D: Deserializer<'de>, const N: usize>(
+    deserializer: D,
+) -> Result<Option<[f64; N]>, D::Error> {
+    array(deserializer).map(Some)
+}
+
+/// `#[serde(default, deserialize_with = "exact_array::optional_matrix")]` for an optional key's
+/// `Option<[[f64; C]; R]>`.
+pub fn optional_matrix<'de, D: Deserializer<'de>, const R: usize, const C: usize>(
+    deserializer: D,
+) -> Result<Option<[[f64; C]; R]>, D::Error> {
+    matrix(deserializer).map(Some)
+}
+
 fn exact<T, E: Error, const N: usize>(values: Vec<T>, what: &str) -> Result<[T; N], E> {
     let len = values.len();
     values.try_into().map_err(|_| E::custom(format!("{what} must hold exactly {N} values, not {len}")))

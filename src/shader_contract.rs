@@ -10,7 +10,7 @@
 
 /// Heights (depths) this close, relative to the scene's (the view's) largest coordinate, are a
 /// tie: 2^-17, about 64 f32 ulps, the rounding of poses (README "the tie rule"). Exact mode
-/// (src/exact.rs) uses it as it is; the GPU paths add an allowance for depths worked out from
+/// (src/exact/) uses it as it is; the GPU paths add an allowance for depths worked out from
 /// snapped corners (`tie_depth`, shaders/raster/draw.glsl), which exact mode has none of.
 pub const TIE_RELATIVE: f64 = 1.0 / 131072.0;
 

@@ -23,7 +23,7 @@
 //!   f32 rounding ([`DEPTH_BIAS_RELATIVE`] of the coordinates, scaled by how steep the planes
 //!   are). A walk is at most 32 steps; one that gives up falls back on the seen triangle's
 //!   plane, extrapolated to p', with an allowance for the creases in between.
-//! - `exact`: two rays in f64 on the CPU at every pixel centre (src/exact.rs): the first hit
+//! - `exact`: two rays in f64 on the CPU at every pixel centre (src/exact/): the first hit
 //!   along −z, then a ray from it toward the camera. The product's own ground truth, and the
 //!   slow end of `rangesynth accuracy`'s curve; its images go through the same effect and
 //!   score passes as the GPU modes'.

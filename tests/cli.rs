@@ -89,7 +89,11 @@ fn bad_scenes_are_refused_with_a_clear_message() {
     let cases: &[(&str, String, &str)] = &[
         ("malformed", "[sensor\nwidth = 3".into(), "scene.toml"),
         ("no_sensor", object.into(), "missing field `sensor`"),
-        ("incomplete_sensor", "[sensor]\nkind = \"orthographic\"\nwidth = 4\n".into(), "missing field"),
+        (
+            "incomplete_sensor",
+            "[sensor]\nkind = \"orthographic\"\nwidth = 4\n".into(),
+            "[sensor] kind = \"orthographic\" needs height",
+        ),
         ("zero_width", SENSOR.replace("width = 32", "width = 0") + object, "at least 1"),
         ("too_large", SENSOR.replace("height = 24", "height = 100000") + object, "limited to"),
         ("theta_90", SENSOR.replace("theta_deg = 30.0", "theta_deg = 90.0") + object, "must lie between -89 and 89"),
@@ -102,7 +106,12 @@ fn bad_scenes_are_refused_with_a_clear_message() {
         ("pitch_zero", SENSOR.replace("pitch = [0.1, 0.1]", "pitch = [0.0, 0.1]") + object, "positive finite"),
         ("unknown_key", SENSOR.to_string() + "colour = 3\n" + object, "unknown field `colour`"),
         ("unknown_mode", SENSOR.to_string() + "[shadow]\nmode = \"soft\"\n" + object, "unknown variant `soft`"),
-        ("unknown_kind", SENSOR.replace("\"orthographic\"", "\"pinhole\"") + object, "unknown variant `pinhole`"),
+        ("unknown_kind", SENSOR.replace("\"orthographic\"", "\"fisheye\"") + object, "unknown variant `fisheye`"),
+        (
+            "pinhole_with_pitch",
+            SENSOR.replace("\"orthographic\"", "\"pinhole\"") + object,
+            "[sensor] kind = \"pinhole\" has no key pitch",
+        ),
         ("missing_model", SENSOR.to_string() + "[[object]]\nmodel = \"nowhere.obj\"\n", "nowhere.obj: No such file"),
         ("unknown_builtin", SENSOR.to_string() + "[[object]]\nmodel = \"builtin:teapot\"\n", "unknown built-in"),
         (

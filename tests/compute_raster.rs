@@ -93,8 +93,8 @@ fn both_rasterizers_render_identical_images_of_one_object() {
                 let graphics = render(&sc);
                 let compute = render_compute(&sc);
                 let name = format!("{model} {pose_name} θ = {theta} {:?}", sc.shadow);
-                assert_eq!(graphics.raster, Raster::Graphics);
-                assert_eq!(compute.raster, Raster::Compute, "{name}");
+                assert_eq!(graphics.raster, Some(Raster::Graphics));
+                assert_eq!(compute.raster, Some(Raster::Compute), "{name}");
                 assert!(graphics.label_unshadowed.iter().any(|&l| l != 0), "{name}: in view");
                 assert_same_images(&name, &graphics, &compute);
             }
@@ -114,7 +114,7 @@ fn effects_see_the_same_range_view_from_either_rasterizer() {
         let mut sc = scene(s, mode, &[(model, turned())]);
         sc.effects = effects;
         let (graphics, compute) = (render(&sc), render_compute(&sc));
-        assert_eq!(compute.raster, Raster::Compute, "{model}");
+        assert_eq!(compute.raster, Some(Raster::Compute), "{model}");
         assert!(graphics.pixels_lost_to(Reason::Grazing) > 0, "{model}: grazing drops pixels");
         assert_eq!(compute.reason, graphics.reason, "{model}: reasons");
         assert_eq!(compute.label, graphics.label, "{model}: labels");
@@ -128,7 +128,7 @@ fn the_compute_rasterizer_renders_both_views_in_one_pass() {
     let s = centred_sensor(96, 80, 0.035, [0.1, 0.0], 45.0);
     let names = |mode| {
         let out = render_compute(&scene(s, mode, &[("builtin:sphere:64", DMat4::IDENTITY)]));
-        assert_eq!(out.raster, Raster::Compute);
+        assert_eq!(out.raster, Some(Raster::Compute));
         out.timings.iter().map(|t| t.name).collect::<Vec<_>>()
     };
     assert_eq!(names(ShadowMode::Depth), ["range and shadow", "shadow mask"]);
@@ -152,7 +152,7 @@ fn views_too_large_for_their_visibility_words_stay_on_the_graphics_path() {
         return;
     }
     let out = render_compute(&sc);
-    assert_eq!(out.raster, Raster::Graphics);
+    assert_eq!(out.raster, Some(Raster::Graphics));
     assert!(out.label.iter().any(|&l| l != 0), "in view");
 }
 
@@ -183,7 +183,7 @@ fn both_rasterizers_render_identical_images_of_several_objects() {
             let sc = scene(centred_sensor(96, 96, 0.03, [0.1, 0.1], theta), mode, objects);
             let name = format!("scene {k} θ = {theta} {mode:?}");
             let (graphics, compute) = (render(&sc), render_compute(&sc));
-            assert_eq!(compute.raster, Raster::Compute, "{name}");
+            assert_eq!(compute.raster, Some(Raster::Compute), "{name}");
             // Every object in view: a label of each object's surfaces (its base + 1 to its count).
             let bases = sc.label_bases().expect("labels");
             for (object, base) in sc.objects.iter().zip(bases) {
@@ -197,7 +197,7 @@ fn both_rasterizers_render_identical_images_of_several_objects() {
     let five = [("builtin:box", DMat4::IDENTITY); 5];
     let sc = scene(centred_sensor(64, 64, 0.06, [0.0, 0.0], 45.0), ShadowMode::Depth, &five);
     let out = render_compute(&sc);
-    assert_eq!(out.raster, Raster::Graphics);
+    assert_eq!(out.raster, Some(Raster::Graphics));
     assert_eq!(out.label, render(&sc).label);
 }
 
@@ -226,7 +226,7 @@ fn auto_takes_the_rasterizer_its_devices_crossover_picks() {
     ] {
         let sc = scene(sensor, ShadowMode::Depth, &objects);
         let auto = render_with(&AUTO, &sc);
-        assert_eq!(auto.raster, expected, "{objects:?}");
+        assert_eq!(auto.raster, Some(expected), "{objects:?}");
         assert!(auto.label == render(&sc).label, "{objects:?}: the same image as the graphics pipeline's");
     }
 }
@@ -237,7 +237,7 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
     let step = DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(0.44);
     let sensed_image =
         rangesynth::io::RangeImage::from(&render(&scene(s, ShadowMode::Depth, &[("builtin:step", step)])));
-    let sensed = SensedImage::new(&sensed_image, &s).unwrap();
+    let sensed = SensedImage::new(&sensed_image, &s.into()).unwrap();
     let hypotheses = |verifier: &Verifier| -> Vec<Hypothesis> {
         // The plane fills the image: 2 triangles over 25,600 pixels, below a CPU device's
         // crossover; the box, 12 triangles over about 44² pixels, is in a GPU's graphics band.
@@ -274,7 +274,7 @@ fn verification_counts_are_the_same_bits_with_either_rasterizer() {
         .chain([(ShadowMode::Depth, (false, effects))]);
     for (mode, (compare_shadow, effects)) in cases {
         let settings = VerifySettings {
-            sensor: s,
+            sensor: s.into(),
             shadow: ShadowSettings::of(mode),
             effects,
             tolerance: 0.05,
@@ -327,8 +327,8 @@ fn an_open_mesh_shows_its_inside_to_the_compute_rasterizer() {
         reflectivity: None,
     });
     let out = render_compute(&sc);
-    assert_eq!(out.raster, Raster::Compute);
-    let s = sc.sensor;
+    assert_eq!(out.raster, Some(Raster::Compute));
+    let s = sc.sensor.scanner().unwrap();
     let mut inside = 0;
     for row in 0..s.height {
         for col in 0..s.width {
@@ -375,7 +375,7 @@ fn spikes(count: u32, tip: f32) -> (Scene, RenderOutput) {
 }
 
 fn assert_renders_as(compute: &RenderOutput, graphics: &RenderOutput) {
-    assert_eq!(compute.raster, Raster::Compute);
+    assert_eq!(compute.raster, Some(Raster::Compute));
     assert!(compute.label_unshadowed == graphics.label_unshadowed, "labels");
     assert!(compute.label == graphics.label, "shadowed labels");
     let bits = |z: &[f32]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
@@ -405,7 +405,7 @@ fn a_model_reaching_beyond_the_compute_rasterizers_reach_stays_on_the_graphics_p
     let out = render_compute(&sc);
     assert!(out.label.iter().all(|&l| l == 1), "the plane everywhere");
     assert_eq!(out.label, render(&sc).label);
-    assert_eq!(out.raster, Raster::Graphics);
+    assert_eq!(out.raster, Some(Raster::Graphics));
 }
 
 /// More queued triangles than one indirect dispatch has workgroups (65,535): the large
@@ -463,7 +463,7 @@ fn a_solid_wound_inward_renders_as_the_graphics_pipeline_renders_it() {
         reflectivity: None,
     });
     let (compute, graphics) = (render_compute(&sc), render(&sc));
-    assert_eq!(compute.raster, Raster::Compute);
+    assert_eq!(compute.raster, Some(Raster::Compute));
     assert!(graphics.label_unshadowed.iter().filter(|&&l| l != 0).count() > 500, "in view");
     assert!(compute.label_unshadowed == graphics.label_unshadowed, "labels");
     assert!(compute.label == graphics.label, "shadowed labels");

@@ -332,7 +332,7 @@ fn step_pose() -> DMat4 {
     DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(25f64.to_radians())
 }
 
-fn step_scene(sensor: Sensor, pose: DMat4) -> Scene {
+fn step_scene(sensor: impl Into<Sensor>, pose: DMat4) -> Scene {
     with(&scene(sensor, ShadowMode::Depth, &[("builtin:step", pose)]), EFFECTS)
 }
 
@@ -341,9 +341,9 @@ fn hypothesis(id: &str, pose: DMat4) -> Hypothesis {
     Hypothesis { id: id.into(), model: VERIFIER.model("builtin:step", Path::new(".")).unwrap(), pose, bindings }
 }
 
-fn verify_settings(sensor: Sensor) -> VerifySettings {
+fn verify_settings(sensor: impl Into<Sensor>) -> VerifySettings {
     VerifySettings {
-        sensor,
+        sensor: sensor.into(),
         shadow: ShadowSettings::of(ShadowMode::Depth),
         effects: effects(EFFECTS),
         tolerance: TOLERANCE,
@@ -358,7 +358,7 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
     let sensed_out = render(&step_scene(sensor, step_pose()));
     assert!(sensed_out.pixels_lost_to(Reason::Dropout) > 0 && sensed_out.pixels_lost_to(Reason::Edge) > 0);
     let image = RangeImage::from(&sensed_out);
-    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let sensed = SensedImage::new(&image, &sensor.into()).unwrap();
     let wrong = step_pose() * DMat4::from_translation(DVec3::new(0.05, 0.0, 0.02));
     let hypotheses = [hypothesis("true", step_pose()), hypothesis("wrong", wrong)];
     let results = VERIFIER.verify(&sensed, &verify_settings(sensor), &hypotheses, &mut |_| {}).unwrap();
@@ -397,7 +397,7 @@ fn verification_with_the_sensed_images_effects_scores_the_true_pose_1_and_matche
 fn counts_with_effects_do_not_depend_on_the_batch_or_the_order() {
     let sensor = centred_sensor(96, 96, 0.045, [0.0, 0.0], 45.0);
     let image = RangeImage::from(&render(&step_scene(sensor, step_pose())));
-    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let sensed = SensedImage::new(&image, &sensor.into()).unwrap();
     let hypotheses: Vec<Hypothesis> = (0..7)
         .map(|k| {
             let pose = step_pose()
@@ -444,7 +444,7 @@ fn verification_reads_each_models_material_reflectivity_at_its_place_in_the_batc
     assert!(dark_lost > 500 && out.label.iter().all(|&l| l != 1), "the dark square is lost: {dark_lost}");
     assert!(out.label.iter().filter(|&&l| l == 2).count() > 500, "the bright square is kept");
     let image = RangeImage::from(&out);
-    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let sensed = SensedImage::new(&image, &sensor.into()).unwrap();
     let squares = Hypothesis {
         id: "squares".into(),
         model: VERIFIER.model("squares.obj", &dir).unwrap(),

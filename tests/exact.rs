@@ -1,4 +1,4 @@
-//! Shadow mode `exact` (src/exact.rs) and the knobs that refine the GPU modes (`[shadow]
+//! Shadow mode `exact` (src/exact/) and the knobs that refine the GPU modes (`[shadow]
 //! columns`, `neighbourhood`): exact mode against the tests' independent CPU reference
 //! (tests/common/reference.rs) and against geometric oracles; its images through the GPU's
 //! effect passes; and the knobs against exact shadowing.

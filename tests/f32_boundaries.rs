@@ -1,6 +1,6 @@
 //! f32 at every boundary (issue "Hostile input, round two", item 6): parameters each valid
 //! alone whose combination the GPU computes in f32 (src/render/plan/gpu_arithmetic.rs, the
-//! sensor's grid in src/sensor.rs, a model's coordinates in src/mesh/mod.rs). Each refusal
+//! sensor's grid in src/sensor/orthographic.rs, a model's coordinates in src/mesh/mod.rs). Each refusal
 //! below is of a scene that `render` used to accept, writing ±inf into valid pixels (which
 //! `verify` then refused to read) or an image with the wrong pixels; each scene just inside
 //! the bounds renders an image whose every valid z is finite, and `verify` accepts it and

@@ -44,8 +44,9 @@ fn range_image_round_trips_bit_identically_with_large_labels() {
         y: coordinate(2),
         z: coordinate(3),
         label: labels.clone(),
-        sensor: Some(sensor(w, h, 0.25, [-1.0, 2.0], 37.5)),
+        sensor: Some(sensor(w, h, 0.25, [-1.0, 2.0], 37.5).into()),
         reason: Some((0..n as u32).map(|i| if labels[i as usize] == 0 { 1 } else { 0 }).collect()),
+        witness: None,
         shadow: Some(ShadowSettings::of(ShadowMode::Depth)),
         effects: Some(toml::from_str("[noise]\nsigma = 0.25\nseed = 9\n[edges]\njump = 0.5\n").unwrap()),
     };
@@ -95,7 +96,7 @@ fn a_rendered_directory_reads_back_what_was_rendered() {
             None => assert!(back.x[i].is_nan() && back.y[i].is_nan() && back.z[i].is_nan(), "pixel {i} has no data"),
         }
     }
-    assert_eq!(back.sensor, Some(s));
+    assert_eq!(back.sensor, Some(s.into()));
     let (_, _, unshadowed) = read_label_image(&dir.join("label_unshadowed.exr"), &Ledger::default()).unwrap();
     assert_eq!(unshadowed, out.label_unshadowed);
     let map: serde_json::Value =

@@ -34,9 +34,9 @@ fn the_vulkan_1_2_path_matches_the_core_path() {
         let names = |out: &rangesynth::RenderOutput| out.timings.iter().map(|t| t.name).collect::<Vec<_>>();
         assert_eq!(names(&old), names(&core));
 
-        let sensed = SensedImage::new(&RangeImage::from(&core), &s).unwrap();
+        let sensed = SensedImage::new(&RangeImage::from(&core), &s.into()).unwrap();
         let settings = VerifySettings {
-            sensor: s,
+            sensor: s.into(),
             shadow: ShadowSettings::of(mode),
             effects: Default::default(),
             tolerance: 0.1,

@@ -2,13 +2,13 @@
 //! docs/design.md "Verification scores". CPU only: counts are given directly.
 
 use rangesynth::io::RangeImage;
-use rangesynth::sensor::{Sensor, SensorKind};
+use rangesynth::sensor::{Scanner, Sensor};
 use rangesynth::verify::{score, Counts, SensedImage};
 
 const PITCH: f64 = 0.5;
 
 fn sensor(width: u32, height: u32) -> Sensor {
-    Sensor { kind: SensorKind::Orthographic, width, height, pitch: [PITCH, PITCH], origin: [0.0, 0.0], theta_deg: 45.0 }
+    Scanner { width, height, pitch: [PITCH, PITCH], origin: [0.0, 0.0], theta_deg: 45.0 }.into()
 }
 
 /// A sensed image from rows of labels (0 = no data), flat at z = 1.
@@ -24,6 +24,7 @@ fn sensed(rows: &[&[u32]]) -> SensedImage {
         z,
         label,
         reason: None,
+        witness: None,
         sensor: None,
         shadow: None,
         effects: None,

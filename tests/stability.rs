@@ -93,7 +93,7 @@ fn convex_shadow_diff(name: &str, mesh: Mesh, normals: &[DVec3], pose: DMat4, si
     let at = pose.transform_point3(centre);
     let s = centred_sensor(size, size, 2.4 * radius / f64::from(size), [at.x, at.y], theta);
     let scene = Scene {
-        sensor: s,
+        sensor: s.into(),
         shadow: ShadowSettings::of(ShadowMode::Depth),
         effects: Default::default(),
         objects: vec![SceneObject { model_ref: name.into(), mesh: Arc::new(mesh), pose, reflectivity: None }],

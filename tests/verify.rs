@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use rangesynth::io::RangeImage;
 use rangesynth::limits::{MemoryBudget, DEFAULT_MEMORY_BUDGET};
 use rangesynth::render::Raster;
-use rangesynth::sensor::Sensor;
+use rangesynth::sensor::{Scanner, Sensor};
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::verify::{Hypothesis, Model, SensedImage, Verification, Verifier, VerifySettings};
 use std::path::Path;
@@ -24,13 +24,14 @@ fn step_pose() -> DMat4 {
     DMat4::from_translation(DVec3::new(0.3, -0.2, 0.0)) * DMat4::from_rotation_z(25f64.to_radians())
 }
 
-fn test_sensor(theta: f64) -> Sensor {
+fn test_sensor(theta: f64) -> Scanner {
     centred_sensor(128, 128, 0.035, [0.0, 0.0], theta)
 }
 
 /// The sensed image: the stepped block, rendered with exact-enough (depth-mode) shadows.
-fn sensed(sensor: Sensor) -> (RangeImage, SensedImage) {
-    let out = render(&scene(sensor, ShadowMode::Depth, &[("builtin:step", step_pose())]));
+fn sensed(sensor: impl Into<Sensor>) -> (RangeImage, SensedImage) {
+    let sensor = sensor.into();
+    let out = render(&scene(sensor.clone(), ShadowMode::Depth, &[("builtin:step", step_pose())]));
     let image = RangeImage::from(&out);
     let sensed = SensedImage::new(&image, &sensor).expect("valid sensed image");
     (image, sensed)
@@ -68,9 +69,9 @@ fn turning(model: &Arc<Model>, n: usize, step: f64, bindings: &[(u32, u32)]) -> 
         .collect()
 }
 
-fn settings(sensor: Sensor, shadow: ShadowMode) -> VerifySettings {
+fn settings(sensor: impl Into<Sensor>, shadow: ShadowMode) -> VerifySettings {
     VerifySettings {
-        sensor,
+        sensor: sensor.into(),
         shadow: ShadowSettings::of(shadow),
         effects: Effects::default(),
         tolerance: TOLERANCE,
@@ -205,7 +206,7 @@ fn a_hypothesis_scores_the_same_alone_or_in_any_batch() {
         assert_eq!(a.scores.s.to_bits(), b.scores.s.to_bits(), "{}", a.id);
     };
     for chunk_size in [1, 7, 1024] {
-        let batch = verify(&sensed, &VerifySettings { chunk_size, ..base }, &hypotheses);
+        let batch = verify(&sensed, &VerifySettings { chunk_size, ..base.clone() }, &hypotheses);
         common::paired(&alone, &batch).for_each(|(a, b)| same(a, b));
     }
     let reversed: Vec<Hypothesis> = hypotheses.iter().rev().cloned().collect();
@@ -237,7 +238,7 @@ fn exact_mode_scores_the_same_alone_or_in_chunks() {
     let base = settings(sensor, ShadowMode::Exact);
     // 20 hypotheses: more than one exact-mode chunk (EXACT_CHUNK).
     assert!(hypotheses.len() > rangesynth::verify::EXACT_CHUNK);
-    let batch = verify(&sensed, &VerifySettings { chunk_size: 1024, ..base }, &hypotheses);
+    let batch = verify(&sensed, &VerifySettings { chunk_size: 1024, ..base.clone() }, &hypotheses);
     for (h, b) in common::paired(&hypotheses, &batch) {
         let alone = verify(&sensed, &base, std::slice::from_ref(h)).remove(0);
         assert_eq!(alone.counts, b.counts, "{}", h.id);
@@ -366,12 +367,15 @@ fn bad_verification_input_is_refused() {
     );
     assert!(err.unwrap_err().to_string().contains("binding (1, 7) names no surface"));
     let other = centred_sensor(64, 128, 0.035, [0.0, 0.0], 45.0);
-    assert!(SensedImage::new(&image, &other).unwrap_err().to_string().contains("128×128 but the sensor is 64×128"));
+    assert!(SensedImage::new(&image, &other.into())
+        .unwrap_err()
+        .to_string()
+        .contains("128×128 but the sensor is 64×128"));
     let mut broken = image.clone();
     let i = broken.label.iter().position(|&l| l != 0).unwrap();
     broken.z[i] = f32::NAN;
-    assert!(SensedImage::new(&broken, &sensor).unwrap_err().to_string().contains("Z = NaN"));
-    let finer = Sensor { pitch: [0.03, 0.035], ..sensor };
+    assert!(SensedImage::new(&broken, &sensor.into()).unwrap_err().to_string().contains("Z = NaN"));
+    let finer = Scanner { pitch: [0.03, 0.035], ..sensor };
     let err = VERIFIER.verify(&sensed, &settings(finer, ShadowMode::Depth), &[correct()], &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("pitch"), "{err}");
     let nan_tolerance = VerifySettings { tolerance: f64::NAN, ..settings(sensor, ShadowMode::Depth) };
@@ -430,11 +434,12 @@ fn an_overlap_table_too_large_for_a_batch_is_refused() {
         z: vec![1.0; n],
         label: (1..=n as u32).collect(),
         reason: None,
-        sensor: Some(sensor),
+        witness: None,
+        sensor: Some(sensor.into()),
         shadow: None,
         effects: None,
     };
-    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let sensed = SensedImage::new(&image, &sensor.into()).unwrap();
     // Made here where it is missing: tools/device_kit.sh runs this binary where cargo did not.
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     std::fs::create_dir_all(&dir).unwrap();

@@ -63,7 +63,7 @@ fn main() -> anyhow::Result<()> {
     for model_name in ["builtin:box", "builtin:sphere:100"] {
         let model = verifier.model(model_name, Path::new("."))?;
         for shadow in [ShadowMode::Depth, ShadowMode::None] {
-            let settings = settings(scene.sensor, shadow);
+            let settings = settings(scene.sensor.clone(), shadow);
             for &n in batches {
                 let hypotheses = hypotheses(&model, n);
                 // Warm up (pipelines, shader compilation in software drivers).
@@ -106,7 +106,7 @@ fn memory_by_batch(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene,
         "memory by batch size: {model_name}, depth-mode shadows, 256², resident MiB before → peak while verifying"
     );
     println!("{:>6} {:>16} {:>16}", "batch", "graphics MiB", "compute MiB");
-    let settings = settings(scene.sensor, ShadowMode::Depth);
+    let settings = settings(scene.sensor.clone(), ShadowMode::Depth);
     let batches: &[usize] = if quick { &[16, 256] } else { &[16, 1024, 4096] };
     for &n in batches {
         let mut cells = Vec::new();
@@ -166,7 +166,7 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
     for &(model_name, side, extent) in workloads {
         for mode in [ShadowMode::Label, ShadowMode::Depth] {
             let sensor = rangesynth::sensor::Sensor::square(side, extent, 45.0);
-            let settings = settings(sensor, mode);
+            let settings = settings(sensor.clone(), mode);
             let mut triangles = 0;
             let mut inputs = Vec::new();
             for verifier in verifiers {
@@ -174,7 +174,7 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
                 triangles = model.mesh.triangles.len();
                 let (at, hypotheses) = centred_hypotheses(&model);
                 let scene = Scene {
-                    sensor,
+                    sensor: sensor.clone(),
                     shadow: settings.shadow,
                     effects: Effects::default(),
                     objects: vec![rangesynth::scene::SceneObject {
@@ -192,7 +192,8 @@ fn filling_costs(verifiers: &[&Verifier], quick: bool) -> anyhow::Result<()> {
                 .iter()
                 .zip(&inputs)
                 .map(|(verifier, (sensed, hypotheses))| {
-                    move || verifier.verify(sensed, &settings, hypotheses, &mut |_| {}).map(drop)
+                    let settings = &settings;
+                    move || verifier.verify(sensed, settings, hypotheses, &mut |_| {}).map(drop)
                 })
                 .collect();
             let seconds = fastest_in_turn(ROUNDS, &jobs)?;
@@ -292,7 +293,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
         ]
     };
     for model_name in models {
-        let settings = settings(scene.sensor, ShadowMode::Depth);
+        let settings = settings(scene.sensor.clone(), ShadowMode::Depth);
         let mut triangles = 0;
         let mut density = 0.0;
         let mut footprint = 0;
@@ -302,7 +303,7 @@ fn raster_costs(verifiers: &[&Verifier], sensed: &SensedImage, scene: &Scene, qu
             triangles = model.mesh.triangles.len();
             // Triangles per pixel of the footprint each hypothesis renders (what `auto` reads).
             let (centre, radius) = model.mesh.bounding_sphere();
-            let grid = scene.sensor.range_grid((0.0, 0.0));
+            let grid = scene.sensor.scanner().expect("the scanner").range_grid((0.0, 0.0));
             let area =
                 grid.footprint(hypotheses(&model, 1)[0].pose.transform_point3(centre), radius, 2).expect("in view");
             footprint = u64::from(area.width) * u64::from(area.height);
@@ -378,7 +379,7 @@ fn grouping_costs(sensed: &SensedImage, scene: &Scene, quick: bool) -> anyhow::R
         .map(|(members, slots, chunks)| format!(" {:>14}", format!("{members}×{slots}×{chunks} hyp/s")))
         .collect();
     println!("{:<26}{names} {:>40} {:>34}", "model (triangles)", "barriers a hyp.", "recording µs a hyp.");
-    let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor, ShadowMode::Label) };
+    let settings = VerifySettings { chunk_size: chunk, ..settings(scene.sensor.clone(), ShadowMode::Label) };
     for model_name in ["builtin:box", "builtin:sphere:100", "builtin:sphere:320"] {
         let mut batches = Vec::new();
         for (verifier, &configuration) in verifiers.iter().zip(&configurations) {
@@ -503,7 +504,7 @@ fn effect_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> any
     let mut baseline = None;
     for (name, text) in cases.iter().copied().chain([("all", all.as_str())]) {
         let effects: Effects = toml::from_str(text)?;
-        let settings = VerifySettings { effects, ..settings(scene.sensor, ShadowMode::Depth) };
+        let settings = VerifySettings { effects, ..settings(scene.sensor.clone(), ShadowMode::Depth) };
         verifier.verify(sensed, &settings, &hypotheses[..1], &mut |_| {})?;
         let mut best = f64::INFINITY;
         for _ in 0..5 {

@@ -82,7 +82,7 @@ vec2 depth_step(DrawData d, vec3 n) {
 //   twice that. (With TIE_RELATIVE alone, two leaning boxes' coincident tops go in part to the
 //   higher label on a GPU whose depths come from snapped corners.)
 // The slope counted is at most, in each axis, a face's at 89° from the view (TIE_STEEPEST, tan
-// 89°; θ has that limit too, src/sensor.rs): a sliver of a face seen almost edge-on, whose
+// 89°; θ has that limit too, src/sensor/scanner.rs): a sliver of a face seen almost edge-on, whose
 // slope has no bound, would otherwise tie with, and so win through, any surface in front of
 // it (a NaN slope, of a face seen exactly edge-on, counts as the cap). Coincident faces
 // steeper than that may go to the higher label where a GPU's depths come from snapped corners.

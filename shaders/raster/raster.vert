@@ -1,6 +1,6 @@
 #version 460
 // Both views are orthographic: pixel (c, r) has its centre at x = x0 + c·dx, y = y0 − r·dy
-// (src/sensor.rs), which lands on framebuffer pixel centres (c + ½, r + ½) through the
+// (src/sensor/orthographic.rs), which lands on framebuffer pixel centres (c + ½, r + ½) through the
 // viewport (src/render/raster/draw.rs).
 #include "draw.glsl"
 

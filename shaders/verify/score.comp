@@ -57,7 +57,7 @@ layout(constant_id = 8) const bool CORRECT_SQRT = true;
 layout(constant_id = 9) const int SQRT_ERROR_ULPS = 0;
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
-// one correctly rounded f32 addition, as the host adds it (src/sensor.rs, local_origin).
+// one correctly rounded f32 addition, as the host adds it (src/sensor/grid.rs, local_origin).
 float synthetic_z(ivec2 p) {
     if (USE_MEASURED_Z) {
         return measured_z[uint(p.y) * s.width + uint(p.x)];

@@ -1,6 +1,6 @@
 //! What accuracy costs in time (`rangesynth accuracy`): every setting of the sweep
 //! (settings.rs) on every scene (scenes.rs), measured against shadow mode `exact`, the
-//! product's own ground truth (src/exact.rs):
+//! product's own ground truth (src/exact/):
 //!
 //! - wrong pixels: where validity or label differs from the exact image;
 //! - the largest |Δz| over pixels valid in both with the same label (where labels differ the
@@ -186,7 +186,7 @@ fn correct_hypothesis(
 
 fn verify_settings(scene: &Scene) -> VerifySettings {
     VerifySettings {
-        sensor: scene.sensor,
+        sensor: scene.sensor.clone(),
         shadow: scene.shadow,
         effects: Default::default(),
         tolerance: DEFAULT_TOLERANCE,
@@ -212,7 +212,7 @@ fn ms_per_pose(
     sensed: &SensedImage,
     options: SweepOptions,
 ) -> Result<f64> {
-    let step = scene.sensor.pitch[0] / 8.0;
+    let step = scene.sensor.require_scanner("the accuracy sweep")?.pitch[0] / 8.0;
     let batch: Vec<Hypothesis> = (0..options.poses.max(1))
         .map(|i| correct_hypothesis(verifier, sweep_scene, scene, sensed, DVec3::new(step * i as f64, 0.0, 0.0)))
         .collect::<Result<_>>()?;

@@ -16,6 +16,7 @@ use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::render_set::{render_set, write_render_set, RENDER_FILES};
+use rangesynth::sensor::View;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::untrusted::escaped;
 use rangesynth::{RenderOutput, Renderer, Scene};
@@ -129,20 +130,30 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     println!("device: {}", renderer.context().device_name());
     match (scene.shadow.mode, renderer.raster()) {
         (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
+        _ if s.scanner().is_none() => println!("raster: none (this rig's rays are cast on the CPU)"),
         (_, Raster::Auto) => println!(
             "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
-            out.raster.as_str(),
+            out.raster.map_or("none", Raster::as_str),
             renderer.crossover()
         ),
-        _ => println!("raster: {}", out.raster.as_str()),
+        _ => println!("raster: {}", out.raster.map_or("none", Raster::as_str)),
     }
+    let view = match s.reference {
+        View::Orthographic(o) => format!("{}×{} at pitch {}×{}", o.width, o.height, o.pitch[0], o.pitch[1]),
+        View::Pinhole(p) => {
+            let k = p.intrinsics;
+            format!("{}×{} pinhole, fx {} fy {} cx {} cy {}", k.width, k.height, k.fx, k.fy, k.cx, k.cy)
+        }
+    };
+    let witnesses = match s.scanner() {
+        Some(scanner) => format!("θ = {}°", scanner.theta_deg),
+        None => {
+            let names: Vec<String> = s.witnesses.iter().map(|w| escaped(&w.name, 20)).collect();
+            format!("witnesses: {}", if names.is_empty() { "none".to_string() } else { names.join(", ") })
+        }
+    };
     println!(
-        "image: {}×{} at pitch {}×{}, θ = {}°, shadow mode {}{}",
-        s.width,
-        s.height,
-        s.pitch[0],
-        s.pitch[1],
-        s.theta_deg,
+        "image: {view}, {witnesses}, shadow mode {}{}",
         scene.shadow.mode.as_str(),
         if out.shadow_pass { "" } else { " (no shadow pass)" }
     );
@@ -151,32 +162,47 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         println!("effects: {}", scene.effects.passes().map(|e| e.pass_name()).collect::<Vec<_>>().join(", "));
     }
     let effects_column = if with_effects { format!(" {:>9}", "effects") } else { String::new() };
-    println!("{:>6}  {:<28} {:<12} {:>8} {:>9}{effects_column}", "label", "model", "surface", "valid", "shadowed");
-    // One pass over the pixels and one over the labels: [valid, shadowed, lost to an effect]
-    // per label.
+    // A column per witness of a rig other than the scanner (whose one is `shadowed`): the
+    // pixels of each label that witness did not see.
+    let witness_columns = if s.scanner().is_some() { 0 } else { s.witnesses.len() };
+    let witness_names: Vec<String> = s.witnesses[..witness_columns].iter().map(|w| escaped(&w.name, 24)).collect();
+    let widths: Vec<usize> = witness_names.iter().map(|name| name.chars().count().max(9)).collect();
+    let witness_header: String = witness_names.iter().zip(&widths).map(|(name, &w)| format!(" {name:>w$}")).collect();
+    println!(
+        "{:>6}  {:<28} {:<12} {:>8} {:>9}{effects_column}{witness_header}",
+        "label", "model", "surface", "valid", "shadowed"
+    );
+    // One pass over the pixels and one over the labels: [valid, shadowed, lost to an effect,
+    // lost by each witness] per label.
     let bases = scene.label_bases()?;
     let labels: usize = scene.objects.iter().map(|o| o.mesh.surface_names.len()).sum();
-    let mut populations = vec![[0u64; 3]; labels + 1];
-    for (&surface, &reason) in out.label_unshadowed.iter().zip(&out.reason) {
+    let stride = 3 + witness_columns;
+    let mut populations = vec![0u64; (labels + 1) * stride];
+    for ((&surface, &reason), &bits) in out.label_unshadowed.iter().zip(&out.reason).zip(&out.witness) {
         let which = match reason {
             Reason::Valid => 0,
             Reason::Shadow => 1,
             _ => 2,
         };
-        if let Some(p) = populations.get_mut(surface as usize) {
+        if let Some(p) = populations.get_mut(surface as usize * stride..(surface as usize + 1) * stride) {
             p[which] += 1;
+            for (k, count) in p[3..].iter_mut().enumerate() {
+                *count += u64::from(bits >> k & 1);
+            }
         }
     }
     // Only the labels with pixels, read in place (a scene can have millions of labels).
     for (object, (o, base)) in scene.objects.iter().zip(bases).enumerate() {
         for (s, name) in o.mesh.surface_names.iter().enumerate() {
             let label = base as usize + s + 1;
-            let [valid, shadowed, lost] = populations[label];
+            let p = &populations[label * stride..(label + 1) * stride];
+            let (valid, shadowed, lost) = (p[0], p[1], p[2]);
             if valid + shadowed + lost > 0 {
                 let model = format!("{object} {}", escaped(&o.model_ref, 26));
                 let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
+                let by_witness: String = p[3..].iter().zip(&widths).map(|(n, &w)| format!(" {n:>w$}")).collect();
                 let surface = escaped(name, 40);
-                println!("{label:>6}  {model:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}");
+                println!("{label:>6}  {model:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}{by_witness}");
             }
         }
     }
@@ -198,6 +224,8 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     for t in out.timings.iter().filter(|t| t.on_cpu) {
         println!("CPU time: {} {:.2} ms", t.name, t.ms.unwrap_or(0.0));
     }
-    println!("GPU time per pass: {}", passes.join(", "));
+    if !passes.is_empty() {
+        println!("GPU time per pass: {}", passes.join(", "));
+    }
     Ok(())
 }

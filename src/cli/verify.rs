@@ -77,7 +77,7 @@ pub struct VerifyArgs {
 pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: &VerifyArgs) -> Result<()> {
     let file = HypothesisFile::from_file(&args.hypotheses, &ledger)?;
     let image = read_range_image(&args.scene, &ledger)?;
-    let sensor = match (file.sensor, image.sensor) {
+    let sensor = match (file.sensor, image.sensor.clone()) {
         (Some(given), Some(header)) if given != header && !args.override_sensor => anyhow::bail!(
             "{} gives a sensor that differs from the one in {}'s header: {}; fix one of them, or pass \
              --override-sensor to use the hypothesis file's",
@@ -187,22 +187,34 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     check_validation(verifier.renderer())
 }
 
-/// Each field in which two sensors differ, with both values.
+/// Each key in which two sensors differ as files write them, with both values (the
+/// witnesses as one key, `witness`).
 fn sensor_differences(given: &Sensor, header: &Sensor) -> String {
-    let fields = [
-        ("kind", format!("{:?}", given.kind), format!("{:?}", header.kind)),
-        ("width", given.width.to_string(), header.width.to_string()),
-        ("height", given.height.to_string(), header.height.to_string()),
-        ("pitch", format!("{:?}", given.pitch), format!("{:?}", header.pitch)),
-        ("origin", format!("{:?}", given.origin), format!("{:?}", header.origin)),
-        ("theta_deg", given.theta_deg.to_string(), header.theta_deg.to_string()),
-    ];
-    fields
-        .iter()
-        .filter(|(_, a, b)| a != b)
-        .map(|(name, a, b)| format!("{name} = {a} (header: {b})"))
+    let keys = |sensor: &Sensor| match serde_json::to_value(sensor) {
+        Ok(serde_json::Value::Object(keys)) => keys,
+        _ => serde_json::Map::new(),
+    };
+    let (given, header) = (keys(given), keys(header));
+    let mut names: Vec<&String> = given.keys().chain(header.keys()).collect();
+    names.sort();
+    names.dedup();
+    let value = |keys: &serde_json::Map<String, serde_json::Value>, name: &str| {
+        keys.get(name).map_or_else(|| "(none)".to_string(), shown)
+    };
+    names
+        .into_iter()
+        .filter(|name| given.get(*name) != header.get(*name))
+        .map(|name| format!("{name} = {} (header: {})", value(&given, name), value(&header, name)))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// A value as a message shows it: arrays with a space after each comma, as files write them.
+fn shown(value: &serde_json::Value) -> String {
+    match value {
+        serde_json::Value::Array(items) => format!("[{}]", items.iter().map(shown).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
+    }
 }
 
 /// The effects as one line of JSON, for messages.
@@ -272,12 +284,15 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
     }
+    let witnesses = match s.scanner() {
+        Some(scanner) => format!("θ = {}°", scanner.theta_deg),
+        None => format!("a {} view and {} witnesses", s.reference.kind(), s.witnesses.len()),
+    };
     println!(
-        "{} hypotheses against a {}×{} image, θ = {}°, shadow mode {}, τ = {}: {:.2} s ({:.1} per second)",
+        "{} hypotheses against a {}×{} image, {witnesses}, shadow mode {}, τ = {}: {:.2} s ({:.1} per second)",
         results.len(),
-        s.width,
-        s.height,
-        s.theta_deg,
+        s.width(),
+        s.height(),
         settings.shadow.mode.as_str(),
         settings.tolerance,
         seconds,

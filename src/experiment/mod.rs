@@ -194,7 +194,7 @@ pub fn run_experiment(
         let turned_centre = turn.transform_point3(centre);
         let pose = DMat4::from_translation(target - DVec3::new(turned_centre.x, turned_centre.y, 0.0)) * turn;
         let scene = Scene {
-            sensor,
+            sensor: sensor.clone(),
             shadow: ShadowSettings::of(ShadowMode::Depth),
             effects: sensed_effects(index as u32 + 1),
             objects: [
@@ -212,7 +212,7 @@ pub fn run_experiment(
         // What a view reads back, it holds only for the view, on top of what the run holds.
         let view_ledger = Ledger::new(MemoryBudget::new(verifier.renderer().ledger().available()));
         let image = read_range_image(&range_path, &view_ledger)?;
-        let header_sensor = image.sensor.ok_or_else(|| Error::file(&range_path, "has no sensor header"))?;
+        let header_sensor = image.sensor.clone().ok_or_else(|| Error::file(&range_path, "has no sensor header"))?;
         let sensed = SensedImage::new(&image, &header_sensor)?;
         let surfaces = model.mesh.surface_count();
         let mut visible: Vec<(u32, u64)> = sensed

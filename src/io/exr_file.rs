@@ -37,6 +37,9 @@ pub fn write_range_image(path: &Path, image: &RangeImage) -> Result<()> {
     if let Some(reason) = &image.reason {
         channels.push(AnyChannel::new("reason", FlatSamples::U32(reason.clone())));
     }
+    if let Some(witness) = &image.witness {
+        channels.push(AnyChannel::new("witness", FlatSamples::U32(witness.clone())));
+    }
     let mut attributes = LayerAttributes::named("range");
     let mut put = |name: &str, value: Option<String>| -> Result<()> {
         if let Some(text) = value {
@@ -45,7 +48,7 @@ pub fn write_range_image(path: &Path, image: &RangeImage) -> Result<()> {
         }
         Ok(())
     };
-    put(SENSOR_ATTRIBUTE, image.sensor.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
+    put(SENSOR_ATTRIBUTE, image.sensor.as_ref().map(toml::to_string).transpose().map_err(|e| Error::file(path, e))?)?;
     put(SHADOW_ATTRIBUTE, image.shadow.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
     put(EFFECTS_ATTRIBUTE, image.effects.map(|s| toml::to_string(&s)).transpose().map_err(|e| Error::file(path, e))?)?;
     write_layer(path, image.width, image.height, attributes, channels)
@@ -148,6 +151,13 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<R
             _ => return Err(Error::file(path, "channel reason must hold 32-bit unsigned integers")),
         },
     };
+    let witness = match channels.iter().position(|c| c.name.eq("witness")) {
+        None => None,
+        Some(i) => match channels.swap_remove(i).sample_data {
+            FlatSamples::U32(bits) => Some(bits),
+            _ => return Err(Error::file(path, "channel witness must hold 32-bit unsigned integers")),
+        },
+    };
     let setting = |name: &str| match attributes.other.get(&Text::from(name)) {
         Some(AttributeValue::Text(text)) => Some(text.to_string()),
         _ => None,
@@ -168,14 +178,24 @@ pub fn parse_range_image(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<R
         e.validate().map_err(|e| Error::file(path, format!("its effects attribute: {e}")))?;
     }
     if let Some(s) = &sensor {
-        if (s.width, s.height) != (width, height) {
+        s.validate().map_err(|e| Error::file(path, format!("its sensor attribute: {e}")))?;
+        if (s.width(), s.height()) != (width, height) {
             return Err(Error::file(
                 path,
-                format!("its sensor says {}×{} but the image is {width}×{height}", s.width, s.height),
+                format!("its sensor says {}×{} but the image is {width}×{height}", s.width(), s.height()),
             ));
         }
     }
-    Ok(RangeImage { width, height, x, y, z, label, reason, sensor, shadow, effects })
+    if let (Some(bits), Some(s)) = (&witness, &sensor) {
+        let known = s.witnesses.len();
+        if let Some(bad) = bits.iter().find(|&&b| known < 32 && b >> known != 0) {
+            return Err(Error::file(
+                path,
+                format!("its witness channel holds {bad:#x}, a bit beyond its sensor's {known} witnesses"),
+            ));
+        }
+    }
+    Ok(RangeImage { width, height, x, y, z, label, reason, witness, sensor, shadow, effects })
 }
 
 /// Reads a label-only image (`label_unshadowed.exr`), charged to `ledger`: width, height,

@@ -24,7 +24,8 @@ pub fn reason_colour(reason: Reason) -> [u8; 3] {
     }
 }
 
-/// Range preview. `valid[i]` says whether pixel i has data; `pitch` is dx, dy.
+/// Range preview of heights `z` (larger is closer). `valid[i]` says whether pixel i has data;
+/// `pitch` is dx, dy (model units a pixel spans).
 pub fn write_range_preview(
     path: &Path,
     width: u32,

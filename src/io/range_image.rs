@@ -19,6 +19,9 @@ pub struct RangeImage {
     pub label: Vec<u32>,
     /// Row-major [`Reason`](crate::effects::Reason) codes, where the file has them (older files have none).
     pub reason: Option<Vec<u32>>,
+    /// Row-major witness bits (bit k: witness k did not see the point), where the file has
+    /// them (older files have none).
+    pub witness: Option<Vec<u32>>,
     pub sensor: Option<Sensor>,
     pub shadow: Option<ShadowSettings>,
     pub effects: Option<Effects>,
@@ -41,7 +44,8 @@ impl From<&RenderOutput> for RangeImage {
             z,
             label: out.label.clone(),
             reason: Some(out.reason.iter().map(|r| r.code()).collect()),
-            sensor: Some(out.sensor),
+            witness: Some(out.witness.clone()),
+            sensor: Some(out.sensor.clone()),
             shadow: Some(out.shadow),
             effects: Some(out.effects),
         }

@@ -41,6 +41,15 @@ pub(crate) fn slot_bytes(
     range * range_pixels + shadow * shadow_pixels + queue
 }
 
+/// Bytes a render on the CPU alone takes (a rig other than the paper's scanner, by exact ray
+/// casting: src/exact/rig.rs) at its peak, rendering or writing its files after: `casters`
+/// over `triangles`, and the image of `pixels` it casts and returns.
+pub(crate) fn exact_bytes(casters: u64, triangles: u64, pixels: u64) -> u64 {
+    let rendering =
+        casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE + (exact::BYTES_PER_PIXEL + RETURNED_BYTES) * pixels;
+    rendering.max(WRITING_BYTES * pixels)
+}
+
 /// Bytes a render of these views takes at its peak, rendering or writing its files after
 /// (the larger of the two): its slot ([`slot_bytes`]), what it returns on the host, and in
 /// shadow mode `exact` the CPU's casters and image (exact.rs) and their upload

@@ -37,12 +37,12 @@ pub(crate) use targets::ViewKind;
 
 use crate::effects::{Effects, Reason};
 use crate::error::{Error, Result};
-use crate::exact::render_scene_exact;
+use crate::exact::{render_rig_exact, render_scene_exact, ExactImage};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::{Ledger, MemoryBudget};
 use crate::pose::check_rigid;
 use crate::scene::Scene;
-use crate::sensor::{Sensor, ViewGrid};
+use crate::sensor::{Scanner, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use mesh_cache::MeshCache;
 use pipelines::Pipelines;
@@ -238,7 +238,7 @@ impl Renderer {
     /// whose views the compute rasterizer renders where `compute`.
     pub(crate) fn passes<'a>(
         &'a self,
-        sensor: &'a Sensor,
+        sensor: &'a Scanner,
         shadow: ShadowSettings,
         effects: &'a Effects,
         compute: bool,
@@ -250,10 +250,12 @@ impl Renderer {
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
     pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
-        let sensor = &scene.sensor;
-        sensor.validate()?;
+        scene.sensor.validate()?;
         scene.effects.validate()?;
         scene.shadow.validate()?;
+        let Some(scanner) = scene.sensor.scanner() else {
+            return self.render_rig(scene);
+        };
         let label_bases = scene.label_bases()?;
         for (i, object) in scene.objects.iter().enumerate() {
             check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
@@ -281,8 +283,7 @@ impl Renderer {
             })
             .collect();
         let name = |i: usize| format!("object {} ({})", i + 1, scene.objects[i].model_ref);
-        let views =
-            plan_views(&scene.sensor, &scene.shadow, &scene.effects, &spheres, &name, self.ctx.max_view_side())?;
+        let views = plan_views(&scanner, &scene.shadow, &scene.effects, &spheres, &name, self.ctx.max_view_side())?;
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
         let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
         let exact_triangles = (scene.shadow.mode == ShadowMode::Exact).then_some(triangles);
@@ -298,7 +299,7 @@ impl Renderer {
         }
         let pixels = |g: &ViewGrid| u64::from(g.width) * u64::from(g.height);
         let view_pixels = pixels(&views.range).max(views.shadow.as_ref().map_or(0, pixels));
-        let reach = spheres.iter().map(|&sphere| views.reach(&scene.sensor, sphere)).fold(0.0, f64::max);
+        let reach = spheres.iter().map(|&sphere| views.reach(&scanner, sphere)).fold(0.0, f64::max);
         let compute = exact_triangles.is_none()
             && self.computes(draws.len(), (triangles, largest), (footprint, reach), view_pixels);
         let queued = queued_triangles(draws.len(), largest);
@@ -306,11 +307,18 @@ impl Renderer {
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
-        self.render_views(scene, &views, &draws, compute)
+        self.render_views(scene, &scanner, &views, &draws, compute)
     }
 
     /// Renders the planned views, with the compute rasterizer where `compute`.
-    fn render_views(&self, scene: &Scene, views: &Views, draws: &[Draw], compute: bool) -> Result<RenderOutput> {
+    fn render_views(
+        &self,
+        scene: &Scene,
+        scanner: &Scanner,
+        views: &Views,
+        draws: &[Draw],
+        compute: bool,
+    ) -> Result<RenderOutput> {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
@@ -338,9 +346,9 @@ impl Renderer {
             host_view: host_view.as_ref(),
             compute,
         };
-        let shadow_table = draw_table(ctx, ViewKind::Shadow, &scene.sensor, [(views, draws)])?;
+        let shadow_table = draw_table(ctx, ViewKind::Shadow, scanner, [(views, draws)])?;
         let range_table =
-            compute.then(|| draw_table(ctx, ViewKind::Range, &scene.sensor, [(views, draws)])).transpose()?.flatten();
+            compute.then(|| draw_table(ctx, ViewKind::Range, scanner, [(views, draws)])).transpose()?.flatten();
         let effects = &scene.effects;
         let reflectivities = effects
             .reflectivity
@@ -372,7 +380,7 @@ impl Renderer {
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
-        let passes = self.passes(&scene.sensor, scene.shadow, effects, compute)?;
+        let passes = self.passes(scanner, scene.shadow, effects, compute)?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
@@ -419,17 +427,76 @@ impl Renderer {
             }
         }
         let timings = cpu_time.into_iter().chain(clock.times()?).collect();
+        // The scanner's one witness is its camera: bit 0 where it could not see the point.
+        let witness = reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect();
         Ok(RenderOutput {
-            sensor: scene.sensor,
+            sensor: scene.sensor.clone(),
             shadow: scene.shadow,
             effects: scene.effects,
             shadow_pass: views.shadow.is_some() || host_view.is_some(),
-            raster: if compute { Raster::Compute } else { Raster::Graphics },
+            raster: Some(if compute { Raster::Compute } else { Raster::Graphics }),
             label,
             label_unshadowed,
             z,
             reason,
+            witness,
             timings,
         })
+    }
+
+    /// Renders a rig other than the paper's scanner: on the CPU, by exact ray casting to the
+    /// reference view and every witness (src/exact/), in shadow mode `exact`, or `none`
+    /// (the reference view's rays alone). The GPU modes and the effects render the scanner
+    /// alone so far, and refuse it by name.
+    fn render_rig(&self, scene: &Scene) -> Result<RenderOutput> {
+        let sensor = &scene.sensor;
+        if !matches!(scene.shadow.mode, ShadowMode::Exact | ShadowMode::None) {
+            sensor.require_scanner(&format!("[shadow] mode = \"{}\"", scene.shadow.mode.as_str()))?;
+        }
+        if !scene.effects.is_empty() {
+            sensor.require_scanner("[effects]")?;
+        }
+        let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
+        let pixels = u64::from(sensor.width()) * u64::from(sensor.height());
+        self.ledger.check(
+            format_args!("rendering a {}×{} image", sensor.width(), sensor.height()),
+            memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels),
+        )?;
+        for (i, object) in scene.objects.iter().enumerate() {
+            check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
+        }
+        let started = Instant::now();
+        let image = render_rig_exact(scene)?;
+        let timings =
+            vec![PassTime { name: "exact rays", ms: Some(started.elapsed().as_secs_f64() * 1e3), on_cpu: true }];
+        Ok(exact_output(scene, image, timings))
+    }
+}
+
+/// A render by exact ray casting on the CPU alone (a rig other than the paper's scanner), without
+/// effects.
+fn exact_output(scene: &Scene, image: ExactImage, timings: Vec<PassTime>) -> RenderOutput {
+    let reason = image
+        .label
+        .iter()
+        .zip(&image.shadowed)
+        .map(|(&label, &shadowed)| match (label, shadowed) {
+            (0, _) => Reason::NoSurface,
+            (_, 0) => Reason::Shadow,
+            _ => Reason::Valid,
+        })
+        .collect();
+    RenderOutput {
+        sensor: scene.sensor.clone(),
+        shadow: scene.shadow,
+        effects: scene.effects,
+        shadow_pass: scene.shadow.mode == ShadowMode::Exact,
+        raster: None,
+        label: image.shadowed,
+        label_unshadowed: image.label,
+        z: image.z.iter().map(|&z| z as f32).collect(),
+        reason,
+        witness: image.witness,
+        timings,
     }
 }

@@ -29,7 +29,7 @@ use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
 use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
-use crate::sensor::{PixelRect, Sensor, ViewGrid};
+use crate::sensor::{PixelRect, Scanner, ViewGrid};
 use crate::shadow::{ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::DMat4;
@@ -269,7 +269,7 @@ pub(crate) struct Passes<'a> {
     pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
-    pub sensor: &'a Sensor,
+    pub sensor: &'a Scanner,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
 }

@@ -39,7 +39,8 @@ pub fn write_render_set(set: StagedSet, scene: &Scene, out: &RenderOutput) -> Re
     write_label_image(&unshadowed, w, h, &out.label_unshadowed)?;
     write_label_map(&labels, scene)?;
     let valid: Vec<bool> = out.label.iter().map(|&l| l != 0).collect();
-    write_range_preview(&range_png, w, h, &out.z, &valid, out.sensor.pitch)?;
+    let (heights, pitch) = out.relief();
+    write_range_preview(&range_png, w, h, &heights, &valid, pitch)?;
     write_label_preview(&label_png, w, h, &out.label, Some(&out.reason))?;
     write_label_preview(&unshadowed_png, w, h, &out.label_unshadowed, None)?;
     set.commit()

@@ -29,7 +29,7 @@ use crate::render::{
     draw_table, plan_views, slot_bytes, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock, PassTime,
     Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
 };
-use crate::sensor::{PixelRect, Sensor};
+use crate::sensor::{PixelRect, Scanner, Sensor};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
@@ -58,7 +58,7 @@ pub struct SensedBuffers<'a> {
 
 /// What is constant over a batch.
 pub struct BatchSettings<'a> {
-    pub sensor: &'a Sensor,
+    pub sensor: &'a Scanner,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
     pub tolerance: f32,
@@ -126,7 +126,7 @@ impl BatchItem<'_> {
 /// on a hypothesis whose views cannot be planned.
 pub(crate) fn slot_memory(
     renderer: &Renderer,
-    sensor: &Sensor,
+    sensor: &Scanner,
     shadow: &ShadowSettings,
     effects: &Effects,
     posed_spheres: impl Iterator<Item = (String, (glam::DVec3, f64))>,
@@ -184,7 +184,7 @@ pub(crate) fn count_batch(
             .zip(&views)
             .map(|(item, views)| {
                 let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
-                let image = render_exact(sensor, &[object])?;
+                let image = render_exact(&Sensor::from(*sensor), &[object])?;
                 HostView::new(ctx, &image, views.origin.z, "exact range view")
             })
             .collect::<Result<_>>()?,

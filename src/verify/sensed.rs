@@ -72,6 +72,7 @@ impl SensedImage {
     /// Checks the image against the sensor it is verified with and computes its statistics.
     pub fn new(image: &RangeImage, sensor: &Sensor) -> Result<Self> {
         sensor.validate()?;
+        let sensor = sensor.require_scanner("a sensed image")?;
         if (image.width, image.height) != (sensor.width, sensor.height) {
             return Err(Error::Scene(format!(
                 "the sensed image is {}×{} but the sensor is {}×{}",

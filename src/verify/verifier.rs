@@ -63,7 +63,7 @@ pub struct Hypothesis {
     pub bindings: Vec<(u32, u32)>,
 }
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct VerifySettings {
     pub sensor: Sensor,
     pub shadow: ShadowSettings,
@@ -228,8 +228,8 @@ impl Verifier {
     }
 
     fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
-        let sensor = &settings.sensor;
-        sensor.validate()?;
+        settings.sensor.validate()?;
+        let sensor = &settings.sensor.require_scanner("verification")?;
         settings.effects.validate()?;
         settings.shadow.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
@@ -348,7 +348,7 @@ impl Verifier {
         each: &mut dyn FnMut(Vec<Verification>) -> Result<()>,
     ) -> Result<()> {
         let plan = self.plan(sensed, settings, hypotheses)?;
-        let sensor = &settings.sensor;
+        let sensor = &settings.sensor.require_scanner("verification")?;
         let ctx = self.renderer.context();
         let (copies, counts_budget) = (plan.copies, plan.counts_budget);
         let layout = |h: &Hypothesis| plan.layout(h);

@@ -204,7 +204,7 @@ fn posed_triangles(scene: &Scene, frame: DMat4) -> Vec<Triangle> {
 }
 
 pub fn reference_render(scene: &Scene) -> Reference {
-    let s = &scene.sensor;
+    let s = &scene.sensor.scanner().expect("the reference renders the paper's scanner");
     let (width, height) = (s.width as usize, s.height as usize);
     let theta = s.theta_deg.to_radians();
     let range = VerticalCaster::new(posed_triangles(scene, DMat4::IDENTITY));
@@ -297,7 +297,7 @@ const Z_SLACK_RELATIVE: f64 = 1e-5;
 /// The label test of `scene`'s shadow settings on the reference's geometry ([`LabelTest`]).
 pub fn label_test(scene: &Scene, reference: &Reference) -> LabelTest {
     use rangesynth::shadow::Neighbourhood;
-    let s = &scene.sensor;
+    let s = &scene.sensor.scanner().expect("the reference renders the paper's scanner");
     let theta = s.theta_deg.to_radians();
     let (c, sn) = (theta.cos(), theta.sin());
     let camera = &reference.camera;

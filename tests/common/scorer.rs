@@ -22,7 +22,7 @@ impl<'a> Images<'a> {
         Images {
             width: sensed.width as usize,
             height: sensed.height as usize,
-            pitch: synthetic.sensor.pitch,
+            pitch: synthetic.sensor.scanner().expect("the paper's scanner").pitch,
             sensed_label: &sensed.label,
             sensed_z: &sensed.z,
             synthetic_label: &synthetic.label,

@@ -7,7 +7,7 @@ pub(crate) mod gpu_arithmetic;
 
 use crate::effects::Effects;
 use crate::error::{Error, Result};
-use crate::sensor::{depth_bounds, Sensor, ViewGrid};
+use crate::sensor::{depth_bounds, Scanner, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::DVec3;
 
@@ -28,7 +28,7 @@ impl Views {
 
     /// How far, in pixels, a bounding sphere (centre in the range frame) reaches from the first
     /// pixel of either view (`ViewGrid::reach`): what the compute rasterizer's choice reads.
-    pub fn reach(&self, sensor: &Sensor, (centre, radius): (DVec3, f64)) -> f64 {
+    pub fn reach(&self, sensor: &Scanner, (centre, radius): (DVec3, f64)) -> f64 {
         let shadow = self.shadow.map_or(0.0, |g| g.reach(sensor.to_shadow_frame().transform_point3(centre), radius));
         self.range.reach(centre, radius).max(shadow)
     }
@@ -47,7 +47,7 @@ impl Views {
 /// shadow view's depth range alone. Such objects are still drawn, and clipped. A box far away
 /// in depth beside the image therefore no longer makes the shadow view impossibly wide.
 pub(crate) fn plan_views(
-    sensor: &Sensor,
+    sensor: &Scanner,
     shadow: &ShadowSettings,
     effects: &Effects,
     spheres: &[(DVec3, f64)],

@@ -9,7 +9,7 @@ use crate::mesh::Solidity;
 use crate::render::gpu_mesh::GpuMesh;
 use crate::render::plan::Views;
 use crate::render::targets::{ViewKind, ViewTargets};
-use crate::sensor::{PixelRect, Sensor, ViewGrid};
+use crate::sensor::{PixelRect, Scanner, ViewGrid};
 use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
@@ -282,7 +282,7 @@ pub(crate) struct DrawTable {
 pub(crate) fn draw_table<'a>(
     ctx: &Arc<GpuContext>,
     kind: ViewKind,
-    sensor: &Sensor,
+    sensor: &Scanner,
     groups: impl IntoIterator<Item = (&'a Views, &'a [Draw<'a>])>,
 ) -> Result<Option<DrawTable>> {
     let view_from_range = match kind {

@@ -10,7 +10,7 @@ use crate::gpu::shaders::layout::spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::render::targets::ViewKind;
-use crate::sensor::{PixelRect, Sensor};
+use crate::sensor::{PixelRect, Scanner};
 use ash::vk;
 use std::sync::Arc;
 
@@ -64,7 +64,7 @@ pub(crate) struct EffectJob {
 impl EffectConstants {
     /// The constants of `effect`'s pass, which `effects` names; `z_in_buffer` says whether an
     /// earlier pass of the job changed z.
-    fn new(effect: Effect, effects: &Effects, sensor: &Sensor, job: &EffectJob, z_in_buffer: bool) -> Self {
+    fn new(effect: Effect, effects: &Effects, sensor: &Scanner, job: &EffectJob, z_in_buffer: bool) -> Self {
         let f = |v: f64| v as f32;
         let (seed_or_width, params) = match effect {
             Effect::Grazing => {
@@ -231,7 +231,7 @@ impl EffectBuffers {
         cmd: vk::CommandBuffer,
         pipelines: &EffectPipelines,
         effect: Effect,
-        (effects, sensor): (&Effects, &Sensor),
+        (effects, sensor): (&Effects, &Scanner),
         job: &EffectJob,
         z_in_buffer: bool,
     ) {

@@ -1,4 +1,4 @@
-//! The range view of shadow mode `exact`, cast on the CPU (src/exact.rs) and copied into the
+//! The range view of shadow mode `exact`, cast on the CPU (src/exact/) and copied into the
 //! range view's attachments and the shadowed labels, where the raster, shadow and mask passes
 //! would have written them: the effect passes and the sink then read it as they read a
 //! rasterized view, so exact mode's images go through the same effects and the same score pass.

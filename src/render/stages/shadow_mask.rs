@@ -18,7 +18,7 @@ use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, 
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::plan::Views;
 use crate::render::targets::{ViewKind, ViewTargets};
-use crate::sensor::{PixelRect, Sensor, ViewGrid};
+use crate::sensor::{PixelRect, Scanner, ViewGrid};
 use crate::shadow::{ShadowTest, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
 use glam::DVec3;
@@ -62,7 +62,7 @@ matches_shader_struct!(
 impl MaskConstants {
     /// Constants for masking the range pixels of `region`. Both grids are given from the
     /// views' local origin, as the views were rendered (draw.rs).
-    pub fn new(sensor: &Sensor, views: &Views, shadow: &ViewGrid, region: PixelRect) -> Self {
+    pub fn new(sensor: &Scanner, views: &Views, shadow: &ViewGrid, region: PixelRect) -> Self {
         let range = &views.range;
         let grid = |g: &ViewGrid, origin: DVec3| {
             [g.origin[0] - origin.x, g.origin[1] - origin.y, g.pitch[0], g.pitch[1]].map(|v| v as f32)

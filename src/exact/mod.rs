@@ -16,10 +16,13 @@
 //! lowest label, and they do not shadow each other (the GPU paths' allowance for depths
 //! worked out from snapped corners has no cause here). Rows are cast in parallel (rayon).
 
+mod ray_caster;
+mod rig;
+
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use crate::sensor::Sensor;
+use crate::sensor::{Scanner, Sensor};
 use glam::{DMat4, DVec2, DVec3};
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as BvhVector;
@@ -32,10 +35,18 @@ pub use crate::shader_contract::TIE_RELATIVE;
 /// one seen exactly edge-on, up to the rounding of its posed corners, is not measured.
 const FACING_TOLERANCE: f64 = 1e-9;
 
-/// Bytes exact mode takes per triangle (its two casters: corners, label, bounds and their
-/// hierarchy) and per pixel (the image it returns), for memory budgets.
-pub const BYTES_PER_TRIANGLE: u64 = 2 * (3 * 24 + 8 + 48 + 96);
-pub const BYTES_PER_PIXEL: u64 = 4 + 4 + 8 + 16;
+/// Bytes a caster takes per triangle (corners, label, bounds and their hierarchy).
+pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + 48 + 96;
+/// Bytes exact mode takes per triangle under the paper's scanner (its two casters) and per
+/// pixel (the image it returns), for memory budgets.
+pub const BYTES_PER_TRIANGLE: u64 = 2 * CASTER_BYTES_PER_TRIANGLE;
+pub const BYTES_PER_PIXEL: u64 = 4 + 4 + 8 + 16 + 4;
+
+/// Casters exact mode builds for a sensor: one for the reference view's rays, one for the
+/// segments to pinhole witnesses, one for each directional witness (at most).
+pub fn casters(sensor: &Sensor) -> u64 {
+    2 + sensor.witnesses.len() as u64
+}
 
 /// One object of the scene: a mesh, its pose (model → range frame) and the label of its
 /// surface 0 (its surface s is labelled `label_base + s`).
@@ -57,11 +68,14 @@ pub struct ExactImage {
     pub shadowed: Vec<u32>,
     /// z of the first hit (range frame); 0 where there is none.
     pub z: Vec<f64>,
-    /// (∂z/∂x, ∂z/∂y) of the hit triangle's plane, which effects such as grazing read; 0 where
-    /// there is no hit.
+    /// (∂z/∂x, ∂z/∂y) of the hit triangle's plane (the reference frame's), which effects such
+    /// as grazing read; 0 where there is no hit.
     pub gradient: Vec<[f64; 2]>,
+    /// Bit k set where witness k does not see the point; 0 where there is no hit.
+    pub witness: Vec<u32>,
 }
 
+#[derive(Clone)]
 struct Triangle {
     corners: [DVec3; 3],
     label: u32,
@@ -133,20 +147,38 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4) -> Vec<Triangle> {
     out
 }
 
-/// Casts both rays at every pixel centre of the scene's image, its objects labelled as the
-/// GPU modes label them (`Scene::label_bases`).
-pub fn render_scene_exact(scene: &Scene) -> Result<ExactImage> {
-    let objects: Vec<ExactObject> = scene
+fn scene_objects(scene: &Scene) -> Result<Vec<ExactObject<'_>>> {
+    Ok(scene
         .objects
         .iter()
         .zip(scene.label_bases()?)
         .map(|(object, label_base)| ExactObject { mesh: &object.mesh, pose: object.pose, label_base })
-        .collect();
-    render_exact(&scene.sensor, &objects)
+        .collect())
 }
 
-/// Casts both rays at every pixel centre of the sensor's image.
+/// Casts the rays of shadow mode `exact` at every pixel centre of the scene's image, its
+/// objects labelled as the GPU modes label them (`Scene::label_bases`).
+pub fn render_scene_exact(scene: &Scene) -> Result<ExactImage> {
+    render_exact(&scene.sensor, &scene_objects(scene)?)
+}
+
+/// The scene's image under a rig other than the paper's scanner (src/exact/rig.rs): in shadow
+/// mode `exact`, tested against every witness; in mode `none`, the reference view's rays alone.
+pub fn render_rig_exact(scene: &Scene) -> Result<ExactImage> {
+    let test_witnesses = scene.shadow.mode == crate::shadow::ShadowMode::Exact;
+    rig::render_rig(&scene.sensor, &scene_objects(scene)?, test_witnesses)
+}
+
+/// Casts the rays of shadow mode `exact` at every pixel centre of the sensor's image.
 pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactImage> {
+    match sensor.scanner() {
+        Some(scanner) => render_scanner(&scanner, objects),
+        None => rig::render_rig(sensor, objects, true),
+    }
+}
+
+/// The paper's scanner: a ray down −z at each pixel centre, then one toward the camera.
+fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImage> {
     sensor.validate()?;
     let range = VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY));
     let to_camera = sensor.to_shadow_frame();
@@ -158,11 +190,10 @@ pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactIma
     let tie = TIE_RELATIVE * scale;
     let d_cam = sensor.camera_direction();
     let (width, height) = (sensor.width, sensor.height);
-    // One pixel: (label, shadowed label, z, gradient).
-    let cast = |col: u32, row: u32| -> (u32, u32, f64, [f64; 2]) {
+    let cast = |col: u32, row: u32| -> ExactPixel {
         let (x, y) = sensor.pixel_centre(col, row);
         let Some((z, triangle)) = range.front(DVec2::new(x, y), tie) else {
-            return (0, 0, 0.0, [0.0; 2]);
+            return ExactPixel::default();
         };
         let [a, b, c] = triangle.corners;
         let normal = (b - a).cross(c - a).normalize();
@@ -171,20 +202,37 @@ pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactIma
         let p = to_camera.transform_point3(DVec3::new(x, y, z));
         let occluded =
             lit_side.dot(d_cam) <= FACING_TOLERANCE || camera.hits(p.truncate()).any(|(above, _, _)| above > p.z + tie);
-        let label = triangle.label;
-        (label, if occluded { 0 } else { label }, z, gradient)
+        // The camera is witness 0.
+        ExactPixel { label: triangle.label, z, gradient, lost_by: u32::from(occluded) }
     };
-    let pixels: Vec<(u32, u32, f64, [f64; 2])> = (0..height)
+    Ok(cast_image(width, height, cast))
+}
+
+/// What exact ray casting finds at one pixel centre.
+#[derive(Clone, Copy, Default)]
+struct ExactPixel {
+    /// The first surface's label, 0 for none.
+    label: u32,
+    z: f64,
+    gradient: [f64; 2],
+    /// Bit k: witness k does not see the point.
+    lost_by: u32,
+}
+
+/// Casts every pixel of a `width`×`height` image, rows in parallel.
+fn cast_image(width: u32, height: u32, cast: impl Fn(u32, u32) -> ExactPixel + Sync) -> ExactImage {
+    let pixels: Vec<ExactPixel> = (0..height)
         .into_par_iter()
         .flat_map_iter(|row| (0..width).map(move |col| (col, row)))
         .map(|(col, row)| cast(col, row))
         .collect();
-    Ok(ExactImage {
+    ExactImage {
         width,
         height,
-        label: pixels.iter().map(|p| p.0).collect(),
-        shadowed: pixels.iter().map(|p| p.1).collect(),
-        z: pixels.iter().map(|p| p.2).collect(),
-        gradient: pixels.iter().map(|p| p.3).collect(),
-    })
+        label: pixels.iter().map(|p| p.label).collect(),
+        shadowed: pixels.iter().map(|p| if p.lost_by == 0 { p.label } else { 0 }).collect(),
+        z: pixels.iter().map(|p| p.z).collect(),
+        gradient: pixels.iter().map(|p| p.gradient).collect(),
+        witness: pixels.iter().map(|p| p.lost_by).collect(),
+    }
 }

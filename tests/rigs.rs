@@ -1,0 +1,322 @@
+//! Rigs: pinhole reference views and witness sets (docs/sensors-and-rigs.md), against
+//! geometry worked out by hand and the tests' own brute-force reference
+//! (tests/common/rig_reference.rs).
+
+mod common;
+
+use common::rig_reference::rig_reference;
+use common::{render, scene};
+use glam::{DMat4, DVec3};
+use rangesynth::effects::Reason;
+use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
+use rangesynth::shadow::ShadowMode;
+use rangesynth::Scene;
+
+/// A 640×480 camera, fx = fy = 500, whose pixel (320, 240) looks along its axis: on a plane
+/// at depth Z, column c lies at X = Z·(c − 320)/500.
+fn camera() -> Intrinsics {
+    Intrinsics { width: 640, height: 480, fx: 500.0, fy: 500.0, cx: 320.0, cy: 240.0 }
+}
+
+fn reference() -> View {
+    View::Pinhole(Pinhole { intrinsics: camera(), near: 0.0, far: f64::INFINITY })
+}
+
+/// A pinhole projector at `centre` (reference frame), looking along the camera's axis.
+fn projector(name: &str, centre: DVec3, intrinsics: Intrinsics) -> Witness {
+    Witness {
+        name: name.into(),
+        geometry: WitnessGeometry::Pinhole { pose: DMat4::from_translation(centre), intrinsics },
+    }
+}
+
+/// Turns a model's +z (the built-in models' up) toward the camera, which looks down +z.
+fn facing_camera(at: DVec3) -> DMat4 {
+    DMat4::from_translation(at) * DMat4::from_rotation_x(std::f64::consts::PI)
+}
+
+/// A plane at depth 5 and the unit box standing on it, its near face at depth 4 and its
+/// x from 0.2 to 1.2 (camera frame).
+fn box_on_plane(witnesses: Vec<Witness>) -> Scene {
+    let sensor = Sensor { reference: reference(), witnesses };
+    scene(
+        sensor,
+        ShadowMode::Exact,
+        &[
+            ("builtin:plane:20", facing_camera(DVec3::new(0.0, 0.0, 5.0))),
+            ("builtin:box", facing_camera(DVec3::new(0.7, 0.0, 5.0))),
+        ],
+    )
+}
+
+const PROJECTOR_BASELINE: f64 = 0.75;
+
+/// The projector's image: 800 columns, wide enough that every point the camera sees on the
+/// plane (X from −3.2 to 3.2 at depth 5) lies on it (u = 500·(X − 0.75)/5 + 400, from 5 to
+/// 644).
+fn projector_image() -> Intrinsics {
+    Intrinsics { width: 800, cx: 400.0, ..camera() }
+}
+
+/// The projector's shadow of the box on the plane along row 240 (Y = 0). A plane point
+/// (X, 0, D) is hidden from the projector at (b, 0, 0) when the segment to it passes through
+/// the box, whose near face is at depth D − h and spans x ≥ x0: at that depth the segment's x
+/// is X + (b − X)·h/D, which reaches x0 for X ≥ (x0·D − b·h)/(D − h) = (1 − 0.75)/4 = 0.0625:
+/// columns 326.25 to 340 (X = 0.2, where the box stands). Columns 340 to 345 see the box's
+/// left face (x = 0.2 is crossed at depths 5 to 4), which turns away from the projector
+/// (b > x0); from column 345 the camera sees the near face, lit up to column 470 (x = 1.2 at
+/// depth 4), and beyond it the plane again, lit (the projector's shadow on that side lies
+/// under the box's far edge, which the camera does not see).
+#[test]
+fn a_box_on_a_plane_casts_the_projectors_geometric_shadow() {
+    let rig = box_on_plane(vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
+    let out = render(&rig);
+    let plane = 1; // the plane's one surface; the box's are 2 to 7
+    let row = 240;
+    let mut checked = 0;
+    for col in 0..640u32 {
+        let i = (row * 640 + col) as usize;
+        let x = f64::from(col as i32 - 320) / 100.0;
+        let expected = match col {
+            0..=325 | 472..=639 => Some((plane, Reason::Valid, 5.0)),
+            327..=339 => Some((plane, Reason::Shadow, 5.0)),
+            341..=344 => Some((0, Reason::Shadow, f64::NAN)),
+            346..=469 => Some((0, Reason::Valid, 4.0)),
+            _ => None, // within a pixel of an edge
+        };
+        let Some((label, reason, depth)) = expected else { continue };
+        assert_eq!(out.reason[i], reason, "column {col} (X = {x})");
+        assert_eq!(out.witness[i], u32::from(reason == Reason::Shadow), "column {col}");
+        if label == plane {
+            assert_eq!(out.label_unshadowed[i], plane, "column {col}");
+        } else {
+            assert_ne!(out.label_unshadowed[i], plane, "column {col}: the box");
+        }
+        if !depth.is_nan() {
+            assert!((f64::from(out.z[i]) - depth).abs() < 1e-6, "column {col}: Z = {}", out.z[i]);
+            let [px, py, _] = out.point(i).unwrap_or([f32::NAN; 3]);
+            if reason == Reason::Valid {
+                assert!((f64::from(px) - depth * x / 5.0).abs() < 1e-6 && py.abs() < 1e-6, "column {col}: X = {px}");
+            }
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 640 - 5);
+}
+
+/// Witness 0 a light straight along the camera's axis, which sees the whole plane beside
+/// the box; witness 1 the projector. The projector's shadow band carries bit 1 alone.
+#[test]
+fn a_pixel_hidden_from_one_witness_carries_its_bit_alone() {
+    let light =
+        Witness { name: "light".into(), geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::NEG_Z)) };
+    let rig =
+        box_on_plane(vec![light, projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
+    let out = render(&rig);
+    let row = 240usize;
+    for col in 327..=339 {
+        assert_eq!(out.witness[row * 640 + col], 0b10, "column {col}");
+    }
+    for col in (0..=325).chain(346..=469) {
+        assert_eq!(out.witness[row * 640 + col], 0, "column {col}");
+    }
+    // The box's left face is edge-on to the light along the axis, and turned from the
+    // projector: lost by both.
+    for col in 341..=344 {
+        assert_eq!(out.witness[row * 640 + col], 0b11, "column {col}");
+    }
+    assert_eq!(out.pixels_lost_by_witness()[1], out.witness.iter().filter(|&&b| b & 2 != 0).count());
+}
+
+/// A witness at the camera's own centre with a 64×48 image (cx = 31.25, cy = 23.25): a plane
+/// point of pixel (c, r) projects to (c − 320 + 31.25, r − 240 + 23.25), on its image for
+/// columns 289 to 352 and rows 217 to 264 exactly; nothing else is lost by it.
+#[test]
+fn a_point_outside_a_witnesss_field_of_view_is_lost_by_that_witness() {
+    let narrow = Intrinsics { width: 64, height: 48, fx: 500.0, fy: 500.0, cx: 31.25, cy: 23.25 };
+    let sensor = Sensor { reference: reference(), witnesses: vec![projector("narrow", DVec3::ZERO, narrow)] };
+    let out =
+        render(&scene(sensor, ShadowMode::Exact, &[("builtin:plane:20", facing_camera(DVec3::new(0.0, 0.0, 5.0)))]));
+    for row in 0..480 {
+        for col in 0..640 {
+            let seen = (289..=352).contains(&col) && (217..=264).contains(&row);
+            let i = (row * 640 + col) as usize;
+            assert_eq!(out.witness[i], u32::from(!seen), "pixel ({col}, {row})");
+            assert_eq!(out.label[i] != 0, seen, "pixel ({col}, {row})");
+        }
+    }
+}
+
+/// A sphere and a cluttered table under a camera, a projector 7.5 cm to its right and an IR
+/// camera 2.5 cm to its left (a Kinect-like rig): labels, depths and witness bits in modes
+/// `exact` and `none` against the brute-force reference, with no interior pixel wrong (a
+/// pixel whose neighbours in the reference all agree with it).
+#[test]
+fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
+    let k = Intrinsics { width: 160, height: 120, fx: 150.0, fy: 150.0, cx: 79.5, cy: 59.5 };
+    let witnesses = vec![
+        projector("projector", DVec3::new(0.075, 0.0, 0.0), Intrinsics { width: 200, height: 160, ..k }),
+        projector("ir", DVec3::new(-0.025, 0.002, 0.0), k),
+    ];
+    let sensor =
+        Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.1, far: f64::INFINITY }), witnesses };
+    let tilt = |at: DVec3, angle: f64| facing_camera(at) * DMat4::from_rotation_z(angle);
+    // (model, pose, scale into the scene's units).
+    let objects = [
+        ("builtin:plane:4", facing_camera(DVec3::new(0.0, 0.0, 1.5)), 1.0),
+        ("builtin:sphere:24", facing_camera(DVec3::new(-0.25, 0.05, 1.3)), 0.15),
+        ("builtin:box", tilt(DVec3::new(0.2, -0.1, 1.5), 0.4), 0.25),
+        ("builtin:step", tilt(DVec3::new(0.05, 0.3, 1.5), -0.7), 0.25),
+        ("builtin:cylinder:16", tilt(DVec3::new(0.45, 0.25, 1.5), 0.0), 0.2),
+    ];
+    let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
+    for mode in [ShadowMode::Exact, ShadowMode::None] {
+        let mut rig = scene(sensor.clone(), mode, &posed);
+        for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
+            object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
+        }
+        let out = render(&rig);
+        let truth = rig_reference(&rig);
+        let n = truth.label.len();
+        let (w, h) = (truth.width as i64, truth.height as i64);
+        let interior = |i: usize| {
+            let (c, r) = (i as i64 % w, i as i64 / w);
+            [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().all(|(dc, dr)| {
+                let (c, r) = (c + dc, r + dr);
+                let j = (r * w + c) as usize;
+                c < 0
+                    || r < 0
+                    || c >= w
+                    || r >= h
+                    || (truth.label[j] == truth.label[i] && truth.witness[j] == truth.witness[i])
+            })
+        };
+        let tested = mode == ShadowMode::Exact;
+        let (mut wrong, mut wrong_interior, mut lost) = (0, 0, 0);
+        for i in 0..n {
+            let expected_bits = if tested { truth.witness[i] } else { 0 };
+            let right = out.label_unshadowed[i] == truth.label[i]
+                && out.witness[i] == expected_bits
+                && (truth.label[i] == 0 || (f64::from(out.z[i]) - truth.depth[i]).abs() <= 1e-6 * truth.depth[i]);
+            if !right {
+                wrong += 1;
+                if interior(i) {
+                    wrong_interior += 1;
+                    eprintln!(
+                        "pixel {i}: {} / {} bits {} / {}",
+                        out.label_unshadowed[i], truth.label[i], out.witness[i], expected_bits
+                    );
+                }
+            }
+            lost += usize::from(expected_bits != 0);
+        }
+        eprintln!("{mode:?}: {wrong} of {n} pixels differ from the reference, {wrong_interior} interior; {lost} lost");
+        assert_eq!(wrong_interior, 0, "{mode:?}: {wrong} pixels differ, {wrong_interior} interior");
+        if tested {
+            assert!(lost > 200, "the rig loses pixels to its witnesses: {lost}");
+        }
+    }
+}
+
+/// Every bad rig is refused by a message that names the key.
+#[test]
+fn bad_rigs_are_refused_with_the_key_named() {
+    let pinhole = "[sensor]\nkind = \"pinhole\"\nwidth = 64\nheight = 48\nfx = 50\nfy = 50\ncx = 31.5\ncy = 23.5\n";
+    let witness = |body: &str| format!("{pinhole}[[sensor.witness]]\nname = \"projector\"\n{body}");
+    let camera = "width = 64\nheight = 48\nfx = 50\nfy = 50\ncx = 31.5\ncy = 23.5\n";
+    let pose = |rows: &str| format!("kind = \"pinhole\"\npose = {rows}\n{camera}");
+    let object = "[[object]]\nmodel = \"builtin:box\"\n";
+    let cases = [
+        (pinhole.replace("fx = 50", "fx = 0"), "[sensor]: fx = 0"),
+        (pinhole.replace("fy = 50", "fy = -2"), "[sensor]: fy = -2"),
+        (pinhole.replace("cx = 31.5", "cx = nan"), "[sensor]: cx = NaN"),
+        (format!("{pinhole}far = 0.5\nnear = 1\n"), "far = 0.5"),
+        (
+            witness(&pose("[[1, 0.1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]")),
+            "[[sensor.witness]] 1 (\"projector\"): pose",
+        ),
+        (witness(&pose("[[1, 0, 0, inf], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]")), "non-finite"),
+        (witness(&pose("[[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]")), "cannot contain any point"),
+        (
+            witness(&pose("[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]").replace("fx = 50", "fx = 0")),
+            "[[sensor.witness]] 1 (\"projector\"): fx = 0",
+        ),
+        (
+            witness("kind = \"directional\"\ndirection = [0, 0, 2]\n"),
+            "direction = [0, 0, 2] must be a finite unit vector",
+        ),
+        (witness("kind = \"directional\"\n"), "kind = \"directional\" needs direction"),
+        (
+            format!(
+                "{pinhole}{}",
+                (0..33)
+                    .map(|i| format!(
+                        "[[sensor.witness]]\nname = \"l{i}\"\nkind = \"directional\"\ndirection = [0, 0, -1]\n"
+                    ))
+                    .collect::<String>()
+            ),
+            "33 witnesses",
+        ),
+    ];
+    for (text, expected) in cases {
+        let e = Scene::from_toml(&format!("{text}{object}"), std::path::Path::new("."), &Default::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains(expected), "expected {expected:?}:\n{text}\n→ {e}");
+    }
+}
+
+/// The GPU shadow modes and the effects render the paper's scanner alone so far, and say so.
+#[test]
+fn what_renders_the_scanner_alone_refuses_other_rigs_by_name() {
+    let mut rig = box_on_plane(vec![]);
+    rig.shadow.mode = ShadowMode::Label;
+    let e = common::renderer().render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("[shadow] mode = \"label\"") && e.contains("pinhole reference view"), "{e}");
+}
+
+/// Every example rig in rigs/ renders from the command line, and its range image records the
+/// whole rig in its header and one bit per witness in its `witness` channel, set exactly where
+/// `reason` says shadow.
+#[test]
+fn every_example_rig_renders_and_records_its_witnesses() {
+    let rigs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
+    let mut names: Vec<_> = std::fs::read_dir(&rigs).unwrap().map(|e| e.unwrap().path()).collect();
+    names.sort();
+    assert_eq!(names.len(), 5, "{names:?}");
+    for rig in names {
+        let name = rig.file_stem().unwrap().to_string_lossy().into_owned();
+        let out_dir = common::cli::fresh_dir("rigs", &name).join("out");
+        let out =
+            common::cli::rangesynth_command().arg("render").arg(&rig).arg("--out").arg(&out_dir).output().unwrap();
+        assert!(out.status.success(), "{name}: {}", common::cli::text(&out.stderr));
+        let image = rangesynth::io::read_range_image(&out_dir.join("range.exr"), &Default::default()).unwrap();
+        let scene = Scene::from_file(&rig, &Default::default()).unwrap();
+        assert_eq!(image.sensor.as_ref(), Some(&scene.sensor), "{name}");
+        let (witness, reason) = (image.witness.unwrap(), image.reason.unwrap());
+        let shadow = Reason::Shadow.code();
+        assert!(witness.iter().zip(&reason).all(|(&bits, &r)| (bits != 0) == (r == shadow)), "{name}");
+        assert!(witness.iter().any(|&bits| bits != 0), "{name}: some pixel is lost to a witness");
+        let all = (1u64 << scene.sensor.witnesses.len()) - 1;
+        assert!(witness.iter().all(|&bits| u64::from(bits) & !all == 0), "{name}: bits of its witnesses only");
+    }
+}
+
+/// A pinhole range image holds X, Y, Z of the point on each valid pixel's ray: on the plane
+/// at depth 5 beside the box, pixel (c, 240) holds (5·(c − 320)/500, 0, 5).
+#[test]
+fn a_pinhole_range_image_holds_the_point_on_each_pixels_ray() {
+    let rig = box_on_plane(vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
+    let out = render(&rig);
+    let image = rangesynth::io::RangeImage::from(&out);
+    for col in [0u32, 100, 300, 500, 639] {
+        let i = (240 * 640 + col) as usize;
+        let x = 5.0 * (f64::from(col) - 320.0) / 500.0;
+        let close = |a: f32, b: f64| (f64::from(a) - b).abs() < 1e-6;
+        assert!(close(image.x[i], x) && close(image.y[i], 0.0) && close(image.z[i], 5.0), "column {col}");
+    }
+    // Row 0, column 0: Y = 5·(0 − 240)/500 = −2.4.
+    assert!((f64::from(image.y[0]) + 2.4).abs() < 1e-6, "{}", image.y[0]);
+    assert!(image.x[240 * 640 + 330].is_nan(), "a shadowed pixel has no point");
+}
