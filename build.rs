@@ -59,6 +59,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("stages/effect_dropout.comp", "effect_dropout.comp.spv", &[]),
     ("stages/effect_noise.comp", "effect_noise.comp.spv", &[]),
     ("stages/effect_quantize.comp", "effect_quantize.comp.spv", &[]),
+    ("stages/effect_disparity.comp", "effect_disparity.comp.spv", &[]),
 ];
 
 fn main() {

@@ -10,6 +10,7 @@
 //! (shaders/stages/random.glsl), so an image is bit-identical across runs, batch sizes and orders.
 
 use crate::error::{Error, Result};
+use crate::sensor::{Sensor, View};
 use serde::{Deserialize, Serialize};
 
 /// Why a pixel of `range.exr` holds no point (its `reason` channel); 0 is a valid point.
@@ -78,11 +79,13 @@ pub enum Effect {
     Dropout,
     Noise,
     Quantize,
+    Disparity,
 }
 
 /// The order the effect passes run in: the losses, then noise, then quantization of the
-/// noisy z (a real sensor digitises what it measured).
-pub const EFFECT_ORDER: [Effect; 7] = [
+/// noisy z (a real sensor digitises what it measured), then disparity (a stereo or
+/// structured-light sensor's measurement of the depth the others left, and its search range).
+pub const EFFECT_ORDER: [Effect; 8] = [
     Effect::Grazing,
     Effect::Range,
     Effect::Reflectivity,
@@ -90,6 +93,7 @@ pub const EFFECT_ORDER: [Effect; 7] = [
     Effect::Dropout,
     Effect::Noise,
     Effect::Quantize,
+    Effect::Disparity,
 ];
 
 impl Effect {
@@ -103,16 +107,17 @@ impl Effect {
             Effect::Dropout => "dropout",
             Effect::Noise => "noise",
             Effect::Quantize => "quantize",
+            Effect::Disparity => "disparity",
         }
     }
 
     /// Whether this effect changes z rather than losing points: the one list of such effects.
     /// Where one is named, z goes through a buffer of measured values from its pass on.
     pub fn changes_z(self) -> bool {
-        matches!(self, Effect::Noise | Effect::Quantize)
+        matches!(self, Effect::Noise | Effect::Quantize | Effect::Disparity)
     }
 
-    /// The reason a pixel this effect loses records; `None` for those that change z.
+    /// The reason a pixel this effect loses records; `None` for those that only change z.
     pub fn reason(self) -> Option<Reason> {
         match self {
             Effect::Grazing => Some(Reason::Grazing),
@@ -120,6 +125,8 @@ impl Effect {
             Effect::Reflectivity => Some(Reason::Dark),
             Effect::Edges => Some(Reason::Edge),
             Effect::Dropout => Some(Reason::Dropout),
+            // Outside its search range.
+            Effect::Disparity => Some(Reason::OutOfRange),
             Effect::Noise | Effect::Quantize => None,
         }
     }
@@ -143,6 +150,8 @@ pub struct Effects {
     pub noise: Option<Noise>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quantize: Option<Quantize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disparity: Option<Disparity>,
 }
 
 /// `[effects.grazing]`: a point is lost when the angle between its surface normal and the
@@ -245,7 +254,69 @@ pub struct Quantize {
     pub z_step: f64,
 }
 
+/// `[effects.disparity]`: depth measured as a disparity, as a structured-light or stereo
+/// sensor with a pinhole reference view measures it. A valid pixel at depth z has disparity
+/// d = f·b/z (`focal_px` f, `baseline` b in model units); Gaussian noise of `noise_px` pixels is
+/// added to it, and it is rounded to 1/`subpixel` of a pixel: d' = round((d + noise)·s)/s. A
+/// pixel whose d' lies outside [`min_px`, `max_px`] (the sensor's disparity search) is lost
+/// (reason "out of range"); the others measure z' = f·b/d'. The depth step at z is about
+/// z²/(f·b·s) and the noise σ_z ≈ z²·σ_d/(f·b). A pinhole reference view's alone.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Disparity {
+    pub baseline: f64,
+    pub focal_px: f64,
+    pub subpixel: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_px: f64,
+    #[serde(default = "no_limit", skip_serializing_if = "is_no_limit")]
+    pub max_px: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub noise_px: f64,
+    #[serde(default)]
+    pub seed: u32,
+}
+
+fn no_limit() -> f64 {
+    f64::MAX
+}
+
+fn is_no_limit(value: &f64) -> bool {
+    *value == f64::MAX
+}
+
 impl Effects {
+    /// Refuses the effects `sensor` cannot have: disparity without a pinhole reference view;
+    /// under any rig but the paper's scanner, grazing and the noise's incidence term, which are
+    /// measured against the scanner's camera so far.
+    pub fn validate_for(&self, sensor: &Sensor) -> Result<()> {
+        let refuse = |m: String| Err(Error::Scene(m));
+        if self.disparity.is_some() && !matches!(sensor.reference, View::Pinhole(_)) {
+            return refuse(format!(
+                "effects.disparity measures depth along a pinhole reference view's optical axis; this sensor's \
+                 reference view is {}",
+                sensor.reference.kind()
+            ));
+        }
+        if sensor.scanner().is_none() {
+            if self.grazing.is_some() {
+                return refuse(
+                    "effects.grazing is measured against the paper's scanner's camera; other rigs do not \
+                               have it yet"
+                        .into(),
+                );
+            }
+            if self.noise.is_some_and(|n| n.incidence_coefficient != 0.0) {
+                return refuse(
+                    "effects.noise.incidence_coefficient is measured against the paper's scanner's \
+                               projector; other rigs do not have it yet"
+                        .into(),
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// Whether no effect is named: then no effect pass is recorded.
     pub fn is_empty(&self) -> bool {
         self.passes().next().is_none()
@@ -265,6 +336,7 @@ impl Effects {
             Effect::Dropout => self.dropout.is_some(),
             Effect::Noise => self.noise.is_some(),
             Effect::Quantize => self.quantize.is_some(),
+            Effect::Disparity => self.disparity.is_some(),
         }
     }
 
@@ -336,6 +408,29 @@ impl Effects {
                 return bad("quantize.z_step", &q.z_step, "positive and finite (model units)");
             }
         }
+        if let Some(d) = &self.disparity {
+            for (key, value) in [("disparity.baseline", d.baseline), ("disparity.focal_px", d.focal_px)] {
+                if !(value.is_finite() && value > 0.0) {
+                    return bad(key, &value, "positive and finite");
+                }
+            }
+            if !((d.baseline * d.focal_px) as f32).is_normal() {
+                return bad("disparity.baseline", &d.baseline, "such that baseline · focal_px is a normal f32");
+            }
+            if !(1.0..=256.0).contains(&d.subpixel) {
+                return bad("disparity.subpixel", &d.subpixel, "in [1, 256] steps a pixel");
+            }
+            if !(d.min_px >= 0.0 && d.min_px < d.max_px) {
+                return bad(
+                    "disparity.min_px",
+                    &d.min_px,
+                    &format!("at least 0 and below effects.disparity.max_px = {}", d.max_px),
+                );
+            }
+            if !(0.0..=1e6).contains(&d.noise_px) {
+                return bad("disparity.noise_px", &d.noise_px, "in [0, 1e6] pixels");
+            }
+        }
         Ok(())
     }
 }
@@ -352,8 +447,9 @@ mod tests {
     fn absent_effects_record_nothing_and_the_order_is_fixed() {
         assert!(Effects::default().is_empty());
         let all = parse(
-            "[quantize]\nz_step = 0.1\n[noise]\nsigma = 0.1\n[dropout]\nprobability = 0.5\n[edges]\njump = 1\n\
-             [reflectivity]\nthreshold = 0.5\n[range]\nmax_z = 1\n[grazing]\nmax_incidence_deg = 80\n",
+            "[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\n[quantize]\nz_step = 0.1\n[noise]\nsigma = 0.1\n\
+             [dropout]\nprobability = 0.5\n[edges]\njump = 1\n[reflectivity]\nthreshold = 0.5\n[range]\nmax_z = 1\n\
+             [grazing]\nmax_incidence_deg = 80\n",
         );
         assert_eq!(all.passes().collect::<Vec<_>>(), EFFECT_ORDER);
         assert_eq!(parse("[noise]\nsigma = 0\n").passes().collect::<Vec<_>>(), [Effect::Noise]);
@@ -401,6 +497,14 @@ mod tests {
             ("[quantize]\nz_step = 1e-46", "quantize.z_step"),
             ("[range]\nmax_z = 1e39", "range.max_z"),
             ("[edges]\njump = 1e39", "edges.jump"),
+            ("[disparity]\nbaseline = 0\nfocal_px = 500\nsubpixel = 8", "disparity.baseline"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = nan\nsubpixel = 8", "disparity.focal_px"),
+            ("[disparity]\nbaseline = 1e-45\nfocal_px = 500\nsubpixel = 8", "disparity.baseline"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 0.5", "disparity.subpixel"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 512", "disparity.subpixel"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmin_px = 40\nmax_px = 30", "disparity.min_px"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmin_px = -1", "disparity.min_px"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nnoise_px = -0.1", "disparity.noise_px"),
         ] {
             let message = parse(text).validate().unwrap_err().to_string();
             assert!(message.contains(key), "{text}: {message}");
@@ -411,8 +515,11 @@ mod tests {
 
     #[test]
     fn an_effect_either_loses_points_for_a_reason_or_changes_z() {
+        // Disparity does both: it measures z, and loses what lies outside its search.
         for effect in EFFECT_ORDER {
-            assert_eq!(effect.reason().is_none(), effect.changes_z(), "{effect:?}");
+            let both = effect == Effect::Disparity;
+            assert_eq!(effect.reason().is_none(), effect.changes_z() && !both, "{effect:?}");
+            assert!(effect.reason().is_some() || effect.changes_z(), "{effect:?}");
         }
         assert!(!parse("[dropout]\nprobability = 0.5\n").changes_z());
         assert!(parse("[quantize]\nz_step = 0.1\n").changes_z());

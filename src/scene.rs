@@ -6,7 +6,9 @@ use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::{parse_toml, read_input_text};
 use crate::limits::{FileId, Ledger};
-use crate::mesh::{builtin_bytes, builtin_mesh, canonical_builtin_name, load_model_file, Mesh};
+use crate::mesh::{
+    builtin_bytes, builtin_mesh, canonical_builtin_name, load_model_file, Mesh, SurfaceChoice, SurfaceRule,
+};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -59,6 +61,9 @@ struct ObjectEntry {
     /// Model units to scene units, applied in the model's frame before the pose.
     #[serde(default = "crate::mesh::default_model_scale")]
     scale: f64,
+    /// How the model's triangles are grouped into surfaces (`SurfaceChoice`).
+    surfaces: Option<SurfaceRule>,
+    crease_deg: Option<f64>,
 }
 
 fn identity_rows() -> [[f64; 4]; 4] {
@@ -87,17 +92,19 @@ impl Scene {
         let file: SceneFile = parse_toml(text)?;
         file.sensor.validate()?;
         file.effects.validate()?;
-        // Each model at each scale, once.
-        let mut loaded: HashMap<(ModelKey, u64), Arc<Mesh>> = HashMap::new();
+        // Each model at each scale and surfaces, once.
+        let mut loaded: HashMap<ModelFormKey, Arc<Mesh>> = HashMap::new();
         let mut objects = Vec::with_capacity(file.object.len());
         let mut labels: u64 = 0;
         for entry in file.object {
             let object = objects.len() + 1;
-            let key = (model_key(&entry.model, base_dir)?, entry.scale.to_bits());
+            let owner = format!("object {object} ({})", quoted(&entry.model));
+            let surfaces = SurfaceChoice::from_keys(entry.surfaces, entry.crease_deg, &owner)?;
+            let key = model_form_key(&entry.model, base_dir, surfaces, entry.scale)?;
             let mesh = match loaded.get(&key) {
                 Some(mesh) => mesh.clone(),
                 None => {
-                    let mesh = Arc::new(load_model(&entry.model, base_dir, ledger)?.scaled(entry.scale, ledger)?);
+                    let mesh = Arc::new(load_model_as(&entry.model, base_dir, ledger, surfaces, entry.scale)?);
                     loaded.insert(key, mesh.clone());
                     mesh
                 }
@@ -115,7 +122,7 @@ impl Scene {
                     quoted(&entry.model)
                 )));
             }
-            let pose = pose_from_rows(entry.pose, &format!("object {object} ({})", quoted(&entry.model)))?;
+            let pose = pose_from_rows(entry.pose, &owner)?;
             objects.push(SceneObject { model_ref: entry.model, mesh, pose, reflectivity: entry.reflectivity });
         }
         let scene = Scene { sensor: file.sensor, shadow: file.shadow, effects: file.effects, objects };
@@ -163,6 +170,27 @@ pub fn load_model(reference: &str, base_dir: &Path, ledger: &Ledger) -> Result<M
         let path: PathBuf = base_dir.join(reference);
         load_model_file(&path, ledger)
     }
+}
+
+/// [`load_model`], its surfaces as `surfaces` asks ([`Mesh::with_surfaces`]) and scaled by
+/// `scale` ([`Mesh::scaled`]): a model as an object or a hypothesis names it.
+pub fn load_model_as(
+    reference: &str,
+    base_dir: &Path,
+    ledger: &Ledger,
+    surfaces: SurfaceChoice,
+    scale: f64,
+) -> Result<Mesh> {
+    load_model(reference, base_dir, ledger)?.with_surfaces(surfaces)?.scaled(scale, ledger)
+}
+
+/// What tells apart the meshes [`load_model_as`] makes, for caches: the model, its surfaces and
+/// its scale.
+pub type ModelFormKey = (ModelKey, (Option<SurfaceRule>, u64), u64);
+
+/// The key of the mesh [`load_model_as`] makes of these.
+pub fn model_form_key(reference: &str, base_dir: &Path, surfaces: SurfaceChoice, scale: f64) -> Result<ModelFormKey> {
+    Ok((model_key(reference, base_dir)?, surfaces.key(), scale.to_bits()))
 }
 
 /// Bytes an object of a scene holds (its entry, its pose, its draw), and each of its labels

@@ -2,7 +2,7 @@
 //! validation every model goes through. CPU only.
 
 use rangesynth::limits::Ledger;
-use rangesynth::mesh::{builtin_mesh, load_obj};
+use rangesynth::mesh::{builtin_mesh, load_obj, SurfaceChoice, SurfaceRule};
 use rangesynth::Error;
 use std::path::PathBuf;
 
@@ -49,12 +49,14 @@ fn an_ungrouped_cube_gets_six_coplanar_surfaces() {
 }
 
 #[test]
-fn an_ungrouped_tilted_quad_pair_is_two_surfaces() {
-    // Two triangles sharing an edge with a 1° fold: not coplanar.
+fn an_ungrouped_quad_pair_folded_by_a_degree_is_one_smooth_surface_and_two_planar_ones() {
+    // Two triangles sharing an edge with a 1° fold: not coplanar, far from a 30° crease.
     let fold = 1f64.to_radians();
     let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 {}\nf 1 2 3\nf 1 3 4\n", fold.tan());
     let mesh = load_obj(&obj("folded.obj", &text), &Ledger::default()).unwrap();
-    assert_eq!(mesh.surface_names.len(), 2);
+    assert_eq!(mesh.surface_names, ["smooth 1"]);
+    let planar = SurfaceChoice { rule: Some(SurfaceRule::Planar), ..Default::default() };
+    assert_eq!(mesh.with_surfaces(planar).unwrap().surface_names, ["planar 1", "planar 2"]);
 }
 
 #[test]

@@ -10,7 +10,7 @@ use common::cli::fresh_dir;
 use common::*;
 use glam::DMat4;
 use rangesynth::limits::{Ledger, MemoryBudget};
-use rangesynth::mesh::{builtin_mesh, load_model_file, parse_ply, parse_stl, Mesh};
+use rangesynth::mesh::{builtin_mesh, load_model_file, parse_ply, parse_stl, Mesh, SurfaceChoice, SurfaceRule};
 use rangesynth::scene::SceneObject;
 use rangesynth::shadow::ShadowMode;
 use std::path::{Path, PathBuf};
@@ -346,10 +346,112 @@ fn a_millimetre_model_at_scale_one_thousandth_is_the_metre_model() {
         let e = scene_of("box_mm.obj", &format!("scale = {bad}\n")).unwrap_err().to_string();
         assert!(e.contains("box_mm.obj") && e.contains("scale = ") && e.contains("positive finite"), "{bad}: {e}");
     }
-    let model = VERIFIER.scaled_model("box_mm.obj", &d, 0.001).unwrap();
+    let model = VERIFIER.model_as("box_mm.obj", &d, Default::default(), 0.001).unwrap();
     let unscaled = VERIFIER.model("box_mm.obj", &d).unwrap();
     for v in 0..box_model().positions.len() as u32 {
         assert!((model.mesh.vertex(v) - box_model().vertex(v)).length() < 1e-12, "vertex {v}");
         assert!((unscaled.mesh.vertex(v) - 1000.0 * box_model().vertex(v)).length() < 1e-9, "vertex {v}");
     }
+}
+
+/// An L-shaped step (x, z profile (0,0) (2,0) (2,1) (1,1) (1,2) (0,2), 1 deep in y) as an OBJ
+/// without groups: its eight faces, each L-shaped side fanned from the inner corner, so that
+/// every edge is shared whole (no T-junctions).
+fn ungrouped_step() -> String {
+    let profile = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)];
+    let mut text: String =
+        [0, 1].iter().flat_map(|&y| profile.iter().map(move |(x, z)| format!("v {x} {y} {z}\n"))).collect();
+    // Sides (y = 0: vertices 1–6, y = 1: 7–12), fanned from the inner corner (vertex 4 / 10).
+    for (a, b) in [(6, 1), (1, 2), (2, 3), (5, 6)] {
+        text += &format!("f 4 {a} {b}\nf 10 {} {}\n", b + 6, a + 6);
+    }
+    // The six faces around the profile, each a quad of two triangles.
+    for k in 0..6 {
+        let (a, b) = (k + 1, (k + 1) % 6 + 1);
+        text += &format!("f {a} {b} {}\nf {a} {} {}\n", b + 6, b + 6, a + 6);
+    }
+    text
+}
+
+/// A model without surfaces of its own is `smooth` by default: a box its six faces, a cylinder
+/// its top, bottom and side, a sphere one surface, the step its eight faces; `planar`, `whole`
+/// and a crease angle regroup them, and `groups` is refused where the file names none.
+#[test]
+fn a_model_without_surfaces_of_its_own_gets_smooth_ones() {
+    let d = fresh_dir("model_formats", "smooth");
+    let count = |path: &Path| load(path).surface_names.len();
+    for (model, surfaces) in [("builtin:box", 6), ("builtin:cylinder:32", 3), ("builtin:sphere:32", 1)] {
+        let path = written(
+            &d,
+            &format!("{}.stl", &model[8..].replace(':', "_")),
+            &stl_bytes(&builtin_mesh(model).unwrap(), true),
+        );
+        assert_eq!(count(&path), surfaces, "{model}");
+    }
+    let step = written(&d, "step.obj", ungrouped_step().as_bytes());
+    let mesh = load(&step);
+    assert_eq!(mesh.surface_names, (1..=8).map(|i| format!("smooth {i}")).collect::<Vec<_>>());
+    assert!(!mesh.surfaces_from_file);
+    let choice = |rule: Option<SurfaceRule>, crease: Option<f64>| SurfaceChoice::from_keys(rule, crease, "object 1");
+    let regrouped = |path: &Path, rule, crease| load(path).with_surfaces(choice(rule, crease).unwrap());
+    let cylinder = d.join("cylinder_32.stl");
+    // The cylinder's side facets turn by 11.25°: a crease of 10° parts all 32 of them.
+    assert_eq!(regrouped(&cylinder, Some(SurfaceRule::Smooth), Some(10.0)).unwrap().surface_names.len(), 34);
+    assert_eq!(regrouped(&cylinder, Some(SurfaceRule::Planar), None).unwrap().surface_names.len(), 34);
+    assert_eq!(regrouped(&cylinder, Some(SurfaceRule::Whole), None).unwrap().surface_names, ["whole"]);
+    let e = regrouped(&cylinder, Some(SurfaceRule::Groups), None).unwrap_err().to_string();
+    assert!(e.contains("cylinder_32.stl") && e.contains("surfaces = \"groups\""), "{e}");
+    // A built-in's faces are its own; whole, it is one surface.
+    let builtin = builtin_mesh("builtin:step").unwrap();
+    assert_eq!(
+        builtin.clone().with_surfaces(choice(Some(SurfaceRule::Groups), None).unwrap()).unwrap().surface_names.len(),
+        8
+    );
+    assert_eq!(builtin.with_surfaces(choice(Some(SurfaceRule::Whole), None).unwrap()).unwrap().surface_names.len(), 1);
+    for (rule, crease, expected) in [
+        (Some(SurfaceRule::Planar), Some(30.0), "crease_deg applies to surfaces = \"smooth\""),
+        (None, Some(0.0), "crease_deg = 0 must lie in (0, 180]"),
+        (Some(SurfaceRule::Smooth), Some(f64::NAN), "crease_deg = NaN"),
+    ] {
+        let e = choice(rule, crease).unwrap_err().to_string();
+        assert!(e.contains("object 1: ") && e.contains(expected), "{e}");
+    }
+}
+
+/// A scene's object and a hypothesis choose their model's surfaces by key, and labels follow:
+/// the step whole is one label, its cylinder creased at 10° thirty-four.
+#[test]
+fn objects_and_hypotheses_choose_their_models_surfaces() {
+    let d = fresh_dir("model_formats", "choose");
+    std::fs::write(d.join("step.obj"), ungrouped_step()).unwrap();
+    let scene = |keys: &str| {
+        let text = format!(
+            "[sensor]\nkind = \"orthographic\"\nwidth = 8\nheight = 8\npitch = [0.5, 0.5]\norigin = [-1.75, 1.75]\n\
+             theta_deg = 0.0\n[[object]]\nmodel = \"step.obj\"\n{keys}"
+        );
+        rangesynth::Scene::from_toml(&text, &d, &Ledger::default())
+    };
+    let labels = |keys: &str| scene(keys).unwrap().objects[0].mesh.surface_names.clone();
+    assert_eq!(labels("").len(), 8);
+    assert_eq!(labels("surfaces = \"whole\"\n"), ["whole"]);
+    assert_eq!(labels("surfaces = \"planar\"\n").len(), 8);
+    let e = scene("surfaces = \"groups\"\n").unwrap_err().to_string();
+    assert!(e.contains("step.obj") && e.contains("groups"), "{e}");
+    let e = scene("surfaces = \"planar\"\ncrease_deg = 20\n").unwrap_err().to_string();
+    assert!(e.contains("object 1 (\"step.obj\")") && e.contains("crease_deg"), "{e}");
+    let e = scene("surfaces = \"curved\"\n").unwrap_err().to_string();
+    assert!(e.contains("curved"), "{e}");
+    let file = r#"{"hypotheses": [
+        {"id": "a", "model": "step.obj", "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+        {"id": "b", "model": "step.obj", "surfaces": "whole", "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#;
+    let file = rangesynth::verify::HypothesisFile::from_json(file, &Ledger::default()).unwrap();
+    let meshes: Vec<usize> = file
+        .hypotheses
+        .iter()
+        .map(|h| VERIFIER.model_as(&h.model, &d, h.surfaces, h.scale).unwrap().mesh.surface_names.len())
+        .collect();
+    assert_eq!(meshes, [8, 1]);
+    let bad = r#"{"hypotheses": [{"id": "c", "model": "step.obj", "crease_deg": -1, "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#;
+    let e = rangesynth::verify::HypothesisFile::from_json(bad, &Ledger::default()).err().unwrap().to_string();
+    assert!(e.contains("hypothesis \"c\"") && e.contains("crease_deg = -1"), "{e}");
 }

@@ -28,6 +28,7 @@ layout(push_constant, std430) uniform Effect {
     uint seed_or_width;            // the effect's seed, or edges' width in pixels
     vec4 params;           // the effect's parameters (src/render/stages/effects.rs)
     uint reflectivity_offset;
+    float param4;          // a fifth parameter: disparity's noise_px
 } e;
 
 // This pass's Reason code (src/effects.rs), given by the host.

@@ -15,7 +15,7 @@ use rangesynth::io::refuse_overwriting_inputs;
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
-use rangesynth::render_set::{render_set, write_render_set, RENDER_FILES};
+use rangesynth::render_set::{check_depth_png, render_files, render_set, write_render_set};
 use rangesynth::sensor::View;
 use rangesynth::shadow::ShadowMode;
 use rangesynth::untrusted::escaped;
@@ -58,6 +58,10 @@ enum Command {
         scene: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// Also write depth.png, BOP's depth image: each valid pixel's depth along the optical
+        /// axis / SCALE as a uint16, 0 elsewhere (pinhole sensors).
+        #[arg(long, value_name = "SCALE")]
+        depth_png: Option<f64>,
     },
     /// Render the embedded demo scene (a stepped block and a cylinder on a table) into DIR.
     Demo {
@@ -87,23 +91,26 @@ pub fn run(cli: Cli) -> Result<()> {
     // One account for the whole run: its inputs, what is parsed from them, and each step's
     // plan on top.
     let ledger = Arc::new(Ledger::new(budget));
-    let (scene, out_dir) = match cli.command {
-        Command::Render { scene: path, out } => (Scene::from_file(&path, &ledger)?, out),
-        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), &ledger)?, out),
+    let (scene, out_dir, depth_png) = match cli.command {
+        Command::Render { scene: path, out, depth_png } => (Scene::from_file(&path, &ledger)?, out, depth_png),
+        Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), &ledger)?, out, None),
         Command::Verify(args) => return verify::run(&options, ledger, cli.raster, &args),
         Command::Accuracy(args) => return accuracy::run(&options, ledger, &args),
         Command::Experiment(args) => return experiment::run(&options, ledger, cli.raster, &args),
     };
-    let outputs = RENDER_FILES.map(|name| out_dir.join(name));
+    if let Some(scale) = depth_png {
+        check_depth_png(&scene, scale)?;
+    }
+    let outputs: Vec<PathBuf> = render_files(depth_png.is_some()).iter().map(|name| out_dir.join(name)).collect();
     refuse_overwriting_inputs(outputs.iter().map(PathBuf::as_path), &ledger)?;
-    let set = render_set(&out_dir)?;
+    let set = render_set(&out_dir, depth_png.is_some())?;
     for object in &scene.objects {
         warn_degenerate(&object.mesh);
     }
     let renderer =
         Renderer::new(&options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(cli.raster);
     let output = renderer.render(&scene)?;
-    let written = write_render_set(set, &scene, &output)?;
+    let written = write_render_set(set, &scene, &output, depth_png)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     check_validation(&renderer)

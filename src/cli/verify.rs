@@ -133,7 +133,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
         .into_iter()
         .map(|h| {
             let model = verifier
-                .scaled_model(&h.model, base_dir, h.scale)
+                .model_as(&h.model, base_dir, h.surfaces, h.scale)
                 .with_context(|| format!("hypothesis {}", quoted(&h.id)))?;
             if warned.insert(h.model.clone()) {
                 warn_degenerate(&model.mesh);

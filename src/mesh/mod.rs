@@ -32,7 +32,9 @@ pub use obj::{load_obj, parse_obj};
 pub use ply::{load_ply, parse_ply};
 pub use solid::Solidity;
 pub use stl::{load_stl, parse_stl};
-pub use surfaces::{merge_coplanar_surfaces, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE};
+pub use surfaces::{
+    SurfaceChoice, SurfaceRule, COPLANAR_ANGLE_TOLERANCE, COPLANAR_DISTANCE_TOLERANCE, DEFAULT_CREASE_DEG,
+};
 
 use crate::error::{Error, Result};
 use glam::DVec3;
@@ -57,6 +59,10 @@ pub struct Mesh {
     pub surface_reflectivity: Vec<Option<f32>>,
     /// Zero-area triangles removed by [`Mesh::new`].
     pub dropped_degenerate: usize,
+    /// Whether the surfaces are the model's own (a built-in's faces, OBJ groups, a PLY face
+    /// property), which `surfaces = "groups"` reads, rather than derived from its geometry
+    /// ([`Mesh::with_surfaces`]).
+    pub surfaces_from_file: bool,
 }
 
 /// The largest |coordinate| a model's vertex may have: a rotation's sum of three products
@@ -153,6 +159,7 @@ impl Mesh {
             surface_names,
             surface_reflectivity,
             dropped_degenerate,
+            surfaces_from_file: true,
         })
     }
 
@@ -198,6 +205,7 @@ impl Mesh {
         )?;
         mesh.surface_reflectivity = self.surface_reflectivity;
         mesh.dropped_degenerate += self.dropped_degenerate;
+        mesh.surfaces_from_file = self.surfaces_from_file;
         Ok(mesh)
     }
 

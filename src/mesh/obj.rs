@@ -26,7 +26,8 @@
 //! budget refuses stops the load. Text parsed without a path reads no library.
 
 use super::mtl::{checked_library, parse_checked_library};
-use super::{is_degenerate, merge_coplanar_surfaces, stored_positions, text_lines, Mesh};
+use super::surfaces::default_surfaces;
+use super::{is_degenerate, stored_positions, text_lines, Mesh};
 use crate::error::{guard_parser, Error, Result};
 use crate::io::{read_identified_file, read_input_file};
 use crate::limits::{FileId, Ledger};
@@ -285,7 +286,7 @@ fn parse(checked: &Checked, name: &str, libraries: &[Option<(String, String)>]) 
     };
     let single_surface = surface_names.len() <= 1;
     let mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
-    let mut mesh = if single_surface { merge_coplanar_surfaces(mesh) } else { mesh };
+    let mut mesh = if single_surface { default_surfaces(mesh) } else { mesh };
     // Each surface takes its first face's material.
     let mut seen = vec![false; mesh.surface_names.len()];
     for (&surface, &material) in mesh.triangle_surfaces.iter().zip(&kept_reflectivity) {

@@ -15,7 +15,8 @@
 //! the mesh is one surface, split into its planar faces as an OBJ without groups is. Any
 //! other element (edges, materials) is read past.
 
-use super::{merge_coplanar_surfaces, Mesh};
+use super::surfaces::default_surfaces;
+use super::Mesh;
 use crate::error::{guard_parser, Error, Result};
 use crate::io::read_input_file;
 use crate::limits::Ledger;
@@ -231,7 +232,7 @@ fn build(name: &str, vertices: Vec<Vertex>, faces: Vec<Face>, has_surfaces: bool
         false => vec!["surface1".to_string()],
     };
     let mesh = Mesh::new(name, positions, triangles, triangle_surfaces, surface_names)?;
-    Ok(if has_surfaces { mesh } else { merge_coplanar_surfaces(mesh) })
+    Ok(if has_surfaces { mesh } else { default_surfaces(mesh) })
 }
 
 /// A PLY vertex: its position; any other property is read past.

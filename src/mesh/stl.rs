@@ -8,7 +8,8 @@
 //! position wherever the mesh needs neighbours (src/mesh/adjacency.rs). STL has no groups, so
 //! the mesh is one surface, split into its planar faces as an OBJ without groups is.
 
-use super::{merge_coplanar_surfaces, Mesh};
+use super::surfaces::default_surfaces;
+use super::Mesh;
 use crate::error::{guard_parser, Error, Result};
 use crate::io::read_input_file;
 use crate::limits::Ledger;
@@ -44,5 +45,5 @@ pub fn parse_stl(bytes: &[u8], name: &str, ledger: &Ledger) -> Result<Mesh> {
     let count = positions.len() as u32 / 3;
     let triangles = (0..count).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
     let mesh = Mesh::new(name, positions, triangles, vec![1; count as usize], vec!["surface1".to_string()])?;
-    Ok(merge_coplanar_surfaces(mesh))
+    Ok(default_surfaces(mesh))
 }

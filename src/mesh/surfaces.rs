@@ -1,15 +1,25 @@
-//! Surfaces of a model that names none: edge-adjacent triangles whose planes agree are
-//! merged (union-find over shared edges), so a box read from an ungrouped OBJ gets its six
-//! faces and a tessellated curved patch gets one surface per facet.
+//! A model's surfaces, as an object or a hypothesis asks for them (`surfaces`): the file's own
+//! groups (OBJ groups, a PLY face property), or the triangles grouped by their geometry —
+//! `planar`, edge-adjacent triangles whose planes agree; `smooth`, edge-adjacent triangles whose
+//! normals differ by less than the crease angle (a cylinder is its top, bottom and side; a sphere
+//! one surface); `whole`, one surface. A model whose file names no surfaces is `smooth` unless
+//! asked otherwise, since a scanned or curved part would otherwise be thousands of one-facet
+//! surfaces that no scene segment can be bound to.
 //!
-//! Two triangles sharing an edge are coplanar when their unit normals differ by less than
-//! [`COPLANAR_ANGLE_TOLERANCE`] radians (either orientation) and the far corner of each lies
-//! within [`COPLANAR_DISTANCE_TOLERANCE`] × the model's bounding radius of the other's plane.
-//! Vertices are welded by exact position first, since OBJ files often repeat a corner per face.
+//! Grouping is a union-find over shared edges, vertices welded by exact position first (OBJ and
+//! STL files repeat a corner per face). Two triangles are coplanar when their unit normals
+//! differ by less than [`COPLANAR_ANGLE_TOLERANCE`] radians (either orientation) and the far
+//! corner of each lies within [`COPLANAR_DISTANCE_TOLERANCE`] × the model's bounding radius of
+//! the other's plane; they are smooth neighbours when their normals differ by less than the
+//! crease angle, oriented alike where they run their shared edge opposite ways (consistent
+//! winding), in either orientation where they run it the same way (wound inconsistently, or
+//! stacked).
 
 use super::adjacency::weld_vertices;
 use super::Mesh;
+use crate::error::{Error, Result};
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
 /// Largest angle between the normals of two merged triangles, in radians (about 0.06°).
@@ -17,10 +27,135 @@ pub const COPLANAR_ANGLE_TOLERANCE: f64 = 1e-3;
 /// Largest distance from a triangle's corner to its neighbour's plane, relative to the
 /// model's bounding radius.
 pub const COPLANAR_DISTANCE_TOLERANCE: f64 = 1e-6;
+/// The crease angle of `smooth` unless `crease_deg` says otherwise, degrees.
+pub const DEFAULT_CREASE_DEG: f64 = 30.0;
 
-/// Replaces the mesh's surfaces by the coplanar patches of its triangles, named
-/// `face1`, `face2`, … in order of their first triangle.
-pub fn merge_coplanar_surfaces(mut mesh: Mesh) -> Mesh {
+/// How a model's triangles are grouped into surfaces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceRule {
+    /// The file's own: OBJ groups, a PLY face property `surface`, `segment` or `label`.
+    Groups,
+    /// Edge-adjacent coplanar triangles, named `planar 1`, `planar 2`, ….
+    Planar,
+    /// Edge-adjacent triangles whose normals differ by less than the crease angle, named
+    /// `smooth 1`, `smooth 2`, ….
+    Smooth,
+    /// One surface, named `whole`.
+    Whole,
+}
+
+impl SurfaceRule {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SurfaceRule::Groups => "groups",
+            SurfaceRule::Planar => "planar",
+            SurfaceRule::Smooth => "smooth",
+            SurfaceRule::Whole => "whole",
+        }
+    }
+}
+
+/// The surfaces asked of a model: a rule, or by default the file's own groups where it has
+/// them and `smooth` elsewhere; and the crease angle of `smooth`, degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceChoice {
+    pub rule: Option<SurfaceRule>,
+    pub crease_deg: f64,
+}
+
+impl Default for SurfaceChoice {
+    fn default() -> Self {
+        Self { rule: None, crease_deg: DEFAULT_CREASE_DEG }
+    }
+}
+
+impl SurfaceChoice {
+    /// The choice of a file's `surfaces` and `crease_deg` keys, refused by name (`owner`
+    /// starts the message) where the crease angle is outside (0, 180] or given to a rule
+    /// other than `smooth`.
+    pub fn from_keys(rule: Option<SurfaceRule>, crease_deg: Option<f64>, owner: &str) -> Result<Self> {
+        if let Some(crease) = crease_deg {
+            if !(crease > 0.0 && crease <= 180.0) {
+                return Err(Error::Scene(format!("{owner}: crease_deg = {crease} must lie in (0, 180]")));
+            }
+            if let Some(other @ (SurfaceRule::Groups | SurfaceRule::Planar | SurfaceRule::Whole)) = rule {
+                return Err(Error::Scene(format!(
+                    "{owner}: crease_deg applies to surfaces = \"smooth\", not \"{}\"",
+                    other.as_str()
+                )));
+            }
+        }
+        Ok(Self { rule, crease_deg: crease_deg.unwrap_or(DEFAULT_CREASE_DEG) })
+    }
+
+    /// What tells two choices apart in a cache's key.
+    pub fn key(&self) -> (Option<SurfaceRule>, u64) {
+        (self.rule, self.crease_deg.to_bits())
+    }
+}
+
+/// The surfaces a model file's reader gives a mesh whose file names none: `smooth` at the
+/// default crease angle (the default of [`SurfaceChoice`]).
+pub(super) fn default_surfaces(mesh: Mesh) -> Mesh {
+    let mut mesh = merge_surfaces(mesh, "smooth", Neighbours::Smooth(DEFAULT_CREASE_DEG.to_radians().cos()));
+    mesh.surfaces_from_file = false;
+    mesh
+}
+
+impl Mesh {
+    /// The same mesh with the surfaces `choice` asks for. Each new surface takes the material
+    /// of its first triangle's surface before.
+    pub fn with_surfaces(self, choice: SurfaceChoice) -> Result<Mesh> {
+        let derived = |mesh: Mesh, kind, neighbours| {
+            let before = (mesh.triangle_surfaces.clone(), mesh.surface_reflectivity.clone());
+            let mut mesh = merge_surfaces(mesh, kind, neighbours);
+            for (t, &s) in mesh.triangle_surfaces.iter().enumerate().rev() {
+                mesh.surface_reflectivity[s as usize - 1] = before.1[before.0[t] as usize - 1];
+            }
+            mesh.surfaces_from_file = false;
+            mesh
+        };
+        let smooth = Neighbours::Smooth(choice.crease_deg.to_radians().cos());
+        match (choice.rule, self.surfaces_from_file) {
+            (Some(SurfaceRule::Groups), false) => Err(Error::Mesh {
+                name: self.name.clone(),
+                reason: "it has no groups or surface property, which surfaces = \"groups\" reads; choose \
+                         \"planar\", \"smooth\" or \"whole\""
+                    .into(),
+            }),
+            (Some(SurfaceRule::Groups) | None, true) => Ok(self),
+            // A file without surfaces was read with the default already.
+            (None, false) => Ok(self),
+            (Some(SurfaceRule::Smooth), false) if choice.crease_deg == DEFAULT_CREASE_DEG => Ok(self),
+            (Some(SurfaceRule::Smooth), _) => Ok(derived(self, "smooth", smooth)),
+            (Some(SurfaceRule::Planar), _) => Ok(derived(self, "planar", Neighbours::Coplanar)),
+            (Some(SurfaceRule::Whole), _) => Ok(derived(self, "whole", Neighbours::All)),
+        }
+    }
+}
+
+/// Which edge-adjacent triangles share a surface.
+#[derive(Clone, Copy)]
+enum Neighbours {
+    Coplanar,
+    /// Normals (oriented alike where the triangles run their edge opposite ways) whose dot
+    /// product exceeds this cosine.
+    Smooth(f64),
+    /// Every triangle, adjacent or not.
+    All,
+}
+
+/// Replaces the mesh's surfaces by the patches of edge-adjacent `neighbours`, named
+/// `{kind} 1`, `{kind} 2`, … in order of their first triangle (`{kind}` alone for one patch of
+/// every triangle).
+fn merge_surfaces(mut mesh: Mesh, kind: &str, neighbours: Neighbours) -> Mesh {
+    if let Neighbours::All = neighbours {
+        mesh.triangle_surfaces.iter_mut().for_each(|s| *s = 1);
+        mesh.surface_names = vec![kind.to_string()];
+        mesh.surface_reflectivity = vec![None];
+        return mesh;
+    }
     let welded = weld_vertices(&mesh.positions);
     let tris: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|v| welded[v as usize])).collect();
     let normals: Vec<DVec3> = mesh
@@ -35,19 +170,34 @@ pub fn merge_coplanar_surfaces(mut mesh: Mesh) -> Mesh {
     let max_distance = COPLANAR_DISTANCE_TOLERANCE * radius.max(f64::MIN_POSITIVE);
 
     let mut parent: Vec<usize> = (0..tris.len()).collect();
-    let mut edge_owner: HashMap<(u32, u32), usize> = HashMap::new();
+    // Each edge's first triangle t and whether it ran the edge from its lower vertex, as
+    // 2·t + 1 or 2·t (a word an edge: the map is most of what grouping holds).
+    let mut edge_owner: HashMap<(u32, u32), u32> = HashMap::new();
     for (t, tri) in tris.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             let edge = (a.min(b), a.max(b));
             match edge_owner.get(&edge) {
-                Some(&other) => {
-                    if coplanar(&mesh, &normals, t, other, max_distance) {
+                Some(&owner) => {
+                    let (other, other_forward) = ((owner / 2) as usize, owner % 2 == 1);
+                    let joined = match neighbours {
+                        Neighbours::All => true,
+                        Neighbours::Coplanar => coplanar(&mesh, &normals, t, other, max_distance),
+                        Neighbours::Smooth(cos_crease) => {
+                            // Alike-oriented neighbours run a shared edge opposite ways; two
+                            // that run it the same way are wound inconsistently or stacked, and
+                            // either orientation counts.
+                            let cos = normals[t].dot(normals[other]);
+                            let cos = if (a < b) != other_forward { cos } else { cos.abs() };
+                            cos > cos_crease
+                        }
+                    };
+                    if joined {
                         union(&mut parent, t, other);
                     }
                 }
                 None => {
-                    edge_owner.insert(edge, t);
+                    edge_owner.insert(edge, 2 * t as u32 + u32::from(a < b));
                 }
             }
         }
@@ -61,7 +211,7 @@ pub fn merge_coplanar_surfaces(mut mesh: Mesh) -> Mesh {
             *surface_of_root.entry(root).or_insert(next)
         })
         .collect();
-    mesh.surface_names = (1..=surface_of_root.len()).map(|i| format!("face{i}")).collect();
+    mesh.surface_names = (1..=surface_of_root.len()).map(|i| format!("{kind} {i}")).collect();
     // The caller knows the triangles' materials (obj.rs).
     mesh.surface_reflectivity = vec![None; surface_of_root.len()];
     mesh

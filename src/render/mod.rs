@@ -238,7 +238,7 @@ impl Renderer {
     /// whose views the compute rasterizer renders where `compute`.
     pub(crate) fn passes<'a>(
         &'a self,
-        sensor: &'a Scanner,
+        sensor: Option<&'a Scanner>,
         shadow: ShadowSettings,
         effects: &'a Effects,
         compute: bool,
@@ -252,6 +252,7 @@ impl Renderer {
     pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
         scene.sensor.validate()?;
         scene.effects.validate()?;
+        scene.effects.validate_for(&scene.sensor)?;
         scene.shadow.validate()?;
         let Some(scanner) = scene.sensor.scanner() else {
             return self.render_rig(scene);
@@ -307,14 +308,15 @@ impl Renderer {
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
-        self.render_views(scene, &scanner, &views, &draws, compute)
+        self.render_views(scene, Some(&scanner), &views, &draws, compute)
     }
 
-    /// Renders the planned views, with the compute rasterizer where `compute`.
+    /// Renders the planned views, with the compute rasterizer where `compute`; a rig other than
+    /// the paper's scanner (`scanner` `None`) is cast on the CPU and takes its effect passes.
     fn render_views(
         &self,
         scene: &Scene,
-        scanner: &Scanner,
+        scanner: Option<&Scanner>,
         views: &Views,
         draws: &[Draw],
         compute: bool,
@@ -322,15 +324,19 @@ impl Renderer {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
-        // Shadow mode `exact`: both rays cast on the CPU, timed on the wall clock.
+        // Shadow mode `exact`, and any rig but the scanner: rays cast on the CPU, timed on the
+        // wall clock.
         let started = Instant::now();
-        let host_view = match scene.shadow.mode {
-            ShadowMode::Exact => {
-                let image = render_scene_exact(scene)?;
-                Some(HostView::new(ctx, &image, views.origin.z, "exact range view")?)
-            }
-            _ => None,
+        let exact_image = match (scanner, scene.shadow.mode) {
+            (None, _) => Some(render_rig_exact(scene)?),
+            (Some(_), ShadowMode::Exact) => Some(render_scene_exact(scene)?),
+            (Some(_), _) => None,
         };
+        let host_view = exact_image
+            .as_ref()
+            .map(|image| HostView::new(ctx, image, views.origin.z, "exact range view"))
+            .transpose()?;
+        let cast_witness = exact_image.map(|image| image.witness);
         let cpu_time = host_view.as_ref().map(|_| PassTime {
             name: "exact rays",
             ms: Some(started.elapsed().as_secs_f64() * 1e3),
@@ -346,9 +352,9 @@ impl Renderer {
             host_view: host_view.as_ref(),
             compute,
         };
-        let shadow_table = draw_table(ctx, ViewKind::Shadow, scanner, [(views, draws)])?;
-        let range_table =
-            compute.then(|| draw_table(ctx, ViewKind::Range, scanner, [(views, draws)])).transpose()?.flatten();
+        let table = |kind, scanner| draw_table(ctx, kind, scanner, [(views, draws)]);
+        let shadow_table = scanner.map(|s| table(ViewKind::Shadow, s)).transpose()?.flatten();
+        let range_table = scanner.filter(|_| compute).map(|s| table(ViewKind::Range, s)).transpose()?.flatten();
         let effects = &scene.effects;
         let reflectivities = effects
             .reflectivity
@@ -427,14 +433,15 @@ impl Renderer {
             }
         }
         let timings = cpu_time.into_iter().chain(clock.times()?).collect();
-        // The scanner's one witness is its camera: bit 0 where it could not see the point.
-        let witness = reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect();
+        // Where rays were cast, their witness bits; else the scanner's one witness, its camera:
+        // bit 0 where it could not see the point.
+        let witness = cast_witness.unwrap_or_else(|| reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect());
         Ok(RenderOutput {
             sensor: scene.sensor.clone(),
             shadow: scene.shadow,
             effects: scene.effects,
             shadow_pass: views.shadow.is_some() || host_view.is_some(),
-            raster: Some(if compute { Raster::Compute } else { Raster::Graphics }),
+            raster: scanner.map(|_| if compute { Raster::Compute } else { Raster::Graphics }),
             label,
             label_unshadowed,
             z,
@@ -444,26 +451,37 @@ impl Renderer {
         })
     }
 
-    /// Renders a rig other than the paper's scanner: on the CPU, by exact ray casting to the
-    /// reference view and every witness (src/exact/), in shadow mode `exact`, or `none`
-    /// (the reference view's rays alone). The GPU modes and the effects render the scanner
-    /// alone so far, and refuse it by name.
+    /// Renders a rig other than the paper's scanner: by exact ray casting on the CPU to the
+    /// reference view and every witness (src/exact/rig.rs) in shadow mode `exact`, to the
+    /// reference view alone in mode `none`; its effects, where it names any, run as GPU passes
+    /// over the cast image. The GPU shadow modes render the scanner alone so far, and refuse
+    /// other rigs by name.
     fn render_rig(&self, scene: &Scene) -> Result<RenderOutput> {
         let sensor = &scene.sensor;
         if !matches!(scene.shadow.mode, ShadowMode::Exact | ShadowMode::None) {
             sensor.require_scanner(&format!("[shadow] mode = \"{}\"", scene.shadow.mode.as_str()))?;
         }
-        if !scene.effects.is_empty() {
-            sensor.require_scanner("[effects]")?;
-        }
+        let (width, height) = (sensor.width(), sensor.height());
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
-        let pixels = u64::from(sensor.width()) * u64::from(sensor.height());
+        let pixels = u64::from(width) * u64::from(height);
+        // The cast image, as a view of the GPU's effect passes where they run: its pixels on a
+        // grid of unit pitch (no pass reads the pitch), z as cast (no local origin).
+        let range = ViewGrid { origin: [0.0; 2], pitch: [1.0; 2], width, height, z_range: (0.0, 1.0) };
+        let views = Views { origin: glam::DVec3::ZERO, range, shadow: None };
+        let with_effects = !scene.effects.is_empty();
+        if with_effects {
+            self.check_pixel_buffers((width, height))?;
+        }
+        let passes_bytes = if with_effects { slot_bytes((pixels, 0), &scene.effects, None, 1) } else { 0 };
         self.ledger.check(
-            format_args!("rendering a {}×{} image", sensor.width(), sensor.height()),
-            memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels),
+            format_args!("rendering a {width}×{height} image"),
+            memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels) + passes_bytes,
         )?;
         for (i, object) in scene.objects.iter().enumerate() {
             check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
+        }
+        if with_effects {
+            return self.render_views(scene, None, &views, &[], false);
         }
         let started = Instant::now();
         let image = render_rig_exact(scene)?;

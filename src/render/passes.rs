@@ -262,6 +262,9 @@ impl<'t> PassClock<'t> {
     }
 }
 
+/// Why a shadow pass has a scanner: only the paper's scanner's jobs have shadow views.
+const SHADOW_SENSOR: &str = "a shadow view is planned for the paper's scanner alone";
+
 /// What is constant over the jobs of one submission.
 pub(crate) struct Passes<'a> {
     pub pipelines: &'a Pipelines,
@@ -269,7 +272,9 @@ pub(crate) struct Passes<'a> {
     pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
-    pub sensor: &'a Scanner,
+    /// The paper's scanner, which the shadow pass renders; `None` for a rig's image cast on the
+    /// CPU (src/exact/rig.rs), which takes effect passes alone.
+    pub sensor: Option<&'a Scanner>,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
 }
@@ -430,7 +435,7 @@ impl<'p> Passes<'p> {
                         layout: p.raster_layout,
                         targets,
                         grid,
-                        view_from_range: sensor.to_shadow_frame(),
+                        view_from_range: sensor.expect(SHADOW_SENSOR).to_shadow_frame(),
                         origin: views.origin,
                         area,
                     };
@@ -447,7 +452,7 @@ impl<'p> Passes<'p> {
             // writes the range view's attachments (stages/shadow_mask.rs). The words are bound in a
             // slot that has them for either variant, so their reads are stated either way.
             let words = slot.compute.as_ref().and_then(|c| c.to_mask());
-            let constants = MaskConstants::new(sensor, views, grid, job.area);
+            let constants = MaskConstants::new(sensor.expect(SHADOW_SENSOR), views, grid, job.area);
             // The variant reading words where it runs: one choice for the pipeline and for the
             // range view's use. It writes the range view's label and gradient only where a
             // pass after it reads them: an effect, or the sink.

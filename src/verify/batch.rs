@@ -321,7 +321,7 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(sensor, settings.shadow, settings.effects, compute)?;
+    let passes = renderer.passes(Some(sensor), settings.shadow, settings.effects, compute)?;
     // Timed stages: a run's three of coverage, its jobs' passes (PassClock::QUERIES less the
     // start) and two of scores at most.
     let laps = recorded.len().div_ceil(slots.len()) * (PassClock::QUERIES as usize + 4) + 1;

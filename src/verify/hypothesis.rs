@@ -5,6 +5,7 @@ use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::io::{parse_json, read_input_text};
 use crate::limits::Ledger;
+use crate::mesh::{SurfaceChoice, SurfaceRule};
 use crate::pose::pose_from_rows;
 use crate::sensor::Sensor;
 use crate::shadow::ShadowSettings;
@@ -40,6 +41,8 @@ pub struct HypothesisEntry {
     pub model: String,
     /// Model units to scene units (`Mesh::scaled`), 1 unless the file gives `"scale"`.
     pub scale: f64,
+    /// The model's surfaces (`"surfaces"`, `"crease_deg"`), which its bindings name.
+    pub surfaces: SurfaceChoice,
     pub pose: DMat4,
     /// (scene label, model surface) pairs.
     pub bindings: Vec<(u32, u32)>,
@@ -63,6 +66,8 @@ struct RawHypothesis {
     model: String,
     #[serde(default = "crate::mesh::default_model_scale")]
     scale: f64,
+    surfaces: Option<SurfaceRule>,
+    crease_deg: Option<f64>,
     #[serde(deserialize_with = "crate::exact_array::matrix")]
     pose: [[f64; 4]; 4],
     #[serde(default)]
@@ -108,14 +113,15 @@ impl HypothesisFile {
             .hypotheses
             .into_iter()
             .map(|h| {
-                let pose = pose_from_rows(h.pose, &format!("hypothesis {}", quoted(&h.id)))?;
+                let owner = format!("hypothesis {}", quoted(&h.id));
+                let pose = pose_from_rows(h.pose, &owner)?;
                 if let Some(&(scene, surface)) = h.bindings.iter().find(|&&(s, m)| s == 0 || m == 0) {
                     return Err(Error::Scene(format!(
-                        "hypothesis {}: binding ({scene}, {surface}) uses label 0, which means \"no data\"",
-                        quoted(&h.id)
+                        "{owner}: binding ({scene}, {surface}) uses label 0, which means \"no data\""
                     )));
                 }
-                Ok(HypothesisEntry { id: h.id, model: h.model, scale: h.scale, pose, bindings: h.bindings })
+                let surfaces = SurfaceChoice::from_keys(h.surfaces, h.crease_deg, &owner)?;
+                Ok(HypothesisEntry { id: h.id, model: h.model, scale: h.scale, surfaces, pose, bindings: h.bindings })
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(Self { tolerance: raw.tolerance, sensor: raw.sensor, shadow: raw.shadow, effects: raw.effects, hypotheses })

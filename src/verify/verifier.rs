@@ -24,11 +24,11 @@ use super::sensed::SensedImage;
 use crate::effects::Effects;
 use crate::error::{Error, Result};
 use crate::exact;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, SurfaceChoice};
 use crate::pose::check_rigid;
 use crate::render::HostView;
 use crate::render::{GpuMesh, Raster, Renderer, MAX_SLOTS};
-use crate::scene::{load_model, model_key, ModelKey};
+use crate::scene::{load_model_as, model_form_key, ModelFormKey};
 use crate::sensor::Sensor;
 use crate::shadow::{ShadowMode, ShadowSettings};
 use crate::untrusted::quoted;
@@ -120,7 +120,7 @@ pub struct Verifier {
     // Dropped before the renderer, whose context it was made on (it holds the context too).
     score_pass: ScorePass,
     renderer: Renderer,
-    models: Mutex<HashMap<(ModelKey, u64), Arc<Model>>>,
+    models: Mutex<HashMap<ModelFormKey, Arc<Model>>>,
     /// Most render-target slots a batch keeps (with_slots).
     slots: usize,
     /// Most chunks in flight at once (with_chunks_in_flight).
@@ -198,20 +198,26 @@ impl Verifier {
     }
 
     /// The model named `reference` (a `builtin:` name, or an OBJ, PLY or STL path relative to
-    /// `base_dir`), loaded and uploaded on first use.
+    /// `base_dir`), with its default surfaces and scale, loaded and uploaded on first use.
     pub fn model(&self, reference: &str, base_dir: &Path) -> Result<Arc<Model>> {
-        self.scaled_model(reference, base_dir, 1.0)
+        self.model_as(reference, base_dir, SurfaceChoice::default(), 1.0)
     }
 
-    /// [`Verifier::model`] with its vertices multiplied by `scale` (model units to scene
-    /// units: `Mesh::scaled`); each scale of a model is loaded and uploaded once.
-    pub fn scaled_model(&self, reference: &str, base_dir: &Path, scale: f64) -> Result<Arc<Model>> {
-        let key = (model_key(reference, base_dir)?, scale.to_bits());
+    /// [`Verifier::model`] with the surfaces `surfaces` asks for and its vertices multiplied by
+    /// `scale` (model units to scene units: `load_model_as`); each form of a model is loaded
+    /// and uploaded once.
+    pub fn model_as(
+        &self,
+        reference: &str,
+        base_dir: &Path,
+        surfaces: SurfaceChoice,
+        scale: f64,
+    ) -> Result<Arc<Model>> {
+        let key = model_form_key(reference, base_dir, surfaces, scale)?;
         if let Some(model) = self.models.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(model.clone());
         }
-        let ledger = self.renderer.ledger();
-        let mesh = Arc::new(load_model(reference, base_dir, ledger)?.scaled(scale, ledger)?);
+        let mesh = Arc::new(load_model_as(reference, base_dir, self.renderer.ledger(), surfaces, scale)?);
         let model = Arc::new(Model {
             gpu: GpuMesh::upload(self.renderer.context(), &mesh)?,
             sphere: mesh.bounding_sphere(),
@@ -231,6 +237,7 @@ impl Verifier {
         settings.sensor.validate()?;
         let sensor = &settings.sensor.require_scanner("verification")?;
         settings.effects.validate()?;
+        settings.effects.validate_for(&settings.sensor)?;
         settings.shadow.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
             return Err(Error::Scene(format!(

@@ -30,7 +30,9 @@ pub struct EffectConstants {
     seed_or_width: u32,
     params: [f32; 4],
     reflectivity_offset: u32,
-    _pad: [u32; 3],
+    /// A fifth parameter (disparity's noise in pixels).
+    param4: f32,
+    _pad: [u32; 2],
 }
 
 matches_shader_struct!(
@@ -47,6 +49,7 @@ matches_shader_struct!(
         seed_or_width,
         params,
         reflectivity_offset,
+        param4,
     }
 );
 
@@ -64,7 +67,10 @@ pub(crate) struct EffectJob {
 impl EffectConstants {
     /// The constants of `effect`'s pass, which `effects` names; `z_in_buffer` says whether an
     /// earlier pass of the job changed z.
-    fn new(effect: Effect, effects: &Effects, sensor: &Scanner, job: &EffectJob, z_in_buffer: bool) -> Self {
+    fn new(effect: Effect, effects: &Effects, sensor: Option<&Scanner>, job: &EffectJob, z_in_buffer: bool) -> Self {
+        // The direction grazing and the noise's incidence term measure against: the scanner's
+        // camera (other rigs refuse both: `Effects::validate_for`).
+        let theta = sensor.map_or(0.0, Scanner::theta);
         let f = |v: f64| v as f32;
         let (seed_or_width, params) = match effect {
             Effect::Grazing => {
@@ -89,7 +95,12 @@ impl EffectConstants {
                 (n.seed, [n.sigma, n.depth_coefficient, n.depth_reference, n.incidence_coefficient].map(f))
             }
             Effect::Quantize => (0, [f(effects.quantize.expect("named").z_step), 0.0, 0.0, 0.0]),
+            Effect::Disparity => {
+                let d = effects.disparity.expect("named");
+                (d.seed, [d.baseline * d.focal_px, d.subpixel, d.min_px, d.max_px].map(f))
+            }
         };
+        let param4 = effects.disparity.filter(|_| effect == Effect::Disparity).map_or(0.0, |d| f(d.noise_px));
         let r = job.region;
         Self {
             region: [r.col, r.row, r.width, r.height],
@@ -98,12 +109,13 @@ impl EffectConstants {
             use_shadowed: u32::from(job.use_shadowed),
             z_in_buffer: u32::from(z_in_buffer),
             z_origin: job.z_origin,
-            cos_theta: f(sensor.theta().cos()),
-            sin_theta: f(sensor.theta().sin()),
+            cos_theta: f(theta.cos()),
+            sin_theta: f(theta.sin()),
             seed_or_width,
             params,
             reflectivity_offset: job.reflectivity_offset,
-            _pad: [0; 3],
+            param4,
+            _pad: [0; 2],
         }
     }
 }
@@ -133,6 +145,7 @@ impl EffectPipelines {
                     Effect::Dropout => (shaders::EFFECT_DROPOUT_COMP, spec::EFFECT_DROPOUT_COMP::REASON),
                     Effect::Noise => (shaders::EFFECT_NOISE_COMP, spec::EFFECT_NOISE_COMP::REASON),
                     Effect::Quantize => (shaders::EFFECT_QUANTIZE_COMP, spec::EFFECT_QUANTIZE_COMP::REASON),
+                    Effect::Disparity => (shaders::EFFECT_DISPARITY_COMP, spec::EFFECT_DISPARITY_COMP::REASON),
                 };
                 let reason = effect.reason().map_or(0, |r| r.code());
                 let mut constants = vec![(reason_id, reason)];
@@ -231,7 +244,7 @@ impl EffectBuffers {
         cmd: vk::CommandBuffer,
         pipelines: &EffectPipelines,
         effect: Effect,
-        (effects, sensor): (&Effects, &Scanner),
+        (effects, sensor): (&Effects, Option<&Scanner>),
         job: &EffectJob,
         z_in_buffer: bool,
     ) {
