@@ -420,6 +420,9 @@ impl Effects {
             if !(1.0..=256.0).contains(&d.subpixel) {
                 return bad("disparity.subpixel", &d.subpixel, "in [1, 256] steps a pixel");
             }
+            if d.max_px.is_nan() || d.max_px <= 0.0 {
+                return bad("disparity.max_px", &d.max_px, "positive (pixels)");
+            }
             if !(d.min_px >= 0.0 && d.min_px < d.max_px) {
                 return bad(
                     "disparity.min_px",
@@ -504,6 +507,8 @@ mod tests {
             ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 512", "disparity.subpixel"),
             ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmin_px = 40\nmax_px = 30", "disparity.min_px"),
             ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmin_px = -1", "disparity.min_px"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmax_px = nan", "disparity.max_px"),
+            ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nmax_px = 0", "disparity.max_px"),
             ("[disparity]\nbaseline = 0.1\nfocal_px = 500\nsubpixel = 8\nnoise_px = -0.1", "disparity.noise_px"),
         ] {
             let message = parse(text).validate().unwrap_err().to_string();

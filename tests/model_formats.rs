@@ -441,6 +441,10 @@ fn objects_and_hypotheses_choose_their_models_surfaces() {
     assert!(e.contains("object 1 (\"step.obj\")") && e.contains("crease_deg"), "{e}");
     let e = scene("surfaces = \"curved\"\n").unwrap_err().to_string();
     assert!(e.contains("curved"), "{e}");
+    // A crease angle alone asks for smooth surfaces: the cylinder's 11.25° facets part at 10°.
+    std::fs::write(d.join("cylinder.stl"), stl_bytes(&builtin_mesh("builtin:cylinder:32").unwrap(), true)).unwrap();
+    let creased = scene("crease_deg = 10\n[[object]]\nmodel = \"cylinder.stl\"\ncrease_deg = 10\n").unwrap();
+    assert_eq!(creased.objects[1].mesh.surface_names.len(), 34);
     let file = r#"{"hypotheses": [
         {"id": "a", "model": "step.obj", "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
         {"id": "b", "model": "step.obj", "surfaces": "whole", "pose": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}"#;

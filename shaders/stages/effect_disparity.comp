@@ -23,7 +23,8 @@ void main() {
         disparity += e.param4 * gaussian(e.seed_or_width, p, DISPARITY_STREAM);
     }
     precise float measured = roundEven(disparity * subpixel) / subpixel;
-    if (!(measured >= e.params.z && measured <= e.params.w) || measured <= 0.0) {
+    // Outside the search, or no finite positive disparity (a point at the camera's centre).
+    if (!(measured >= e.params.z && measured <= e.params.w) || !(measured > 0.0) || isinf(measured)) {
         lose(index);
         measured_z[index] = current_z(p, index);
         return;

@@ -17,9 +17,13 @@ void main() {
     }
     uint index = index_of(p);
     float z = current_z(p, index);
-    float alpha = min(acos(clamp(1.0 / length(surface_normal(p)), 0.0, 1.0)), MAX_INCIDENCE);
     float from_reference = z - e.params.z;
-    float oblique = alpha / (1.5707963267948966 - alpha);
-    float sigma = e.params.x + e.params.y * from_reference * from_reference + e.params.w * oblique * oblique;
+    float sigma = e.params.x + e.params.y * from_reference * from_reference;
+    // The incidence term only where its coefficient is given: the normal is not read otherwise.
+    if (e.params.w != 0.0) {
+        float alpha = min(acos(clamp(1.0 / length(surface_normal(p)), 0.0, 1.0)), MAX_INCIDENCE);
+        float oblique = alpha / (1.5707963267948966 - alpha);
+        sigma += e.params.w * oblique * oblique;
+    }
     measured_z[index] = z + sigma * gaussian(e.seed_or_width, p, NOISE_STREAM);
 }

@@ -113,7 +113,10 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool
         let [a, b, c] = triangle.corners;
         let normal = (b - a).cross(c - a).normalize();
         let lit = normal * normal.dot(toward_reference(p)).signum();
-        let gradient = [-normal.x / normal.z, -normal.y / normal.z];
+        // A face along the reference's rays (n.z = 0), which a pinhole view's off-axis rays can
+        // meet, has an infinite gradient, or an indeterminate component where n's other one is
+        // 0 too: 0 there, so that no NaN reaches the effects.
+        let gradient = [-normal.x / normal.z, -normal.y / normal.z].map(|g| if g.is_nan() { 0.0 } else { g });
         ExactPixel { label: triangle.label, z, gradient, lost_by: lost_by(p, lit) }
     };
     Ok(cast_image(sensor.width(), sensor.height(), cast))

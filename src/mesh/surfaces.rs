@@ -73,7 +73,7 @@ impl Default for SurfaceChoice {
 impl SurfaceChoice {
     /// The choice of a file's `surfaces` and `crease_deg` keys, refused by name (`owner`
     /// starts the message) where the crease angle is outside (0, 180] or given to a rule
-    /// other than `smooth`.
+    /// other than `smooth`. A crease angle alone asks for `smooth`.
     pub fn from_keys(rule: Option<SurfaceRule>, crease_deg: Option<f64>, owner: &str) -> Result<Self> {
         if let Some(crease) = crease_deg {
             if !(crease > 0.0 && crease <= 180.0) {
@@ -86,6 +86,7 @@ impl SurfaceChoice {
                 )));
             }
         }
+        let rule = rule.or(crease_deg.map(|_| SurfaceRule::Smooth));
         Ok(Self { rule, crease_deg: crease_deg.unwrap_or(DEFAULT_CREASE_DEG) })
     }
 
@@ -120,8 +121,8 @@ impl Mesh {
         match (choice.rule, self.surfaces_from_file) {
             (Some(SurfaceRule::Groups), false) => Err(Error::Mesh {
                 name: self.name.clone(),
-                reason: "it has no groups or surface property, which surfaces = \"groups\" reads; choose \
-                         \"planar\", \"smooth\" or \"whole\""
+                reason: "it names no surfaces (no more than one OBJ group, no PLY surface property), which \
+                         surfaces = \"groups\" reads; choose \"planar\", \"smooth\" or \"whole\""
                     .into(),
             }),
             (Some(SurfaceRule::Groups) | None, true) => Ok(self),

@@ -440,7 +440,7 @@ impl Renderer {
             sensor: scene.sensor.clone(),
             shadow: scene.shadow,
             effects: scene.effects,
-            shadow_pass: views.shadow.is_some() || host_view.is_some(),
+            shadow_pass: views.shadow.is_some() || scene.shadow.mode == ShadowMode::Exact,
             raster: scanner.map(|_| if compute { Raster::Compute } else { Raster::Graphics }),
             label,
             label_unshadowed,
