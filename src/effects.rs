@@ -10,7 +10,7 @@
 //! (shaders/stages/random.glsl), so an image is bit-identical across runs, batch sizes and orders.
 
 use crate::error::{Error, Result};
-use crate::sensor::{Sensor, View};
+use crate::sensor::{Sensor, View, WitnessGeometry};
 use serde::{Deserialize, Serialize};
 
 /// Why a pixel of `range.exr` holds no point (its `reason` channel); 0 is a valid point.
@@ -260,12 +260,16 @@ pub struct Quantize {
 /// added to it, and it is rounded to 1/`subpixel` of a pixel: d' = round((d + noise)·s)/s. A
 /// pixel whose d' lies outside [`min_px`, `max_px`] (the sensor's disparity search) is lost
 /// (reason "out of range"); the others measure z' = f·b/d'. The depth step at z is about
-/// z²/(f·b·s) and the noise σ_z ≈ z²·σ_d/(f·b). A pinhole reference view's alone.
+/// z²/(f·b·s) and the noise σ_z ≈ z²·σ_d/(f·b). A pinhole reference view's alone; left out,
+/// `focal_px` is its fx and `baseline` the distance to its first witness's centre
+/// ([`Effects::for_sensor`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Disparity {
-    pub baseline: f64,
-    pub focal_px: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_px: Option<f64>,
     pub subpixel: f64,
     #[serde(default, skip_serializing_if = "is_zero")]
     pub min_px: f64,
@@ -286,17 +290,37 @@ fn is_no_limit(value: &f64) -> bool {
 }
 
 impl Effects {
-    /// Refuses the effects `sensor` cannot have: disparity without a pinhole reference view;
+    /// The effects as `sensor` has them, its disparity's focal length and baseline filled in
+    /// where they were left out (the reference view's fx; the distance from its centre to the
+    /// first witness's, a pinhole one); refuses what it cannot have: disparity without a
+    /// pinhole reference view, or without the first witness it would take its baseline from;
     /// under any rig but the paper's scanner, grazing and the noise's incidence term, which are
     /// measured against the scanner's camera so far.
-    pub fn validate_for(&self, sensor: &Sensor) -> Result<()> {
+    pub fn for_sensor(&self, sensor: &Sensor) -> Result<Effects> {
         let refuse = |m: String| Err(Error::Scene(m));
-        if self.disparity.is_some() && !matches!(sensor.reference, View::Pinhole(_)) {
-            return refuse(format!(
-                "effects.disparity measures depth along a pinhole reference view's optical axis; this sensor's \
-                 reference view is {}",
-                sensor.reference.kind()
-            ));
+        let mut effects = *self;
+        if let Some(d) = &mut effects.disparity {
+            let View::Pinhole(view) = sensor.reference else {
+                return refuse(format!(
+                    "effects.disparity measures depth along a pinhole reference view's optical axis; this sensor's \
+                     reference view is {}",
+                    sensor.reference.kind()
+                ));
+            };
+            d.focal_px = d.focal_px.or(Some(view.intrinsics.fx));
+            if d.baseline.is_none() {
+                match sensor.witnesses.first().map(|w| w.geometry) {
+                    Some(WitnessGeometry::Pinhole { pose, .. }) => d.baseline = Some(pose.w_axis.truncate().length()),
+                    _ => {
+                        return refuse(
+                            "effects.disparity.baseline is left out, but the sensor's first witness is no pinhole \
+                             view to measure it to"
+                                .into(),
+                        )
+                    }
+                }
+            }
+            effects.validate()?;
         }
         if sensor.scanner().is_none() {
             if self.grazing.is_some() {
@@ -314,7 +338,7 @@ impl Effects {
                 );
             }
         }
-        Ok(())
+        Ok(effects)
     }
 
     /// Whether no effect is named: then no effect pass is recorded.
@@ -410,12 +434,15 @@ impl Effects {
         }
         if let Some(d) = &self.disparity {
             for (key, value) in [("disparity.baseline", d.baseline), ("disparity.focal_px", d.focal_px)] {
-                if !(value.is_finite() && value > 0.0) {
-                    return bad(key, &value, "positive and finite");
+                match value {
+                    Some(v) if !(v.is_finite() && v > 0.0) => return bad(key, &v, "positive and finite"),
+                    _ => {}
                 }
             }
-            if !((d.baseline * d.focal_px) as f32).is_normal() {
-                return bad("disparity.baseline", &d.baseline, "such that baseline · focal_px is a normal f32");
+            if let (Some(b), Some(f)) = (d.baseline, d.focal_px) {
+                if !((b * f) as f32).is_normal() {
+                    return bad("disparity.baseline", &b, "such that baseline · focal_px is a normal f32");
+                }
             }
             if !(1.0..=256.0).contains(&d.subpixel) {
                 return bad("disparity.subpixel", &d.subpixel, "in [1, 256] steps a pixel");

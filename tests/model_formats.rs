@@ -374,13 +374,16 @@ fn ungrouped_step() -> String {
 }
 
 /// A model without surfaces of its own is `smooth` by default: a box its six faces, a cylinder
-/// its top, bottom and side, a sphere one surface, the step its eight faces; `planar`, `whole`
+/// its top, bottom and side, a sphere one surface, a step its eight faces; `planar`, `whole`
 /// and a crease angle regroup them, and `groups` is refused where the file names none.
 #[test]
 fn a_model_without_surfaces_of_its_own_gets_smooth_ones() {
     let d = fresh_dir("model_formats", "smooth");
     let count = |path: &Path| load(path).surface_names.len();
-    for (model, surfaces) in [("builtin:box", 6), ("builtin:cylinder:32", 3), ("builtin:sphere:32", 1)] {
+    // The built-in step's sides are each two faces meeting at a T-junction: joined along it.
+    for (model, surfaces) in
+        [("builtin:box", 6), ("builtin:cylinder:32", 3), ("builtin:sphere:32", 1), ("builtin:step", 8)]
+    {
         let path = written(
             &d,
             &format!("{}.stl", &model[8..].replace(':', "_")),
@@ -407,7 +410,16 @@ fn a_model_without_surfaces_of_its_own_gets_smooth_ones() {
         builtin.clone().with_surfaces(choice(Some(SurfaceRule::Groups), None).unwrap()).unwrap().surface_names.len(),
         8
     );
-    assert_eq!(builtin.with_surfaces(choice(Some(SurfaceRule::Whole), None).unwrap()).unwrap().surface_names.len(), 1);
+    assert_eq!(
+        builtin.clone().with_surfaces(choice(Some(SurfaceRule::Whole), None).unwrap()).unwrap().surface_names.len(),
+        1
+    );
+    let smooth = builtin.clone().with_surfaces(choice(Some(SurfaceRule::Smooth), None).unwrap()).unwrap();
+    assert_eq!(smooth.surface_names.len(), 8);
+    // Its triangles fall into the same eight groups as its own faces.
+    let pairs: std::collections::BTreeSet<(u32, u32)> =
+        builtin.triangle_surfaces.iter().copied().zip(smooth.triangle_surfaces.iter().copied()).collect();
+    assert_eq!(pairs.len(), 8, "{pairs:?}");
     for (rule, crease, expected) in [
         (Some(SurfaceRule::Planar), Some(30.0), "crease_deg applies to surfaces = \"smooth\""),
         (None, Some(0.0), "crease_deg = 0 must lie in (0, 180]"),

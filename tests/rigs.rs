@@ -467,3 +467,34 @@ fn render_writes_a_bop_depth_png_for_a_pinhole_sensor() {
         assert!(!d.join("refused").exists(), "{scene} {scale}: nothing written");
     }
 }
+
+/// The disparity's depth levels: on a plane tilted 30° across the depths around 1, 2 and 4 m,
+/// every measured depth is f·b·s/k for an integer k, and the levels next to the depth are
+/// apart by f·b·s/(k(k + 1)) ≈ z²/(f·b·s): 2.9 mm at 1 m, 11.5 mm at 2 m, 46 mm at 4 m for a
+/// Kinect v1 (f = 580 px, b = 7.5 cm, s = 8). Left out, f and b come from the rig: its fx and
+/// the distance to its first witness, here the projector 7.5 cm to the camera's right.
+#[test]
+fn disparity_steps_grow_with_the_square_of_depth_and_take_the_rigs_geometry() {
+    let fbs = 580.0 * 0.075 * 8.0;
+    let image = Intrinsics { width: 64, height: 48, fx: 580.0, fy: 580.0, cx: 31.5, cy: 23.5 };
+    for (z, step) in [(1.0, 0.0029), (2.0, 0.0115), (4.0, 0.046)] {
+        let mut rig = plane_at(z, "[disparity]\nsubpixel = 8\n");
+        rig.sensor.witnesses = vec![projector("projector", DVec3::new(0.075, 0.0, 0.0), image)];
+        rig.objects[0].pose = facing_camera(DVec3::new(0.0, 0.0, z)) * DMat4::from_rotation_x(30f64.to_radians());
+        let out = render(&rig);
+        let mut levels: Vec<f64> =
+            out.z.iter().zip(&out.label).filter(|p| *p.1 != 0).map(|p| f64::from(*p.0)).collect();
+        levels.sort_by(f64::total_cmp);
+        levels.dedup();
+        assert!(levels.len() > 3, "Z = {z}: {} levels", levels.len());
+        for &level in &levels {
+            let k = (fbs / level).round();
+            assert!((level - fbs / k).abs() < 1e-5 * level, "Z = {z}: {level} is no f·b·s/k");
+        }
+        let above = levels.iter().position(|&l| l >= z).unwrap();
+        let measured = levels[above] - levels[above - 1];
+        assert!((measured / step - 1.0).abs() < 0.03, "Z = {z}: step {measured}, expected {step}");
+    }
+    let e = common::renderer().render(&plane_at(2.0, "[disparity]\nsubpixel = 8\n")).err().unwrap().to_string();
+    assert!(e.contains("effects.disparity.baseline is left out"), "{e}");
+}

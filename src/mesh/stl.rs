@@ -6,7 +6,7 @@
 //! 50 bytes, an ASCII facet more), and is charged to the run's budget before it is read.
 //! Triangles are kept unindexed (three vertices each): their corners are matched by
 //! position wherever the mesh needs neighbours (src/mesh/adjacency.rs). STL has no groups, so
-//! the mesh is one surface, split into its planar faces as an OBJ without groups is.
+//! its surfaces are derived from its geometry (smooth by default) as an OBJ's without groups are.
 
 use super::surfaces::default_surfaces;
 use super::Mesh;
@@ -18,9 +18,10 @@ use std::io::Cursor;
 use std::path::Path;
 
 /// Bytes parsing takes, at most, per byte of the file: a binary triangle's 50 bytes become
-/// three f64 corners with room for their vector's doubling, then the mesh (measured with a
-/// counting allocator: tests/memory.rs).
-const BYTES_PER_FILE_BYTE: u64 = 8;
+/// three f64 corners with room for their vector's doubling, then the mesh and its surfaces'
+/// grouping, whose open edges a triangle soup has three of (measured with a counting
+/// allocator: tests/memory.rs).
+const BYTES_PER_FILE_BYTE: u64 = 10;
 
 pub fn load_stl(path: &Path, ledger: &Ledger) -> Result<Mesh> {
     let bytes = read_input_file(path, "model", ledger)?;

@@ -136,6 +136,14 @@ impl Mesh {
     }
 }
 
+/// The flag of an edge two triangles share, beside its first triangle's word.
+const SHARED: u64 = 1 << 63;
+
+/// Most open edges at one vertex whose pairs are compared for T-junctions: beyond it (a fan of
+/// open edges, as a triangle soup's vertex may have) they are left apart, so that grouping
+/// never takes quadratic time.
+const MAX_OPEN_EDGES_COMPARED: usize = 16;
+
 /// Which edge-adjacent triangles share a surface.
 #[derive(Clone, Copy)]
 enum Neighbours {
@@ -171,34 +179,63 @@ fn merge_surfaces(mut mesh: Mesh, kind: &str, neighbours: Neighbours) -> Mesh {
     let max_distance = COPLANAR_DISTANCE_TOLERANCE * radius.max(f64::MIN_POSITIVE);
 
     let mut parent: Vec<usize> = (0..tris.len()).collect();
+    // Whether triangles t and u, which run a shared edge or line the same way (`same_way`),
+    // belong to one surface. Alike-oriented neighbours run it opposite ways; two that run it
+    // the same way are wound inconsistently or stacked, and either orientation counts.
+    let joined = |t: usize, u: usize, same_way: bool| match neighbours {
+        Neighbours::All => true,
+        Neighbours::Coplanar => coplanar(&mesh, &normals, t, u, max_distance),
+        Neighbours::Smooth(cos_crease) => {
+            let cos = normals[t].dot(normals[u]);
+            (if same_way { cos.abs() } else { cos }) > cos_crease
+        }
+    };
     // Each edge's first triangle t and whether it ran the edge from its lower vertex, as
-    // 2·t + 1 or 2·t (a word an edge: the map is most of what grouping holds).
-    let mut edge_owner: HashMap<(u32, u32), u32> = HashMap::new();
+    // 2·t + 1 or 2·t, and whether another triangle shares it ([`SHARED`]).
+    let mut edge_owner: HashMap<(u32, u32), u64> = HashMap::new();
     for (t, tri) in tris.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             let edge = (a.min(b), a.max(b));
-            match edge_owner.get(&edge) {
-                Some(&owner) => {
-                    let (other, other_forward) = ((owner / 2) as usize, owner % 2 == 1);
-                    let joined = match neighbours {
-                        Neighbours::All => true,
-                        Neighbours::Coplanar => coplanar(&mesh, &normals, t, other, max_distance),
-                        Neighbours::Smooth(cos_crease) => {
-                            // Alike-oriented neighbours run a shared edge opposite ways; two
-                            // that run it the same way are wound inconsistently or stacked, and
-                            // either orientation counts.
-                            let cos = normals[t].dot(normals[other]);
-                            let cos = if (a < b) != other_forward { cos } else { cos.abs() };
-                            cos > cos_crease
-                        }
-                    };
-                    if joined {
-                        union(&mut parent, t, other);
+            match edge_owner.get_mut(&edge) {
+                Some(owner) => {
+                    *owner |= SHARED;
+                    let (other, other_forward) = ((*owner & !SHARED) / 2, *owner % 2 == 1);
+                    if joined(t, other as usize, (a < b) == other_forward) {
+                        union(&mut parent, t, other as usize);
                     }
                 }
                 None => {
-                    edge_owner.insert(edge, 2 * t as u32 + u32::from(a < b));
+                    edge_owner.insert(edge, 2 * t as u64 + u64::from(a < b));
+                }
+            }
+        }
+    }
+    // T-junctions: an edge no other triangle shares whole may run along part of another such
+    // edge (a vertex of one face on an edge of its neighbour, as the built-in step's sides are
+    // made). Such open edges meet at a common end and leave it in one direction; at each vertex
+    // with at most MAX_OPEN_EDGES_COMPARED of them, each pair is compared.
+    // Each open edge at each of its ends: (vertex, the other end, triangle), sorted by vertex.
+    let mut open: Vec<(u32, u32, u32)> = Vec::new();
+    for (&(a, b), &owner) in edge_owner.iter().filter(|(_, &owner)| owner & SHARED == 0) {
+        let t = (owner / 2) as u32;
+        open.extend([(a, b, t), (b, a, t)]);
+    }
+    drop(edge_owner);
+    open.sort_unstable();
+    let position = |v: u32| mesh.vertex(v);
+    // Whether triangle t runs its edge from v to end (rather than back).
+    let leaves =
+        |t: u32, v: u32, end: u32| (0..3).any(|k| tris[t as usize][k] == v && tris[t as usize][(k + 1) % 3] == end);
+    for at_vertex in open.chunk_by(|e, f| e.0 == f.0).filter(|edges| edges.len() <= MAX_OPEN_EDGES_COMPARED) {
+        for (i, &(v, end, t)) in at_vertex.iter().enumerate() {
+            for &(_, other_end, u) in &at_vertex[i + 1..] {
+                let (along, other_along) = (position(end) - position(v), position(other_end) - position(v));
+                let collinear = along.cross(other_along).length() <= 1e-9 * along.length() * other_along.length();
+                let same_way = leaves(t, v, end) == leaves(u, v, other_end);
+                let (t, u) = (t as usize, u as usize);
+                if t != u && collinear && along.dot(other_along) > 0.0 && joined(t, u, same_way) {
+                    union(&mut parent, t, u);
                 }
             }
         }

@@ -252,7 +252,9 @@ impl Renderer {
     pub fn render(&self, scene: &Scene) -> Result<RenderOutput> {
         scene.sensor.validate()?;
         scene.effects.validate()?;
-        scene.effects.validate_for(&scene.sensor)?;
+        // The effects as the sensor has them (disparity's focal length and baseline filled in).
+        let effects = scene.effects.for_sensor(&scene.sensor)?;
+        let scene = &Scene { effects, ..scene.clone() };
         scene.shadow.validate()?;
         let Some(scanner) = scene.sensor.scanner() else {
             return self.render_rig(scene);

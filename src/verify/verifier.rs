@@ -237,7 +237,7 @@ impl Verifier {
         settings.sensor.validate()?;
         let sensor = &settings.sensor.require_scanner("verification")?;
         settings.effects.validate()?;
-        settings.effects.validate_for(&settings.sensor)?;
+        settings.effects.for_sensor(&settings.sensor)?;
         settings.shadow.validate()?;
         if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
             return Err(Error::Scene(format!(

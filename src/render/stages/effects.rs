@@ -97,7 +97,9 @@ impl EffectConstants {
             Effect::Quantize => (0, [f(effects.quantize.expect("named").z_step), 0.0, 0.0, 0.0]),
             Effect::Disparity => {
                 let d = effects.disparity.expect("named");
-                (d.seed, [d.baseline * d.focal_px, d.subpixel, d.min_px, d.max_px].map(f))
+                // Filled in from the sensor before any pass (`Effects::for_sensor`).
+                let focal_baseline = d.baseline.zip(d.focal_px).map_or(f64::NAN, |(b, f)| b * f);
+                (d.seed, [focal_baseline, d.subpixel, d.min_px, d.max_px].map(f))
             }
         };
         let param4 = effects.disparity.filter(|_| effect == Effect::Disparity).map_or(0.0, |d| f(d.noise_px));
