@@ -3,7 +3,8 @@
 //! the product but the scene description and the documented tolerances.
 //!
 //! A pinhole reference view's ray through pixel (c, r) is ((c − cx)/fx, (r − cy)/fy, 1) from
-//! its centre; its first hit p (the tie rule: hits within the tie distance of the nearest go
+//! its centre, an orthographic one's runs down −z through the pixel centre (x0 + c·dx,
+//! y0 − r·dy) from above the scene; its first hit p (the tie rule: hits within the tie distance of the nearest go
 //! to the lowest label) is seen by a witness when p's surface faces it (the side the
 //! reference sees, by more than the facing tolerance), p projects onto the witness's image
 //! (pinhole), and no triangle meets the segment from p to its centre (pinhole) or the ray
@@ -23,7 +24,8 @@ pub struct RigReference {
     pub height: u32,
     /// Label of the first hit, 0 for none.
     pub label: Vec<u32>,
-    /// Depth along the optical axis of the first hit (0 for none).
+    /// Depth of the first hit (0 for none): along a pinhole view's optical axis, or an
+    /// orthographic view's z.
     pub depth: Vec<f64>,
     /// Bit k: witness k does not see the hit.
     pub witness: Vec<u32>,
@@ -50,10 +52,12 @@ fn intersect(t: &Triangle, origin: DVec3, direction: DVec3) -> Option<f64> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| e2.dot(q) / det)
 }
 
-/// Renders the scene's rig (a pinhole reference view) by brute force.
+/// Renders the scene's rig by brute force.
 pub fn rig_reference(scene: &Scene) -> RigReference {
-    let View::Pinhole(view) = scene.sensor.reference else { panic!("the rig reference renders pinhole views") };
-    let k = view.intrinsics;
+    let (width, height) = match scene.sensor.reference {
+        View::Pinhole(view) => (view.intrinsics.width, view.intrinsics.height),
+        View::Orthographic(view) => (view.width, view.height),
+    };
     let bases = scene.label_bases().expect("labels fit");
     let mut triangles = Vec::new();
     for (object, base) in scene.objects.iter().zip(bases) {
@@ -64,23 +68,37 @@ pub fn rig_reference(scene: &Scene) -> RigReference {
     }
     let scale = triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     let tie = TIE_RELATIVE * scale;
-    let n = (k.width * k.height) as usize;
-    let mut out =
-        RigReference { width: k.width, height: k.height, label: vec![0; n], depth: vec![0.0; n], witness: vec![0; n] };
-    for row in 0..k.height {
-        for col in 0..k.width {
-            let ray = DVec3::new((f64::from(col) - k.cx) / k.fx, (f64::from(row) - k.cy) / k.fy, 1.0);
+    let n = (width * height) as usize;
+    let mut out = RigReference { width, height, label: vec![0; n], depth: vec![0.0; n], witness: vec![0; n] };
+    let top = 2.0 * scale;
+    for row in 0..height {
+        for col in 0..width {
+            // The ray (origin, direction), the range of its parameter t that is seen, and the
+            // depth at t: a pinhole view's Z = t; an orthographic view's z, from above the scene.
+            let (origin, ray, seen, orthographic) = match scene.sensor.reference {
+                View::Pinhole(view) => {
+                    let k = view.intrinsics;
+                    let ray = DVec3::new((f64::from(col) - k.cx) / k.fx, (f64::from(row) - k.cy) / k.fy, 1.0);
+                    (DVec3::ZERO, ray, (view.near, view.far), false)
+                }
+                View::Orthographic(view) => {
+                    let x = view.origin[0] + f64::from(col) * view.pitch[0];
+                    let y = view.origin[1] - f64::from(row) * view.pitch[1];
+                    (DVec3::new(x, y, top), DVec3::NEG_Z, (0.0, f64::INFINITY), true)
+                }
+            };
             let hits: Vec<(f64, &Triangle)> = triangles
                 .iter()
-                .filter_map(|t| intersect(t, DVec3::ZERO, ray).map(|d| (d, t)))
-                .filter(|&(d, _)| d >= view.near && d <= view.far)
+                .filter_map(|t| intersect(t, origin, ray).map(|d| (d, t)))
+                .filter(|&(d, _)| d >= seen.0 && d <= seen.1)
                 .collect();
             let Some(nearest) = hits.iter().map(|h| h.0).min_by(f64::total_cmp) else { continue };
-            let (depth, hit) = hits.iter().filter(|h| h.0 <= nearest + tie).min_by_key(|h| h.1.label).copied().unwrap();
-            let p = depth * ray;
+            let (t, hit) = hits.iter().filter(|h| h.0 <= nearest + tie).min_by_key(|h| h.1.label).copied().unwrap();
+            let p = origin + t * ray;
+            let depth = if orthographic { p.z } else { t };
             let [a, b, c] = hit.corners;
             let normal = (b - a).cross(c - a).normalize();
-            let lit = if normal.dot(-p) > 0.0 { normal } else { -normal };
+            let lit = if normal.dot(-ray) > 0.0 { normal } else { -normal };
             let mut bits = 0;
             for (w, witness) in scene.sensor.witnesses.iter().enumerate() {
                 let (toward, reach, in_view) = match witness.geometry {
@@ -114,7 +132,7 @@ pub fn rig_reference(scene: &Scene) -> RigReference {
                     bits |= 1 << w;
                 }
             }
-            let i = (row * k.width + col) as usize;
+            let i = (row * width + col) as usize;
             (out.label[i], out.depth[i], out.witness[i]) = (hit.label, depth, bits);
         }
     }
