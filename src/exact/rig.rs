@@ -20,10 +20,10 @@ use glam::{DMat4, DQuat, DVec2, DVec3};
 /// How a witness is tested.
 enum WitnessTest {
     /// Parallel rays: the scene in a frame where they run down −z from +z.
-    Directional { frame: DMat4, caster: VerticalCaster },
-    /// A centre: segments to it in the reference frame; `from_reference` takes a point into
-    /// the witness's frame for its field of view.
-    Pinhole { from_reference: DMat4 },
+    Directional { frame: DMat4, caster: Box<VerticalCaster> },
+    /// A centre: segments to it in the reference frame, and its field of view
+    /// (`Witness::in_view`).
+    Pinhole,
 }
 
 /// The frame in which rays arriving from `direction` run down −z: the scanner's `R_y(−θ)`
@@ -56,9 +56,12 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool
         .map(|w| match w.geometry {
             WitnessGeometry::Directional(direction) => {
                 let frame = directional_frame(direction);
-                WitnessTest::Directional { caster: VerticalCaster::new(posed_triangles(objects, frame)), frame }
+                WitnessTest::Directional {
+                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame))),
+                    frame,
+                }
             }
-            WitnessGeometry::Pinhole { pose, .. } => WitnessTest::Pinhole { from_reference: pose.inverse() },
+            WitnessGeometry::Pinhole { .. } => WitnessTest::Pinhole,
         })
         .collect();
     // What the reference ray of pixel (col, row) meets first: its point, depth and triangle.
@@ -87,11 +90,8 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool
                         let q = frame.transform_point3(p);
                         !caster.hits(q.truncate()).any(|(above, _, _)| above > q.z + tie)
                     }
-                    WitnessTest::Pinhole { from_reference } => {
-                        let WitnessGeometry::Pinhole { intrinsics, .. } = witness.geometry else { unreachable!() };
-                        let in_view = intrinsics
-                            .project(from_reference.transform_point3(p))
-                            .is_some_and(|uv| intrinsics.contains(uv));
+                    WitnessTest::Pinhole => {
+                        let in_view = witness.in_view(p);
                         let rays = rays.as_ref().expect("built for pinhole witnesses");
                         in_view && !rays.hits(p, toward * distance, 1.0).any(|(t, _, _)| t * distance > tie)
                     }

@@ -128,7 +128,6 @@ impl Mesh {
             (Some(SurfaceRule::Groups) | None, true) => Ok(self),
             // A file without surfaces was read with the default already.
             (None, false) => Ok(self),
-            (Some(SurfaceRule::Smooth), false) if choice.crease_deg == DEFAULT_CREASE_DEG => Ok(self),
             (Some(SurfaceRule::Smooth), _) => Ok(derived(self, "smooth", smooth)),
             (Some(SurfaceRule::Planar), _) => Ok(derived(self, "planar", Neighbours::Coplanar)),
             (Some(SurfaceRule::Whole), _) => Ok(derived(self, "whole", Neighbours::All)),
