@@ -65,17 +65,10 @@ impl RenderOutput {
             return None;
         }
         let w = self.width() as usize;
-        match self.sensor.reference {
-            // x, y are the pixel centre as the range frame holds it, z as measured in f32.
-            View::Orthographic(o) => {
-                let (x, y) = o.pixel_centre((index % w) as u32, (index / w) as u32);
-                Some([x as f32, y as f32, self.z[index]])
-            }
-            reference @ View::Pinhole(_) => {
-                let p = reference.point((index % w) as u32, (index / w) as u32, f64::from(self.z[index]));
-                Some([p.x as f32, p.y as f32, self.z[index]])
-            }
-        }
+        // z as measured in f32; x, y where the pixel's ray reaches that depth (an orthographic
+        // view's pixel centre).
+        let p = self.sensor.reference.point((index % w) as u32, (index / w) as u32, f64::from(self.z[index]));
+        Some([p.x as f32, p.y as f32, self.z[index]])
     }
 
     /// Heights toward the sensor (larger is closer) and the model units a pixel spans, as the

@@ -16,7 +16,7 @@ use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS};
 use rangesynth::render_set::{check_depth_png, render_files, render_set, write_render_set};
-use rangesynth::sensor::View;
+use rangesynth::sensor::{Sensor, View};
 use rangesynth::shadow::ShadowMode;
 use rangesynth::untrusted::escaped;
 use rangesynth::{RenderOutput, Renderer, Scene};
@@ -132,6 +132,17 @@ fn check_validation(renderer: &Renderer) -> Result<()> {
     Ok(())
 }
 
+/// What a summary says of a sensor's witnesses: the scanner's θ, or the witnesses' names.
+fn witnesses_text(s: &Sensor) -> String {
+    match s.scanner() {
+        Some(scanner) => format!("θ = {}°", scanner.theta_deg),
+        None => {
+            let names: Vec<String> = s.witnesses.iter().map(|w| escaped(&w.name, 20)).collect();
+            format!("witnesses: {}", if names.is_empty() { "none".to_string() } else { names.join(", ") })
+        }
+    }
+}
+
 fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Result<()> {
     let s = &scene.sensor;
     println!("device: {}", renderer.context().device_name());
@@ -152,13 +163,7 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
             format!("{}×{} pinhole, fx {} fy {} cx {} cy {}", k.width, k.height, k.fx, k.fy, k.cx, k.cy)
         }
     };
-    let witnesses = match s.scanner() {
-        Some(scanner) => format!("θ = {}°", scanner.theta_deg),
-        None => {
-            let names: Vec<String> = s.witnesses.iter().map(|w| escaped(&w.name, 20)).collect();
-            format!("witnesses: {}", if names.is_empty() { "none".to_string() } else { names.join(", ") })
-        }
-    };
+    let witnesses = witnesses_text(s);
     println!(
         "image: {view}, {witnesses}, shadow mode {}{}",
         scene.shadow.mode.as_str(),

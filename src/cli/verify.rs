@@ -284,10 +284,7 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     if !settings.effects.is_empty() {
         println!("effects: {}", effects_text(&settings.effects));
     }
-    let witnesses = match s.scanner() {
-        Some(scanner) => format!("θ = {}°", scanner.theta_deg),
-        None => format!("a {} view and {} witnesses", s.reference.kind(), s.witnesses.len()),
-    };
+    let witnesses = super::witnesses_text(s);
     println!(
         "{} hypotheses against a {}×{} image, {witnesses}, shadow mode {}, τ = {}: {:.2} s ({:.1} per second)",
         results.len(),

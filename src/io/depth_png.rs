@@ -10,9 +10,7 @@ use std::path::Path;
 /// 0. A depth whose value does not fit 1 to 65535 is refused (a value of 0 would read as no
 /// measurement, and a clamped one as another depth), naming the scale that would hold it.
 pub fn depth_png_values(depth: &[f32], valid: &[bool], scale: f64) -> Result<Vec<u16>> {
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(Error::Scene(format!("the depth PNG's scale {scale} must be positive and finite")));
-    }
+    check_depth_scale(scale)?;
     depth
         .iter()
         .zip(valid)
@@ -32,6 +30,14 @@ pub fn depth_png_values(depth: &[f32], valid: &[bool], scale: f64) -> Result<Vec
             }
         })
         .collect()
+}
+
+/// Refuses a scale that is not positive and finite.
+pub fn check_depth_scale(scale: f64) -> Result<()> {
+    match scale.is_finite() && scale > 0.0 {
+        true => Ok(()),
+        false => Err(Error::Scene(format!("the depth PNG's scale {scale} must be positive and finite"))),
+    }
 }
 
 /// Writes `values` (row-major) as a 16-bit greyscale PNG, atomically.

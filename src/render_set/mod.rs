@@ -8,8 +8,8 @@ pub use labels::{label_map, write_label_map, LabelEntry};
 
 use crate::error::{Error, Result};
 use crate::io::{
-    depth_png_values, write_depth_png, write_label_image, write_label_preview, write_range_image, write_range_preview,
-    RangeImage, StagedSet,
+    check_depth_scale, depth_png_values, write_depth_png, write_label_image, write_label_preview, write_range_image,
+    write_range_preview, RangeImage, StagedSet,
 };
 use crate::render_output::RenderOutput;
 use crate::scene::Scene;
@@ -46,9 +46,7 @@ pub fn write_render_directory(dir: &Path, scene: &Scene, out: &RenderOutput) -> 
 /// Refuses a depth PNG (`render --depth-png SCALE`) for a sensor whose reference view is not a
 /// pinhole camera: its depth is along an optical axis.
 pub fn check_depth_png(scene: &Scene, scale: f64) -> Result<()> {
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(Error::Scene(format!("--depth-png {scale}: the scale must be positive and finite")));
-    }
+    check_depth_scale(scale)?;
     match scene.sensor.reference {
         View::Pinhole(_) => Ok(()),
         View::Orthographic(_) => Err(Error::Scene(
