@@ -496,3 +496,53 @@ fn verify_reads_a_hypothesis_models_scale() {
     assert!(by_id("metre")["s"].as_f64().unwrap() > 0.9, "{}", by_id("metre"));
     assert_ne!(by_id("unscaled")["counts"], by_id("metre")["counts"]);
 }
+
+/// `verify` under a pinhole camera and projector, from the command line: the sensed EXR's
+/// header carries the rig, the true pose of the one box scores exactly 1, and a hypothesis
+/// file whose rig differs from the header is refused naming the key (`fx`); with
+/// `--override-sensor` its rig is taken, and the true pose no longer scores 1.
+#[test]
+fn verify_scores_under_a_pinhole_rig_and_refuses_a_rig_that_differs() {
+    let d = dir("verify_rig");
+    let rig = "[sensor]\nkind = \"pinhole\"\nwidth = 96\nheight = 72\nfx = 90.0\nfy = 90.0\ncx = 47.5\ncy = 35.5\n\
+               [[sensor.witness]]\nname = \"projector\"\nkind = \"pinhole\"\n\
+               pose = [[1,0,0,0.3],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n\
+               width = 96\nheight = 72\nfx = 60.0\nfy = 60.0\ncx = 47.5\ncy = 35.5\n";
+    let pose = "[[0.9,0,0.4358898943540674,0.1],[0,-1,0,0],[0.4358898943540674,0,-0.9,3],[0,0,0,1]]";
+    let scene = write_scene(
+        &d,
+        &format!("{rig}[shadow]\nmode = \"depth\"\n[[object]]\nmodel = \"builtin:box\"\npose = {pose}\n"),
+    );
+    let out = rangesynth(&["render", scene.to_str().unwrap(), "--out", d.join("sensed").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let exr = d.join("sensed/range.exr");
+    let bindings = "[[1,1],[2,2],[3,3],[4,4],[5,5],[6,6]]";
+    let file = |sensor: &str| {
+        format!(
+            r#"{{{sensor}"hypotheses": [{{"id": "true", "model": "builtin:box", "pose": {pose}, "bindings": {bindings}}}]}}"#
+        )
+    };
+    let hyps = d.join("true.json");
+    std::fs::write(&hyps, file("")).unwrap();
+    let scores = d.join("true.jsonl");
+    let out = verify(&hyps, &exr, &scores, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
+    assert_eq!(line["s"].as_f64(), Some(1.0), "{line}");
+    assert!(line["counts"]["n_i"].as_u64().unwrap() > 100, "{line}");
+
+    let other = r#""sensor": {"kind": "pinhole", "width": 96, "height": 72, "fx": 95.0, "fy": 90.0, "cx": 47.5, "cy": 35.5, "witness": [{"name": "projector", "kind": "pinhole", "pose": [[1,0,0,0.3],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "width": 96, "height": 72, "fx": 60.0, "fy": 60.0, "cx": 47.5, "cy": 35.5}]}, "#;
+    let hyps = d.join("other.json");
+    std::fs::write(&hyps, file(other)).unwrap();
+    let out = verify(&hyps, &exr, &d.join("other.jsonl"), &[]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("fx = 95") && stderr.contains("90"), "{stderr}");
+    // The file's rig on request: the sensed pixels read through other intrinsics no longer
+    // match the true pose's.
+    let scores = d.join("other.jsonl");
+    let out = verify(&hyps, &exr, &scores, &["--override-sensor"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
+    assert!(line["s"].as_f64().unwrap() < 0.99, "{line}");
+}

@@ -5,11 +5,14 @@
 mod common;
 
 use common::rig_reference::rig_reference;
+use common::scorer::{as_cpu, cpu_counts, cpu_scores, Images};
 use common::{render, scene};
 use glam::{DMat4, DVec3};
 use rangesynth::effects::Reason;
+use rangesynth::io::RangeImage;
 use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::verify::{Hypothesis, SensedImage, VerifySettings};
 use rangesynth::Scene;
 
 /// A 640×480 camera, fx = fy = 500, whose pixel (320, 240) looks along its axis: on a plane
@@ -184,8 +187,8 @@ fn differences(
 
 /// A sphere and a cluttered table under a camera, a projector 7.5 cm to its right and an IR
 /// camera 2.5 cm to its left (a Kinect-like rig): labels, depths and witness bits in modes
-/// `exact` and `none` against the brute-force reference, with no interior pixel wrong (a
-/// pixel whose neighbours in the reference all agree with it).
+/// `exact`, `depth` and `none` against the brute-force reference, with no interior pixel wrong
+/// (a pixel whose neighbours in the reference all agree with it).
 #[test]
 fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
     let k = Intrinsics { width: 160, height: 120, fx: 150.0, fy: 150.0, cx: 79.5, cy: 59.5 };
@@ -205,14 +208,15 @@ fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
         ("builtin:cylinder:16", tilt(DVec3::new(0.45, 0.25, 1.5), 0.0), 0.2),
     ];
     let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
-    for mode in [ShadowMode::Exact, ShadowMode::None] {
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None] {
         let mut rig = scene(sensor.clone(), mode, &posed);
         for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
             object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
         }
         let out = render(&rig);
         let truth = rig_reference(&rig);
-        let tested = mode == ShadowMode::Exact;
+        let tested = mode != ShadowMode::None;
+        assert!(out.shadow_pass == tested, "{mode:?}: the witnesses were tested");
         let (wrong, wrong_interior) = differences(&out, &truth, tested);
         let lost = if tested { truth.witness.iter().filter(|&&bits| bits != 0).count() } else { 0 };
         eprintln!("{mode:?}: {wrong} pixels differ from the reference, {wrong_interior} interior; {lost} lost");
@@ -542,4 +546,127 @@ fn an_orthographic_view_with_pinhole_and_directional_witnesses_matches_the_refer
     assert_eq!(interior_wrong, 0, "{wrong} pixels differ, {interior_wrong} interior");
     let lost_by = |bit: u32| truth.witness.iter().filter(|&&b| b & bit != 0).count();
     assert!(lost_by(1) > 50 && lost_by(2) > 50, "both witnesses lose pixels: {} and {}", lost_by(1), lost_by(2));
+}
+
+/// A box turned to show three faces to the camera, 4 to 5 units deep, under the camera and
+/// the projector at its baseline.
+fn turned_box_pose() -> DMat4 {
+    facing_camera(DVec3::new(0.3, -0.1, 5.0)) * DMat4::from_rotation_y(0.5) * DMat4::from_rotation_x(0.4)
+}
+
+fn projector_rig() -> Sensor {
+    let witnesses = vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())];
+    Sensor { reference: reference(), witnesses }
+}
+
+fn rig_hypothesis(id: &str, model: &str, pose: DMat4, bindings: &[(u32, u32)]) -> Hypothesis {
+    let model = common::VERIFIER.model(model, std::path::Path::new(".")).unwrap();
+    Hypothesis { id: id.into(), model, pose, bindings: bindings.to_vec() }
+}
+
+fn rig_settings(mode: ShadowMode) -> VerifySettings {
+    VerifySettings {
+        sensor: projector_rig(),
+        shadow: ShadowSettings::of(mode),
+        effects: Default::default(),
+        tolerance: 0.01,
+        compare_shadow: true,
+        chunk_size: 1024,
+    }
+}
+
+/// `verify` under a pinhole camera and projector: against the sensed image of the turned
+/// box, the true pose scores exactly 1 (no effects: the same image), the pose moved by two
+/// pixels' width at the box's depth (2 · 4.5 / 500) scores less, and every count and score of
+/// every hypothesis equals the independent CPU scorer's on the rendered images (areas from
+/// the pixels' points along their rays, in units of a pixel at the farthest sensed depth;
+/// a hypothesis nearer than the sensed surface counts in N1−), in shadow modes exact, depth
+/// and none, shadowed and unshadowed.
+#[test]
+fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_scorer() {
+    let bindings: Vec<(u32, u32)> = (1..=6).map(|l| (l, l)).collect();
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None] {
+        let sensed_scene = scene(projector_rig(), mode, &[("builtin:box", turned_box_pose())]);
+        let image = RangeImage::from(&render(&sensed_scene));
+        let sensed = SensedImage::new(&image, &projector_rig()).expect("a pinhole sensed image");
+        let moved = DMat4::from_translation(DVec3::new(2.0 * 4.5 / 500.0, 0.0, 0.0)) * turned_box_pose();
+        let nearer = DMat4::from_translation(DVec3::new(0.0, 0.0, -0.05)) * turned_box_pose();
+        let hypotheses = [
+            rig_hypothesis("true", "builtin:box", turned_box_pose(), &bindings),
+            rig_hypothesis("moved", "builtin:box", moved, &bindings),
+            rig_hypothesis("nearer", "builtin:box", nearer, &bindings),
+            rig_hypothesis("sphere", "builtin:sphere:24", facing_camera(DVec3::new(0.6, 0.2, 4.2)), &[(1, 1)]),
+            // Over the image's bottom-right corner: the score pass's last column and row.
+            rig_hypothesis("corner", "builtin:box", facing_camera(DVec3::new(3.2, 2.4, 5.0)), &[(1, 1)]),
+            // Around the camera's centre, its bottom face through it: no footprint to cut, and
+            // every pixel sees the box's inside at a depth Z > 0 (never the face at Z = 0).
+            rig_hypothesis("around", "builtin:box", DMat4::IDENTITY, &[(1, 1)]),
+            // Behind the camera: nothing in view.
+            rig_hypothesis("behind", "builtin:box", DMat4::from_translation(DVec3::new(0.0, 0.0, -3.0)), &[(1, 1)]),
+        ];
+        let settings = rig_settings(mode);
+        let results = common::VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |_| {}).expect("verifies");
+        common::assert_no_validation_messages();
+        for (h, v) in common::paired(&hypotheses, &results) {
+            let name = format!("{} ({mode:?})", h.id);
+            let synthetic = render(&scene(projector_rig(), mode, &[(h.model.mesh.name.as_str(), h.pose)]));
+            let shadowed = Images::of(&image, &synthetic);
+            let unshadowed = Images { synthetic_label: &synthetic.label_unshadowed, ..Images::of(&image, &synthetic) };
+            let (unshadowed_counts, unshadowed_scores) = v.unshadowed.as_ref().expect("compare_shadow");
+            for (which, images, counts, scores) in [
+                ("", &shadowed, &v.counts, &v.scores),
+                (" unshadowed", &unshadowed, unshadowed_counts, unshadowed_scores),
+            ] {
+                let cpu = cpu_counts(images, settings.tolerance as f32);
+                assert_eq!(as_cpu(counts, &sensed, sensed.valid), cpu, "{name}{which}: counts");
+                let expected = cpu_scores(&cpu, &h.bindings);
+                let s = scores;
+                for (k, (ours, cpu)) in [s.s1, s.s2, s.s3, s.s4, s.s5, s.s6, s.s].iter().zip(expected).enumerate() {
+                    let scale = ours.abs().max(cpu.abs()).max(f64::MIN_POSITIVE);
+                    assert!((ours - cpu).abs() <= 1e-12 * scale, "{name}{which} score {k}: {ours} vs CPU {cpu}");
+                }
+            }
+            assert_eq!(v.raster, None, "{name}: cast on the CPU");
+        }
+        let score = |id: &str| results.iter().find(|v| v.id == id).map(|v| v.scores.s).unwrap();
+        assert_eq!(score("true"), 1.0, "{mode:?}");
+        assert!(score("moved") < 0.95, "{mode:?}: moved scores {}", score("moved"));
+        let nearer = &results[2].counts;
+        assert!(nearer.n1_minus > 0 && nearer.n1_plus == 0, "{mode:?}: nearer {nearer:?}");
+        assert!(results[4].counts.synthetic_valid() > 0, "{mode:?}: the corner box is in view");
+        if mode == ShadowMode::None {
+            assert_eq!(results[5].counts.synthetic_valid(), 640 * 480, "{mode:?}: inside the box");
+        }
+        assert_eq!(results[6].counts.synthetic_valid(), 0, "{mode:?}: behind the camera");
+    }
+}
+
+/// A pinhole sensed image refuses what cannot be: a sensor of other intrinsics or another
+/// kind of view, a labelled pixel at depth Z ≤ 0, and shadow mode `label`, which the GPU
+/// renders for the paper's scanner alone so far.
+#[test]
+fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
+    let sensed_scene = scene(projector_rig(), ShadowMode::None, &[("builtin:box", turned_box_pose())]);
+    let image = RangeImage::from(&render(&sensed_scene));
+    let sensed = SensedImage::new(&image, &projector_rig()).unwrap();
+    let hypotheses = [rig_hypothesis("true", "builtin:box", turned_box_pose(), &[(1, 1)])];
+    let refused = |settings: &VerifySettings| {
+        common::VERIFIER.verify(&sensed, settings, &hypotheses, &mut |_| {}).err().map(|e| e.to_string())
+    };
+    let mut other = rig_settings(ShadowMode::None);
+    other.sensor.reference =
+        View::Pinhole(Pinhole { intrinsics: Intrinsics { fx: 510.0, ..camera() }, near: 0.0, far: f64::INFINITY });
+    assert!(refused(&other).is_some_and(|e| e.contains("intrinsics")), "{:?}", refused(&other));
+    let label = rig_settings(ShadowMode::Label);
+    assert!(refused(&label).is_some_and(|e| e.contains("[shadow] mode = \"label\"")), "{:?}", refused(&label));
+    let scanner =
+        rangesynth::sensor::Scanner { width: 640, height: 480, pitch: [0.01; 2], origin: [0.0; 2], theta_deg: 0.0 };
+    let ortho = VerifySettings { sensor: scanner.into(), ..rig_settings(ShadowMode::None) };
+    let e = refused(&ortho).unwrap_or_default();
+    assert!(e.contains("pinhole view") && e.contains("orthographic"), "{e}");
+    let mut behind = image.clone();
+    let i = behind.label.iter().position(|&l| l != 0).unwrap();
+    behind.z[i] = -1.0;
+    let e = SensedImage::new(&behind, &projector_rig()).unwrap_err().to_string();
+    assert!(e.contains("Z = -1") && e.contains("behind its pinhole view"), "{e}");
 }

@@ -33,9 +33,10 @@ layout(push_constant, std430) uniform Score {
     uint surfaces;          // M
     uint segments;          // K
     float tolerance;        // τ
-    float area_scale;       // area.rs unit_scale
-    float dx;
+    float area_scale;       // area.rs unit_scale, of the area unit's sides (BlockGeometry)
+    float dx;               // the orthographic pitch; PINHOLE: 1/fx and 1/fy
     float dy;
+    vec2 principal;         // PINHOLE: cx, cy
 } s;
 
 // The counts layout's scalar words and where N_M starts, given by the host from
@@ -55,6 +56,10 @@ layout(constant_id = 7) const bool USE_MEASURED_Z = false; // z from measured_z,
 // added to it first: 0, but for the test that stands in for a device whose sqrt errs.
 layout(constant_id = 8) const bool CORRECT_SQRT = true;
 layout(constant_id = 9) const int SQRT_ERROR_ULPS = 0;
+// The view's kind (BlockRays, area.rs): an orthographic view's z grows toward the sensor and
+// its blocks' points lie over a grid of pitch (dx, dy); a pinhole view's depth Z grows away
+// from it and a pixel's point is Z times its ray, ((col − cx)/fx, (row − cy)/fy, 1).
+layout(constant_id = 10) const bool PINHOLE = false;
 
 // The synthetic z as the range image stores it: the view's f32 offset plus its local origin,
 // one correctly rounded f32 addition, as the host adds it (src/sensor/grid.rs, local_origin).
@@ -186,12 +191,33 @@ float sqrt_rounded(float s) {
     return r;
 }
 
-// area.rs block_area_units, operation for operation, without fused multiply-adds, its square
-// root rounded as the host's is.
-uint triangle_units(float p, float q, float level) {
-    precise float sum = p * p + q * q + level;
+// Units of a triangle whose doubled area's square is `sum`: its square root rounded as the
+// host's is, scaled, capped (area.rs).
+uint units_of(float sum) {
     precise float units = sqrt_rounded(sum) * s.area_scale;
     return uint(min(units, 4294967040.0));
+}
+
+// area.rs block_area_units, operation for operation, without fused multiply-adds.
+uint triangle_units(float p, float q, float level) {
+    precise float sum = p * p + q * q + level;
+    return units_of(sum);
+}
+
+// The squared length of a × b, as area.rs `squared_cross` works it out.
+float squared_cross(vec3 a, vec3 b) {
+    precise float x = a.y * b.z - a.z * b.y;
+    precise float y = a.z * b.x - a.x * b.z;
+    precise float z = a.x * b.y - a.y * b.x;
+    precise float sum = x * x + y * y + z * z;
+    return sum;
+}
+
+// A pinhole view's point of pixel p at depth z: z times its ray (area.rs `pinhole_point`).
+vec3 pinhole_point(ivec2 p, float z) {
+    precise vec2 ray = (vec2(p) - s.principal) * vec2(s.dx, s.dy);
+    precise vec3 point = vec3(z * ray.x, z * ray.y, z);
+    return point;
 }
 
 void main() {
@@ -239,7 +265,8 @@ void main() {
             n0.pixels += 1u;
         } else {
             count_pixel(overlap, overlaps + (k - 1u) * s.surfaces + (m - 1u));
-            precise float d = z - uintBitsToFloat(sensed.y);
+            // Positive where the synthetic surface lies nearer the sensor than the sensed one.
+            precise float d = PINHOLE ? uintBitsToFloat(sensed.y) - z : z - uintBitsToFloat(sensed.y);
             if (abs(d) <= s.tolerance) {
                 n1_plus.pixels += 1u;
             } else if (d > s.tolerance) {
@@ -247,7 +274,16 @@ void main() {
             }
         }
         // The 2×2 block whose top-left pixel this is, if all four carry surface m.
-        if (has_right && has_down && m_right == m && m_below == m && m_across == m) {
+        if (PINHOLE && has_right && has_down && m_right == m && m_below == m && m_across == m) {
+            // area.rs pinhole_block_area_units.
+            precise vec3 p00 = pinhole_point(p, z);
+            precise vec3 e1 = pinhole_point(right, z10) - p00;
+            precise vec3 e2 = pinhole_point(across, z11) - p00;
+            precise vec3 e3 = pinhole_point(down, z01) - p00;
+            uint surface_area = areas + 2u * (m - 1u);
+            count_units(area, surface_area, units_of(squared_cross(e1, e2)));
+            count_units(area, surface_area, units_of(squared_cross(e2, e3)));
+        } else if (has_right && has_down && m_right == m && m_below == m && m_across == m) {
             precise float a = z10 - z;
             precise float b = z11 - z;
             precise float e = z01 - z;

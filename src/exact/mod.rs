@@ -22,7 +22,8 @@ mod rig;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use crate::sensor::{Scanner, Sensor};
+use crate::sensor::{PixelRect, Scanner, Sensor};
+use crate::shadow::ShadowMode;
 use glam::{DMat4, DVec2, DVec3};
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as BvhVector;
@@ -162,18 +163,34 @@ pub fn render_scene_exact(scene: &Scene) -> Result<ExactImage> {
     render_exact(&scene.sensor, &scene_objects(scene)?)
 }
 
-/// The scene's image under a rig other than the paper's scanner (src/exact/rig.rs): in shadow
-/// mode `exact`, tested against every witness; in mode `none`, the reference view's rays alone.
+/// The scene's image under a rig other than the paper's scanner (src/exact/rig.rs), in
+/// shadow mode `mode` (`render_rig`).
 pub fn render_rig_exact(scene: &Scene) -> Result<ExactImage> {
-    let test_witnesses = scene.shadow.mode == crate::shadow::ShadowMode::Exact;
-    rig::render_rig(&scene.sensor, &scene_objects(scene)?, test_witnesses)
+    let full = PixelRect { col: 0, row: 0, width: scene.sensor.width(), height: scene.sensor.height() };
+    render_rig(&scene.sensor, &scene_objects(scene)?, scene.shadow.mode, full)
+}
+
+/// The image of `objects` under a rig other than the paper's scanner, cast on the CPU within
+/// `region` (the rest meets nothing): in shadow modes `exact` and `depth` each point is tested
+/// against every witness (depth mode asks, up to its bias, the question exact mode answers,
+/// and under a rig the CPU answers it exactly: src/shadow.rs); in mode `none` the reference
+/// view's rays alone are cast. Mode `label` is not cast (it reads the witnesses' label
+/// images, which the GPU renders).
+pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], mode: ShadowMode, region: PixelRect) -> Result<ExactImage> {
+    let test_witnesses = match mode {
+        ShadowMode::Exact | ShadowMode::Depth => true,
+        ShadowMode::None => false,
+        ShadowMode::Label => sensor.require_scanner("[shadow] mode = \"label\"").map(|_| true)?,
+    };
+    rig::render_rig(sensor, objects, test_witnesses, region)
 }
 
 /// Casts the rays of shadow mode `exact` at every pixel centre of the sensor's image.
 pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactImage> {
+    let full = PixelRect { col: 0, row: 0, width: sensor.width(), height: sensor.height() };
     match sensor.scanner() {
         Some(scanner) => render_scanner(&scanner, objects),
-        None => rig::render_rig(sensor, objects, true),
+        None => rig::render_rig(sensor, objects, true, full),
     }
 }
 
@@ -205,7 +222,7 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
         // The camera is witness 0.
         ExactPixel { label: triangle.label, z, gradient, lost_by: u32::from(occluded) }
     };
-    Ok(cast_image(width, height, cast))
+    Ok(cast_image((width, height), PixelRect { col: 0, row: 0, width, height }, cast))
 }
 
 /// What exact ray casting finds at one pixel centre.
@@ -219,12 +236,22 @@ struct ExactPixel {
     lost_by: u32,
 }
 
-/// Casts every pixel of a `width`×`height` image, rows in parallel.
-fn cast_image(width: u32, height: u32, cast: impl Fn(u32, u32) -> ExactPixel + Sync) -> ExactImage {
+/// Casts the pixels of `region` in a `width`×`height` image, rows in parallel; the others
+/// meet nothing.
+fn cast_image(
+    (width, height): (u32, u32),
+    region: PixelRect,
+    cast: impl Fn(u32, u32) -> ExactPixel + Sync,
+) -> ExactImage {
+    let cols = region.col..region.col + region.width;
+    let rows = region.row..region.row + region.height;
     let pixels: Vec<ExactPixel> = (0..height)
         .into_par_iter()
         .flat_map_iter(|row| (0..width).map(move |col| (col, row)))
-        .map(|(col, row)| cast(col, row))
+        .map(|(col, row)| match cols.contains(&col) && rows.contains(&row) {
+            true => cast(col, row),
+            false => ExactPixel::default(),
+        })
         .collect();
     ExactImage {
         width,

@@ -13,7 +13,7 @@ use super::{
     cast_image, posed_triangles, ExactImage, ExactObject, ExactPixel, Triangle, VerticalCaster, FACING_TOLERANCE,
 };
 use crate::error::{Error, Result};
-use crate::sensor::{Direction, Sensor, View, WitnessGeometry};
+use crate::sensor::{Direction, PixelRect, Sensor, View, WitnessGeometry};
 use crate::shader_contract::TIE_RELATIVE;
 use glam::{DMat4, DQuat, DVec2, DVec3};
 
@@ -35,10 +35,15 @@ fn directional_frame(direction: Direction) -> DMat4 {
     }
 }
 
-/// Casts the reference view's ray at every pixel centre and, where `test_witnesses`, tests
-/// each point against every witness. Bit k of the image's `witness` is set where witness k
+/// Casts the reference view's ray at every pixel centre of `region` and, where
+/// `test_witnesses`, tests each point against every witness. Bit k of the image's `witness` is set where witness k
 /// does not see the point.
-pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool) -> Result<ExactImage> {
+pub fn render_rig(
+    sensor: &Sensor,
+    objects: &[ExactObject],
+    test_witnesses: bool,
+    region: PixelRect,
+) -> Result<ExactImage> {
     sensor.validate()?;
     let triangles = posed_triangles(objects, DMat4::IDENTITY);
     let scale = triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
@@ -73,7 +78,9 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool
             }
             (View::Pinhole(p), _, Some(rays)) => {
                 let d = p.intrinsics.ray(col, row);
-                rays.front(DVec3::ZERO, d, (p.near, p.far), tie).map(|(z, t)| (z * d, z, t))
+                // A point on the plane of the view's centre (Z = 0) is not in front of it.
+                let near = p.near.max(f64::MIN_POSITIVE);
+                rays.front(DVec3::ZERO, d, (near, p.far), tie).map(|(z, t)| (z * d, z, t))
             }
             _ => unreachable!("the reference view's caster is built above"),
         }
@@ -119,5 +126,5 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], test_witnesses: bool
         let gradient = [-normal.x / normal.z, -normal.y / normal.z].map(|g| if g.is_nan() { 0.0 } else { g });
         ExactPixel { label: triangle.label, z, gradient, lost_by: lost_by(p, lit) }
     };
-    Ok(cast_image(sensor.width(), sensor.height(), cast))
+    Ok(cast_image((sensor.width(), sensor.height()), region, cast))
 }

@@ -442,7 +442,7 @@ impl Renderer {
             sensor: scene.sensor.clone(),
             shadow: scene.shadow,
             effects: scene.effects,
-            shadow_pass: views.shadow.is_some() || scene.shadow.mode == ShadowMode::Exact,
+            shadow_pass: views.shadow.is_some() || casts_shadows(scene, scanner),
             raster: scanner.map(|_| if compute { Raster::Compute } else { Raster::Graphics }),
             label,
             label_unshadowed,
@@ -454,22 +454,19 @@ impl Renderer {
     }
 
     /// Renders a rig other than the paper's scanner: by exact ray casting on the CPU to the
-    /// reference view and every witness (src/exact/rig.rs) in shadow mode `exact`, to the
-    /// reference view alone in mode `none`; its effects, where it names any, run as GPU passes
-    /// over the cast image. The GPU shadow modes render the scanner alone so far, and refuse
-    /// other rigs by name.
+    /// reference view and every witness (src/exact/rig.rs) in shadow modes `exact` and `depth`,
+    /// to the reference view alone in mode `none`; its effects, where it names any, run as GPU
+    /// passes over the cast image. Mode `label`, which reads the witnesses' label images, is
+    /// the GPU's, which renders the scanner alone so far: other rigs are refused by name.
     fn render_rig(&self, scene: &Scene) -> Result<RenderOutput> {
         let sensor = &scene.sensor;
-        if !matches!(scene.shadow.mode, ShadowMode::Exact | ShadowMode::None) {
-            sensor.require_scanner(&format!("[shadow] mode = \"{}\"", scene.shadow.mode.as_str()))?;
+        if scene.shadow.mode == ShadowMode::Label {
+            sensor.require_scanner("[shadow] mode = \"label\"")?;
         }
         let (width, height) = (sensor.width(), sensor.height());
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
         let pixels = u64::from(width) * u64::from(height);
-        // The cast image, as a view of the GPU's effect passes where they run: its pixels on a
-        // grid of unit pitch (no pass reads the pitch), z as cast (no local origin).
-        let range = ViewGrid { origin: [0.0; 2], pitch: [1.0; 2], width, height, z_range: (0.0, 1.0) };
-        let views = Views { origin: glam::DVec3::ZERO, range, shadow: None };
+        let views = Views::cast(width, height);
         let with_effects = !scene.effects.is_empty();
         if with_effects {
             self.check_pixel_buffers((width, height))?;
@@ -493,6 +490,12 @@ impl Renderer {
     }
 }
 
+/// Whether the scene's witnesses were tested on the CPU: shadow mode `exact`, and under a rig
+/// other than the paper's scanner (`scanner` `None`) mode `depth` too.
+fn casts_shadows(scene: &Scene, scanner: Option<&Scanner>) -> bool {
+    matches!((scanner, scene.shadow.mode), (_, ShadowMode::Exact) | (None, ShadowMode::Depth))
+}
+
 /// A render by exact ray casting on the CPU alone (a rig other than the paper's scanner), without
 /// effects.
 fn exact_output(scene: &Scene, image: ExactImage, timings: Vec<PassTime>) -> RenderOutput {
@@ -510,7 +513,7 @@ fn exact_output(scene: &Scene, image: ExactImage, timings: Vec<PassTime>) -> Ren
         sensor: scene.sensor.clone(),
         shadow: scene.shadow,
         effects: scene.effects,
-        shadow_pass: scene.shadow.mode == ShadowMode::Exact,
+        shadow_pass: casts_shadows(scene, None),
         raster: None,
         label: image.shadowed,
         label_unshadowed: image.label,

@@ -78,6 +78,48 @@ impl View {
         }
     }
 
+    /// The pixels whose rays can meet a sphere, with `margin` more each way, clipped to the
+    /// image; `None` where none can. An orthographic view's are the sphere's xy box over its
+    /// grid; a pinhole view's hold the projections of the cube around the sphere (a convex
+    /// set's projection lies within its hull's), or are the whole image where the sphere
+    /// reaches the plane of the view's centre (Z ≤ 0), which has no projection.
+    pub fn footprint(&self, centre: DVec3, radius: f64, margin: u32) -> Option<PixelRect> {
+        match self {
+            View::Orthographic(o) => {
+                let grid = ViewGrid {
+                    origin: o.origin,
+                    pitch: o.pitch,
+                    width: o.width,
+                    height: o.height,
+                    z_range: (0.0, 1.0),
+                };
+                grid.footprint(centre, radius, margin)
+            }
+            View::Pinhole(p) => {
+                let k = &p.intrinsics;
+                let full = PixelRect { col: 0, row: 0, width: k.width, height: k.height };
+                // (A NaN centre has no projection either.)
+                if centre.z - radius <= 0.0 || centre.is_nan() || radius.is_nan() {
+                    return Some(full);
+                }
+                let corners = (0..8).map(|i| {
+                    let sign = |bit: u32| if i & bit == 0 { -1.0 } else { 1.0 };
+                    centre + radius * DVec3::new(sign(1), sign(2), sign(4))
+                });
+                let (lo, hi) = corners
+                    .filter_map(|c| k.project(c))
+                    .fold((glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY), |(lo, hi), uv| (lo.min(uv), hi.max(uv)));
+                let m = f64::from(margin);
+                let span = |lo: f64, hi: f64, n: u32| {
+                    let (lo, hi) = ((lo.floor() - m).max(0.0), (hi.ceil() + m).min(f64::from(n) - 1.0));
+                    (lo <= hi).then(|| (lo as u32, (hi - lo) as u32 + 1))
+                };
+                let ((col, width), (row, height)) = (span(lo.x, hi.x, k.width)?, span(lo.y, hi.y, k.height)?);
+                Some(PixelRect { col, row, width, height })
+            }
+        }
+    }
+
     /// The region this view sees: an orthographic view's pixels' prism, unbounded both ways
     /// along z; a pinhole view's frustum between near and far.
     pub fn volume(&self) -> ViewVolume {
@@ -189,6 +231,21 @@ mod tests {
     fn pinhole() -> View {
         let intrinsics = Intrinsics { width: 4, height: 2, fx: 2.0, fy: 2.0, cx: 1.5, cy: 0.5 };
         View::Pinhole(Pinhole { intrinsics, near: 0.0, far: f64::INFINITY })
+    }
+
+    /// A pinhole view's footprint holds every pixel whose ray meets the sphere: a sphere of
+    /// radius 0.5 at (0, 0, 4) under fx = fy = 2, (cx, cy) = (1.5, 0.5) projects within
+    /// u, v = 1.5 ± 2·0.5/3.5 and 0.5 ± 2·0.5/3.5 (its cube's nearest face at Z = 3.5): columns
+    /// 1..=2 and rows 0..=1, one more each way with margin 1, clipped to the 4×2 image. A sphere
+    /// reaching Z ≤ 0 has the whole image; one behind the view, or beside it, none or the whole.
+    #[test]
+    fn a_pinhole_footprint_holds_the_projected_sphere() {
+        let view = pinhole();
+        let rect = |col, row, width, height| Some(PixelRect { col, row, width, height });
+        assert_eq!(view.footprint(DVec3::new(0.0, 0.0, 4.0), 0.5, 0), rect(1, 0, 2, 2));
+        assert_eq!(view.footprint(DVec3::new(0.0, 0.0, 4.0), 0.5, 1), rect(0, 0, 4, 2));
+        assert_eq!(view.footprint(DVec3::new(0.0, 0.0, 0.2), 0.5, 0), rect(0, 0, 4, 2));
+        assert_eq!(view.footprint(DVec3::new(40.0, 0.0, 4.0), 0.5, 1), None);
     }
 
     /// Orthographic points lie over their pixel centres at z; pinhole ones at depth Z along

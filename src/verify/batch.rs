@@ -19,10 +19,11 @@
 //! footprint misses the image records nothing. The slots' counts, in device-local buffers
 //! zeroed first, are copied to host memory at the end and put in the order the verifier reads.
 
-use super::score_pass::{ScoreBindings, ScoreConstants, ScoreInputs, ScorePass, ScoreSources};
+use super::area::{BlockGeometry, BlockRays};
+use super::score_pass::{ScoreBindings, ScoreConstants, ScoreInputs, ScorePass, ScorePipelines, ScoreSources};
 use crate::effects::Effects;
 use crate::error::Result;
-use crate::exact::{render_exact, ExactObject};
+use crate::exact::{render_exact, render_rig, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestamps};
 use crate::mesh::Mesh;
 use crate::render::{
@@ -58,11 +59,15 @@ pub struct SensedBuffers<'a> {
 
 /// What is constant over a batch.
 pub struct BatchSettings<'a> {
-    pub sensor: &'a Scanner,
+    pub sensor: &'a Sensor,
+    /// The paper's scanner, where the sensor is one: the GPU renders its views. Any other
+    /// rig's images are cast on the CPU (src/exact/rig.rs), within each hypothesis' footprint.
+    pub scanner: Option<&'a Scanner>,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
     pub tolerance: f32,
-    pub area_scale: f32,
+    /// How blocks of the sensor's image turn depths into area (the sensed image's).
+    pub blocks: BlockGeometry,
     pub sensed: SensedBuffers<'a>,
     /// Render-target slots: hypotheses recorded side by side in a run.
     pub slots: usize,
@@ -165,30 +170,54 @@ pub(crate) fn count_batch(
         return Ok(BatchCounts { words: vec![0; counts_words], rasters: Vec::new() });
     }
     let ctx = renderer.context();
-    let sensor = settings.sensor;
+    let (width, height) = (settings.sensor.width(), settings.sensor.height());
     let max_side = ctx.max_view_side();
-    let to_shadow = sensor.to_shadow_frame();
+    let to_shadow = settings.scanner.map(Scanner::to_shadow_frame);
+    let posed_sphere = |item: &BatchItem| (item.pose.transform_point3(item.sphere.0), item.sphere.1);
     let views: Vec<Views> = items
         .iter()
-        .map(|item| {
-            let (centre, radius) = item.sphere;
-            let posed = [(item.pose.transform_point3(centre), radius)];
-            plan_views(sensor, &settings.shadow, settings.effects, &posed, &|_| "its model".into(), max_side)
+        .map(|item| match settings.scanner {
+            Some(scanner) => {
+                let posed = [posed_sphere(item)];
+                plan_views(scanner, &settings.shadow, settings.effects, &posed, &|_| "its model".into(), max_side)
+            }
+            None => Ok(Views::cast(width, height)),
         })
         .collect::<Result<_>>()?;
+    // Each hypothesis' pixels that its model can cover (with a margin), in the range view.
+    let footprints: Vec<Option<PixelRect>> = items
+        .iter()
+        .zip(&views)
+        .map(|(item, views)| {
+            let (centre, radius) = posed_sphere(item);
+            match settings.scanner {
+                Some(_) => views.range.footprint(centre, radius, FOOTPRINT_MARGIN),
+                None => settings.sensor.reference.footprint(centre, radius, FOOTPRINT_MARGIN),
+            }
+        })
+        .collect();
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
-    // Shadow mode `exact`: each hypothesis' range view cast on the CPU, to be copied in.
-    let host_views: Vec<HostView> = match settings.shadow.mode {
-        ShadowMode::Exact => items
+    // Shadow mode `exact`, and any rig but the scanner: each hypothesis' range view cast on the
+    // CPU, to be copied in (a rig's within the hypothesis' footprint).
+    let cast = |(item, views): (&BatchItem, &Views), footprint: &Option<PixelRect>| {
+        let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
+        let image = match settings.scanner {
+            Some(_) => render_exact(settings.sensor, &[object])?,
+            None => {
+                let nothing = PixelRect { col: 0, row: 0, width: 0, height: 0 };
+                render_rig(settings.sensor, &[object], settings.shadow.mode, footprint.unwrap_or(nothing))?
+            }
+        };
+        HostView::new(ctx, &image, views.origin.z, "exact range view")
+    };
+    let host_views: Vec<HostView> = match (settings.scanner, settings.shadow.mode) {
+        (Some(_), mode) if mode != ShadowMode::Exact => Vec::new(),
+        _ => items
             .iter()
             .zip(&views)
-            .map(|(item, views)| {
-                let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
-                let image = render_exact(&Sensor::from(*sensor), &[object])?;
-                HostView::new(ctx, &image, views.origin.z, "exact range view")
-            })
+            .zip(&footprints)
+            .map(|(item, footprint)| cast(item, footprint))
             .collect::<Result<_>>()?,
-        _ => Vec::new(),
     };
     // Hypothesis i's labels 1..=M at reflectivity_offsets[i] + label; label 0 first.
     let default_reflectivity = settings.effects.reflectivity.map_or(1.0, |r| r.default);
@@ -207,23 +236,28 @@ pub(crate) fn count_batch(
     // The slots' views are the sensor's and the widest shadow view; the compute rasterizer's
     // words cover them.
     let shadow_width = views.iter().filter_map(|v| v.shadow.map(|g| g.width)).max();
-    let slot_view_pixels = u64::from(sensor.height) * u64::from(sensor.width.max(shadow_width.unwrap_or(0)));
+    let slot_view_pixels = u64::from(height) * u64::from(width.max(shadow_width.unwrap_or(0)));
     // Each hypothesis' footprint in both views; one that misses the image records nothing.
     let jobs: Vec<Option<Job>> = (0..)
-        .zip(items.iter().zip(&views).zip(&draws).zip(&reflectivity_offsets))
-        .map(|(index, (((item, views), draws), &reflectivity_offset))| {
-            let (centre, radius) = item.sphere;
-            let centre = item.pose.transform_point3(centre);
-            let area = views.range.footprint(centre, radius, FOOTPRINT_MARGIN)?;
-            let shadow_area = views.shadow.map(|g| {
+        .zip(items.iter().zip(&views).zip(&draws).zip(&reflectivity_offsets).zip(&footprints))
+        .map(|(index, ((((item, views), draws), &reflectivity_offset), footprint))| {
+            let (centre, radius) = posed_sphere(item);
+            let area = (*footprint)?;
+            let shadow_area = views.shadow.zip(to_shadow).map(|(g, to_shadow)| {
                 let columns =
                     g.footprint(to_shadow.transform_point3(centre), radius, FOOTPRINT_MARGIN).unwrap_or(g.full());
                 // Rows are the range view's (a rotation about y keeps y).
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
             let footprint = u64::from(area.width) * u64::from(area.height);
-            let reach = views.reach(sensor, (centre, radius));
             let triangles = u64::from(item.mesh.index_count / 3);
+            let compute = match settings.scanner {
+                Some(scanner) if host_views.is_empty() => {
+                    let reach = views.reach(scanner, (centre, radius));
+                    renderer.computes(1, (triangles, triangles), (footprint, reach), slot_view_pixels)
+                }
+                _ => false,
+            };
             Some(Job {
                 draws: draws.as_slice(),
                 first_draw_index: index,
@@ -232,22 +266,22 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
-                compute: host_views.is_empty()
-                    && renderer.computes(1, (triangles, triangles), (footprint, reach), slot_view_pixels),
+                compute,
             })
         })
         .collect();
     // Hypothesis i is draw i of the table, seen or not.
     let groups = || views.iter().zip(draws.iter().map(|d| d.as_slice()));
-    let shadow_table = draw_table(ctx, ViewKind::Shadow, sensor, groups())?;
+    let table = |kind| settings.scanner.map(|scanner| draw_table(ctx, kind, scanner, groups())).transpose();
+    let shadow_table = table(ViewKind::Shadow)?.flatten();
     // Every hypothesis is a view of one draw; the table is needed where any renders by compute.
     let compute = jobs.iter().flatten().any(|job| job.compute);
     let range_table = match compute {
-        true => draw_table(ctx, ViewKind::Range, sensor, groups())?,
+        true => table(ViewKind::Range)?.flatten(),
         false => None,
     };
     let shape = SlotShape {
-        size: (sensor.width, sensor.height),
+        size: (width, height),
         shadow: shadow_width.zip(shadow_table.as_ref()),
         sink: SinkKind::Compute,
         effects: (!settings.effects.is_empty())
@@ -321,7 +355,8 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(Some(sensor), settings.shadow, settings.effects, compute)?;
+    let passes = renderer.passes(settings.scanner, settings.shadow, settings.effects, compute)?;
+    let score_pipelines = score_pass.pipelines(matches!(settings.blocks.rays, BlockRays::Pinhole { .. }))?;
     // Timed stages: a run's three of coverage, its jobs' passes (PassClock::QUERIES less the
     // start) and two of scores at most.
     let laps = recorded.len().div_ceil(slots.len()) * (PassClock::QUERIES as usize + 4) + 1;
@@ -359,7 +394,13 @@ pub(crate) fn count_batch(
                 .iter()
                 .zip(run_places)
                 .map(|(&(item, job), &(slot, at))| {
-                    let scoring = ScoreJob { settings, score_pass, item, job, slot_counts: (&slot_counts[slot], at) };
+                    let scoring = ScoreJob {
+                        settings,
+                        pipelines: score_pipelines,
+                        item,
+                        job,
+                        slot_counts: (&slot_counts[slot], at),
+                    };
                     scoring.sink(&score_bindings[slot])
                 })
                 .collect();
@@ -408,7 +449,7 @@ pub(crate) fn count_batch(
 /// slot's counts with where in them its own start.
 struct ScoreJob<'a> {
     settings: &'a BatchSettings<'a>,
-    score_pass: &'a ScorePass,
+    pipelines: ScorePipelines<'a>,
     item: &'a BatchItem<'a>,
     job: &'a Job<'a>,
     slot_counts: (&'a Buffer, usize),
@@ -419,7 +460,7 @@ impl<'a> ScoreJob<'a> {
     /// asks for it and a shadow pass ran, a step of its own (the counts are written again,
     /// ordered after the first). Else the verifier copies the counts.
     fn sink(self, bindings: &'a ScoreBindings) -> Sink<'a> {
-        let Self { settings, score_pass, item, .. } = self;
+        let Self { settings, pipelines, item, .. } = self;
         let (counts, at) = self.slot_counts;
         let steps = move |images: JobImages<'a>| -> Vec<Step<'a>> {
             let reads = vec![(images.label, Access::ComputeRead), (images.z, Access::ComputeRead)];
@@ -433,14 +474,14 @@ impl<'a> ScoreJob<'a> {
                 measured_z: images.measured_z.is_some(),
             };
             let first = self.constants(at);
-            let record = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, sources, &first);
+            let record = move |_: &GpuContext, cmd| bindings.record(cmd, pipelines, sources, &first);
             let Some(offset) = item.unshadowed_offset.filter(|_| images.shadowed_labels.is_some()) else {
                 return vec![Step::new(reads, buffers, record).timed("score")];
             };
             debug_assert!((item.counts_offset..item.counts_offset + item.counts_words).contains(&offset));
             let again = self.constants(at + offset - item.counts_offset);
             let unshadowed = ScoreSources { shadowed: false, ..sources };
-            let record_again = move |_: &GpuContext, cmd| bindings.record(cmd, score_pass, unshadowed, &again);
+            let record_again = move |_: &GpuContext, cmd| bindings.record(cmd, pipelines, unshadowed, &again);
             vec![
                 Step::new(reads.clone(), buffers.clone(), record).timed("score"),
                 Step::new(reads, buffers, record_again).timed("score (unshadowed)"),
@@ -452,19 +493,21 @@ impl<'a> ScoreJob<'a> {
 
     /// The score pass's constants for counts at `offset` in the slot's.
     fn constants(&self, offset: usize) -> ScoreConstants {
-        let (sensor, job) = (self.settings.sensor, self.job);
+        let (settings, job) = (self.settings, self.job);
         ScoreConstants {
             counts_offset: offset as u32,
-            width: sensor.width,
-            height: sensor.height,
+            width: settings.sensor.width(),
+            height: settings.sensor.height(),
             z_origin: job.views.origin.z as f32,
             region: [job.area.col, job.area.row, job.area.width, job.area.height],
             surfaces: self.item.surfaces,
             segments: self.settings.sensed.segment_count,
             tolerance: self.settings.tolerance,
-            area_scale: self.settings.area_scale,
-            dx: sensor.pitch[0] as f32,
-            dy: sensor.pitch[1] as f32,
+            area_scale: settings.blocks.scale(),
+            dx: 0.0,
+            dy: 0.0,
+            principal: [0.0; 2],
         }
+        .with_rays(settings.blocks.rays)
     }
 }

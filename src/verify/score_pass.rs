@@ -1,13 +1,14 @@
 //! The compute pass that accumulates one hypothesis' verification counts
 //! (shaders/verify/score.comp, src/verify/counts.rs).
 
+use super::area::BlockRays;
 use super::counts::{N0_WORD, N1_MINUS_WORD, N1_PLUS_WORD, SCALARS};
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SCORE_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use ash::vk;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Push constants of the score pass; matches `shaders/verify/score.comp`.
 #[repr(C)]
@@ -24,14 +25,40 @@ pub struct ScoreConstants {
     pub segments: u32,
     pub tolerance: f32,
     pub area_scale: f32,
+    /// An orthographic view's pitch; a pinhole view's 1/fx, 1/fy (`BlockRays`).
     pub dx: f32,
     pub dy: f32,
+    /// A pinhole view's cx, cy.
+    pub principal: [f32; 2],
 }
 
 matches_shader_struct!(
     ScoreConstants,
-    Score { counts_offset, width, height, z_origin, region, surfaces, segments, tolerance, area_scale, dx, dy }
+    Score {
+        counts_offset,
+        width,
+        height,
+        z_origin,
+        region,
+        surfaces,
+        segments,
+        tolerance,
+        area_scale,
+        dx,
+        dy,
+        principal
+    }
 );
+
+impl ScoreConstants {
+    /// The constants' view fields for `rays` (src/verify/area.rs).
+    pub fn with_rays(self, rays: BlockRays) -> Self {
+        match rays {
+            BlockRays::Orthographic { dx, dy } => Self { dx, dy, principal: [0.0; 2], ..self },
+            BlockRays::Pinhole { inverse_focal: [dx, dy], principal } => Self { dx, dy, principal, ..self },
+        }
+    }
+}
 
 /// What a score pass counts from (specialization constants of shaders/verify/score.comp).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,13 +89,21 @@ impl ScoreSources {
 /// adding a pixel at a time spent about half the pass on its atomics.
 const SCORE_RUN: u32 = 16;
 
-/// The score pass's pipelines, one for each [`ScoreSources`], built once per verifier. Their
-/// descriptor-set layouts are defined identically, so one set serves them all. A software
-/// rasterizer such as lavapipe runs both sides of a branch on a uniform value, so the sources
-/// are chosen by specialization, not by a push constant.
+/// The score pass's pipelines, one for each [`ScoreSources`] and kind of view (orthographic,
+/// pinhole: `BlockRays`), each kind's built on first use and kept for the verifier's life.
+/// Their descriptor-set layouts are defined identically, so one set serves them all. A
+/// software rasterizer such as lavapipe runs both sides of a branch on a uniform value, so the
+/// sources and the kind are chosen by specialization, not by a push constant.
 pub(crate) struct ScorePass {
-    pipelines: Vec<ComputePipeline>,
+    ctx: Arc<GpuContext>,
+    sqrt: (bool, i32),
+    /// Orthographic, then pinhole.
+    kinds: [OnceLock<Vec<ComputePipeline>>; 2],
 }
+
+/// One kind of view's pipelines, by [`ScoreSources::index`].
+#[derive(Clone, Copy)]
+pub(crate) struct ScorePipelines<'a>(&'a [ComputePipeline]);
 
 impl ScorePass {
     /// The pass, correcting the device's square root to the IEEE one (shaders/verify/score.comp,
@@ -83,7 +118,22 @@ impl ScorePass {
         Self::with_sqrt((true, ulps), ctx)
     }
 
-    fn with_sqrt((correct, error_ulps): (bool, i32), ctx: &Arc<GpuContext>) -> Result<Self> {
+    /// Builds the orthographic views' pipelines, so that a device that cannot build the pass
+    /// fails here.
+    fn with_sqrt(sqrt: (bool, i32), ctx: &Arc<GpuContext>) -> Result<Self> {
+        let pass = Self { ctx: ctx.clone(), sqrt, kinds: Default::default() };
+        pass.pipelines(false)?;
+        Ok(pass)
+    }
+
+    /// The pipelines for an orthographic view, or a pinhole one, built on first use.
+    pub fn pipelines(&self, pinhole: bool) -> Result<ScorePipelines<'_>> {
+        let cell = &self.kinds[usize::from(pinhole)];
+        if let Some(built) = cell.get() {
+            return Ok(ScorePipelines(built));
+        }
+        let (correct, error_ulps) = self.sqrt;
+        let ctx = &self.ctx;
         let pipeline = |sources: ScoreSources| {
             let flags = [sources.shadowed, sources.losses, sources.measured_z].map(u32::from);
             // The range view's label and z; the buffers of ScoreInputs.
@@ -103,12 +153,14 @@ impl ScorePass {
                     (spec::USE_MEASURED_Z, flags[2]),
                     (spec::CORRECT_SQRT, u32::from(correct)),
                     (spec::SQRT_ERROR_ULPS, error_ulps as u32),
+                    (spec::PINHOLE, u32::from(pinhole)),
                 ],
-                &format!("verification counts ({sources:?})"),
+                &format!("verification counts ({sources:?}, pinhole: {pinhole})"),
             )
         };
-        let pipelines = (0..ScoreSources::ALL).map(|i| pipeline(ScoreSources::of_index(i))).collect::<Result<_>>()?;
-        Ok(Self { pipelines })
+        let built = (0..ScoreSources::ALL).map(|i| pipeline(ScoreSources::of_index(i))).collect::<Result<_>>()?;
+        // A concurrent call may have built them first; either set serves.
+        Ok(ScorePipelines(cell.get_or_init(|| built)))
     }
 
     /// The descriptor set binding what one slot's score passes read and write: the range
@@ -126,7 +178,7 @@ impl ScorePass {
             Losses,
             MeasuredZ,
         });
-        let set_layout = self.pipelines[0].set_layout;
+        let set_layout = self.pipelines(false)?.0[0].set_layout;
         let set = StorageSet::new(ctx, set_layout, &[reads.label, reads.z], (&[], &buffers), "score bindings")?;
         Ok(ScoreBindings { set })
     }
@@ -151,8 +203,14 @@ pub(crate) struct ScoreBindings {
 impl ScoreBindings {
     /// Records the pass counting from `sources` over the constants' region: workgroups of 8×8
     /// invocations, each scoring a run of [`SCORE_RUN`] pixels.
-    pub fn record(&self, cmd: vk::CommandBuffer, pass: &ScorePass, sources: ScoreSources, constants: &ScoreConstants) {
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipelines: ScorePipelines,
+        sources: ScoreSources,
+        constants: &ScoreConstants,
+    ) {
         let groups = [constants.region[2].div_ceil(8 * SCORE_RUN), constants.region[3].div_ceil(8)];
-        self.set.dispatch(cmd, &pass.pipelines[sources.index()], bytemuck::bytes_of(constants), groups);
+        self.set.dispatch(cmd, &pipelines.0[sources.index()], bytemuck::bytes_of(constants), groups);
     }
 }

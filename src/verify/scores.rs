@@ -8,7 +8,6 @@
 //! what the paper's Fig. 6 example reports (shadowing removed model segment 1 and s2 *rose*).
 //! Such bindings are listed in `absent_bindings`.
 
-use super::area::units_to_area;
 use super::counts::Counts;
 use super::sensed::SensedImage;
 use serde::Serialize;
@@ -60,7 +59,6 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
     let overlap_of = |k: u32, m: u32| {
         counts.overlap.binary_search_by_key(&(k, m), |&(key, _)| key).map_or(0, |i| counts.overlap[i].1)
     };
-    let (dx, dy) = (sensed.pitch[0], sensed.pitch[1]);
     let details: Vec<BindingDetail> = bound
         .iter()
         .map(|&(scene_label, surface)| {
@@ -82,8 +80,8 @@ pub fn score(counts: &Counts, sensed: &SensedImage, bindings: &[(u32, u32)]) -> 
                 overlap,
                 scene_population,
                 model_population,
-                scene_area: units_to_area(scene_units, dx, dy),
-                model_area: units_to_area(model_units, dx, dy),
+                scene_area: sensed.blocks.area(scene_units),
+                model_area: sensed.blocks.area(model_units),
                 absent: scene_population == 0 || model_population == 0,
             }
         })

@@ -3,11 +3,11 @@
 //! from the sensed image alone: N_i, N_S and A_S. The per-pixel data goes to the GPU once, on
 //! the first verification that needs it there, and is kept for the next.
 
-use super::area::{block_area_units, unit_scale};
+use super::area::BlockGeometry;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
 use crate::io::RangeImage;
-use crate::sensor::Sensor;
+use crate::sensor::{Sensor, View};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
 
@@ -15,7 +15,10 @@ use std::sync::{Arc, OnceLock};
 pub struct SensedImage {
     pub width: u32,
     pub height: u32,
-    pub pitch: [f64; 2],
+    /// The reference view it was measured in: a verification's sensor must have its pixels.
+    pub view: View,
+    /// How its blocks, and the hypotheses', turn depths into area (src/verify/area.rs).
+    pub blocks: BlockGeometry,
     /// The segment labels present, ascending; dense index k stands for `segments[k]`.
     pub segments: Vec<u32>,
     /// Per pixel, the dense segment index + 1, or 0 where there is no data.
@@ -72,11 +75,13 @@ impl SensedImage {
     /// Checks the image against the sensor it is verified with and computes its statistics.
     pub fn new(image: &RangeImage, sensor: &Sensor) -> Result<Self> {
         sensor.validate()?;
-        let sensor = sensor.require_scanner("a sensed image")?;
-        if (image.width, image.height) != (sensor.width, sensor.height) {
+        if (image.width, image.height) != (sensor.width(), sensor.height()) {
             return Err(Error::Scene(format!(
                 "the sensed image is {}×{} but the sensor is {}×{}",
-                image.width, image.height, sensor.width, sensor.height
+                image.width,
+                image.height,
+                sensor.width(),
+                sensor.height()
             )));
         }
         let n = image.label.len();
@@ -86,6 +91,17 @@ impl SensedImage {
         if let Some(i) = (0..n).find(|&i| image.label[i] != 0 && !image.z[i].is_finite()) {
             return Err(Error::Scene(format!(
                 "the sensed image has label {} but Z = {} at pixel ({}, {})",
+                image.label[i],
+                image.z[i],
+                i % image.width as usize,
+                i / image.width as usize
+            )));
+        }
+        // A pinhole view sees only what lies in front of its centre.
+        let pinhole = matches!(sensor.reference, View::Pinhole(_));
+        if let Some(i) = (0..n).find(|&i| pinhole && image.label[i] != 0 && image.z[i] <= 0.0) {
+            return Err(Error::Scene(format!(
+                "the sensed image has label {} but depth Z = {} ≤ 0 at pixel ({}, {}), behind its pinhole view",
                 image.label[i],
                 image.z[i],
                 i % image.width as usize,
@@ -104,8 +120,9 @@ impl SensedImage {
         for &k in segment_index.iter().filter(|&&k| k != 0) {
             segment_population[k as usize - 1] += 1;
         }
-        let (dx, dy) = (sensor.pitch[0] as f32, sensor.pitch[1] as f32);
-        let scale = unit_scale(dx, dy);
+        // A pinhole view's area unit is a pixel's footprint at the farthest sensed depth.
+        let farthest = (0..n).filter(|&i| image.label[i] != 0).map(|i| f64::from(image.z[i])).fold(0.0, f64::max);
+        let blocks = BlockGeometry::of(&sensor.reference, if farthest > 0.0 { farthest } else { 1.0 });
         let mut segment_area_units = vec![0u64; segments.len()];
         let (w, h) = (image.width as usize, image.height as usize);
         for r in 0..h.saturating_sub(1) {
@@ -113,8 +130,8 @@ impl SensedImage {
                 let i = r * w + c;
                 let k = segment_index[i];
                 if k != 0 && segment_index[i + 1] == k && segment_index[i + w] == k && segment_index[i + w + 1] == k {
-                    let units =
-                        block_area_units(image.z[i], image.z[i + 1], image.z[i + w], image.z[i + w + 1], dx, dy, scale);
+                    let depths = [image.z[i], image.z[i + 1], image.z[i + w], image.z[i + w + 1]];
+                    let units = blocks.block_units((c as u32, r as u32), depths);
                     segment_area_units[k as usize - 1] += units.iter().map(|&u| u64::from(u)).sum::<u64>();
                 }
             }
@@ -122,7 +139,8 @@ impl SensedImage {
         Ok(Self {
             width: image.width,
             height: image.height,
-            pitch: sensor.pitch,
+            view: sensor.reference,
+            blocks,
             valid: segment_population.iter().sum(),
             segments,
             segment_index,

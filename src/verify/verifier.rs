@@ -9,10 +9,10 @@
 //! (one, or three on a GPU), and the sensed image. A batch keeps as many slots as the verifier
 //! asks for ([`Verifier::with_slots`]) and the memory budget holds, at least one. On a GPU,
 //! three chunks are in flight at once, chunks recorded while the device runs another
-//! (lanes.rs). In shadow mode `exact` a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose
-//! images are cast on the CPU before it is submitted.
+//! (lanes.rs). In shadow mode `exact`, and under any rig but the paper's scanner, a chunk holds
+//! at most [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is submitted
+//! (docs/sensors-and-rigs.md, "Verifying under a rig").
 
-use super::area::unit_scale;
 use super::batch::{
     count_batch, default_slots, slot_memory, BatchCounts, BatchItem, BatchSettings, SensedBuffers, StageTimes,
 };
@@ -27,9 +27,9 @@ use crate::exact;
 use crate::mesh::{Mesh, SurfaceChoice};
 use crate::pose::check_rigid;
 use crate::render::HostView;
-use crate::render::{GpuMesh, Raster, Renderer, MAX_SLOTS};
+use crate::render::{slot_bytes, GpuMesh, Raster, Renderer, MAX_SLOTS};
 use crate::scene::{load_model_as, model_form_key, ModelFormKey};
-use crate::sensor::Sensor;
+use crate::sensor::{Scanner, Sensor, View};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use crate::untrusted::quoted;
 use glam::{DMat4, DVec3};
@@ -235,24 +235,23 @@ impl Verifier {
 
     fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
         settings.sensor.validate()?;
-        let sensor = &settings.sensor.require_scanner("verification")?;
+        let scanner = settings.sensor.scanner();
+        if scanner.is_none() && settings.shadow.mode == ShadowMode::Label {
+            settings.sensor.require_scanner("[shadow] mode = \"label\"")?;
+        }
         settings.effects.validate()?;
         settings.effects.for_sensor(&settings.sensor)?;
         settings.shadow.validate()?;
-        if (sensed.width, sensed.height) != (sensor.width, sensor.height) {
+        let (width, height) = (settings.sensor.width(), settings.sensor.height());
+        if (sensed.width, sensed.height) != (width, height) {
             return Err(Error::Scene(format!(
-                "the sensed image is {}×{} but the sensor is {}×{}",
-                sensed.width, sensed.height, sensor.width, sensor.height
+                "the sensed image is {}×{} but the sensor is {width}×{height}",
+                sensed.width, sensed.height
             )));
         }
         // The sensed image and the shadowed labels are buffers of a word a pixel.
-        self.renderer.check_pixel_buffers((sensor.width, sensor.height))?;
-        if sensed.pitch != sensor.pitch {
-            return Err(Error::Scene(format!(
-                "the sensed image was measured at pitch {:?} but the sensor has pitch {:?}",
-                sensed.pitch, sensor.pitch
-            )));
-        }
+        self.renderer.check_pixel_buffers((width, height))?;
+        check_same_pixels(&sensed.view, &settings.sensor.reference)?;
         if !(settings.tolerance.is_finite() && settings.tolerance >= 0.0) {
             return Err(Error::Scene(format!("tolerance {} must be a finite number ≥ 0", settings.tolerance)));
         }
@@ -291,23 +290,28 @@ impl Verifier {
             (format!("hypothesis {}", quoted(&h.id)), (h.pose.transform_point3(h.model.sphere.0), h.model.sphere.1))
         });
         let max_triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
-        let per_slot = slot_memory(&self.renderer, sensor, &settings.shadow, &settings.effects, posed, max_triangles)?;
-        let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
-        // Shadow mode `exact`: one chunk's images cast on the CPU, and the casters of one.
-        let exact_bytes = match settings.shadow.mode {
-            ShadowMode::Exact => {
-                let images = hypotheses.len().min(EXACT_CHUNK) as u64;
-                let triangles = hypotheses.iter().map(|h| h.model.mesh.triangles.len() as u64).max().unwrap_or(0);
-                let pixels = u64::from(sensor.width) * u64::from(sensor.height);
-                images * (HostView::BYTES_PER_PIXEL + exact::BYTES_PER_PIXEL) * pixels
-                    + triangles * exact::BYTES_PER_TRIANGLE
+        let pixels = u64::from(width) * u64::from(height);
+        let per_slot = match &scanner {
+            Some(scanner) => {
+                slot_memory(&self.renderer, scanner, &settings.shadow, &settings.effects, posed, max_triangles)?
             }
-            _ => 0,
+            None => slot_bytes((pixels, 0), &settings.effects, None, 1),
+        };
+        let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
+        // Images cast on the CPU (shadow mode `exact`, and any rig but the scanner): one
+        // chunk's, and the casters of one hypothesis.
+        let exact_bytes = match casts_on_cpu(scanner.as_ref(), settings.shadow.mode) {
+            true => {
+                let images = hypotheses.len().min(EXACT_CHUNK) as u64;
+                let casters = exact::casters(&settings.sensor);
+                images * (HostView::BYTES_PER_PIXEL + exact::BYTES_PER_PIXEL) * pixels
+                    + max_triangles * casters * exact::CASTER_BYTES_PER_TRIANGLE
+            }
+            false => 0,
         };
         // The sensed image on the host and the GPU; and a chunk's: its counts with their
         // readback, its exact images and its slots, as many as the budget holds, up to those
         // asked for. As many chunks in flight (lanes.rs) as asked for and the budget holds.
-        let pixels = u64::from(sensor.width) * u64::from(sensor.height);
         let sensed_bytes = (SensedImage::HOST_BYTES_PER_PIXEL + SensedImage::GPU_BYTES_PER_PIXEL) * pixels;
         let chunk_bytes = 2 * counts + exact_bytes;
         let ledger = self.renderer.ledger();
@@ -315,7 +319,7 @@ impl Verifier {
         let holds = available.saturating_sub(sensed_bytes + chunk_bytes) / per_slot.max(1);
         plan.slots = plan.slots.min(usize::try_from(holds).unwrap_or(usize::MAX)).max(1);
         let in_flight = chunk_bytes + per_slot * plan.slots as u64;
-        let what = format_args!("verifying against a {}×{} image", sensor.width, sensor.height);
+        let what = format_args!("verifying against a {width}×{height} image");
         ledger.check(what, sensed_bytes + in_flight)?;
         plan.lanes = (1..=self.chunks_in_flight)
             .rev()
@@ -355,25 +359,26 @@ impl Verifier {
         each: &mut dyn FnMut(Vec<Verification>) -> Result<()>,
     ) -> Result<()> {
         let plan = self.plan(sensed, settings, hypotheses)?;
-        let sensor = &settings.sensor.require_scanner("verification")?;
+        let scanner = settings.sensor.scanner();
         let ctx = self.renderer.context();
         let (copies, counts_budget) = (plan.copies, plan.counts_budget);
         let layout = |h: &Hypothesis| plan.layout(h);
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         let on_gpu = sensed.on_gpu(ctx)?;
         let batch = BatchSettings {
-            sensor,
+            sensor: &settings.sensor,
+            scanner: scanner.as_ref(),
             shadow: settings.shadow,
             effects: &settings.effects,
             tolerance: settings.tolerance as f32,
-            area_scale: unit_scale(sensor.pitch[0] as f32, sensor.pitch[1] as f32),
+            blocks: sensed.blocks,
             sensed: SensedBuffers { pixels: &on_gpu.pixels, segment_count: sensed.segments.len() as u32 },
             slots: plan.slots,
             stage_times: self.stage_times.as_ref(),
         };
-        let chunk_cap = match settings.shadow.mode {
-            ShadowMode::Exact => settings.chunk_size.clamp(1, EXACT_CHUNK),
-            _ => settings.chunk_size.clamp(1, MAX_CHUNK),
+        let chunk_cap = match casts_on_cpu(scanner.as_ref(), settings.shadow.mode) {
+            true => settings.chunk_size.clamp(1, EXACT_CHUNK),
+            false => settings.chunk_size.clamp(1, MAX_CHUNK),
         };
         // Each chunk as long as its cap (in lanes, shorter: lane_chunk_cap) and the counts
         // budget allow.
@@ -396,7 +401,10 @@ impl Verifier {
             chunks.push(start..end);
             start = end;
         }
-        let shadow_pass = settings.shadow.mode.shadows(sensor.theta_deg);
+        let shadow_pass = match &scanner {
+            Some(scanner) => settings.shadow.mode.shadows(scanner.theta_deg),
+            None => settings.shadow.mode != ShadowMode::None && !settings.sensor.witnesses.is_empty(),
+        };
         let verify_chunk = |range: Range<usize>| -> Result<Vec<Verification>> {
             let chunk = &hypotheses[range];
             let mut offset = 0;
@@ -443,5 +451,32 @@ impl Verifier {
         } else {
             chunks.iter().try_for_each(|range| each(verify_chunk(range.clone())?))
         }
+    }
+}
+
+/// Whether a verification's images are cast on the CPU: in shadow mode `exact`, and under any
+/// rig but the paper's scanner (`scanner` `None`), whose GPU views are the scanner's alone so far.
+fn casts_on_cpu(scanner: Option<&Scanner>, mode: ShadowMode) -> bool {
+    scanner.is_none() || mode == ShadowMode::Exact
+}
+
+/// Refuses a sensor whose pixels are not those the sensed image was measured in: another
+/// kind of view, another orthographic pitch, other pinhole intrinsics (its size is checked
+/// before).
+fn check_same_pixels(sensed: &View, sensor: &View) -> Result<()> {
+    let refuse = |what: String| Err(Error::Scene(format!("the sensed image {what}")));
+    match (sensed, sensor) {
+        (View::Orthographic(a), View::Orthographic(b)) if a.pitch != b.pitch => {
+            refuse(format!("was measured at pitch {:?} but the sensor has pitch {:?}", a.pitch, b.pitch))
+        }
+        (View::Pinhole(a), View::Pinhole(b)) if a.intrinsics != b.intrinsics => {
+            refuse(format!("was measured with intrinsics {:?} but the sensor has {:?}", a.intrinsics, b.intrinsics))
+        }
+        (View::Orthographic(_), View::Orthographic(_)) | (View::Pinhole(_), View::Pinhole(_)) => Ok(()),
+        _ => refuse(format!(
+            "was measured in a {} view but the sensor's reference view is {}",
+            sensed.kind(),
+            sensor.kind()
+        )),
     }
 }

@@ -6,10 +6,19 @@
 
 use std::collections::BTreeMap;
 
+/// Where an image's pixels' rays run: the scores' areas and which way is nearer.
+#[derive(Clone, Copy)]
+pub enum Rays {
+    /// Parallel over a grid of this pitch; z grows toward the sensor.
+    Orthographic([f64; 2]),
+    /// Through the centre of a pinhole view of these intrinsics; depth grows away from it.
+    Pinhole { fx: f64, fy: f64, cx: f64, cy: f64 },
+}
+
 pub struct Images<'a> {
     pub width: usize,
     pub height: usize,
-    pub pitch: [f64; 2],
+    pub rays: Rays,
     pub sensed_label: &'a [u32],
     pub sensed_z: &'a [f32],
     pub synthetic_label: &'a [u32],
@@ -22,7 +31,13 @@ impl<'a> Images<'a> {
         Images {
             width: sensed.width as usize,
             height: sensed.height as usize,
-            pitch: synthetic.sensor.scanner().expect("the paper's scanner").pitch,
+            rays: match synthetic.sensor.reference {
+                rangesynth::sensor::View::Orthographic(o) => Rays::Orthographic(o.pitch),
+                rangesynth::sensor::View::Pinhole(p) => {
+                    let k = p.intrinsics;
+                    Rays::Pinhole { fx: k.fx, fy: k.fy, cx: k.cx, cy: k.cy }
+                }
+            },
             sensed_label: &sensed.label,
             sensed_z: &sensed.z,
             synthetic_label: &synthetic.label,
@@ -52,7 +67,31 @@ fn triangle_units(p: f32, q: f32, level: f32, scale: f32) -> u64 {
     u64::from((sum.sqrt() * scale).min(4_294_967_040.0) as u32)
 }
 
-fn areas(label: &[u32], z: &[f32], w: usize, h: usize, dx: f32, dy: f32) -> BTreeMap<u32, u64> {
+/// A pinhole block's two triangles' units: the points z·((c − cx)/fx, (r − cy)/fy, 1) of its
+/// four pixels (1/fx and 1/fy rounded to f32, then multiplied), each triangle's doubled area
+/// the length of the cross product of two of its edges from the top-left point, x, y, z
+/// components summed in that order.
+fn pinhole_units(c: usize, r: usize, z: [f32; 4], (ifx, ify, cx, cy): (f32, f32, f32, f32), scale: f32) -> u64 {
+    let point = |c: usize, r: usize, z: f32| [z * ((c as f32 - cx) * ifx), z * ((r as f32 - cy) * ify), z];
+    let p = point(c, r, z[0]);
+    let edge = |q: [f32; 3]| [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+    let (e1, e2, e3) = (edge(point(c + 1, r, z[1])), edge(point(c + 1, r + 1, z[3])), edge(point(c, r + 1, z[2])));
+    let units = |a: [f32; 3], b: [f32; 3]| {
+        let x = a[1] * b[2] - a[2] * b[1];
+        let y = a[2] * b[0] - a[0] * b[2];
+        let z = a[0] * b[1] - a[1] * b[0];
+        triangle_units(0.0, 0.0, x * x + y * y + z * z, scale)
+    };
+    units(e1, e2) + units(e2, e3)
+}
+
+/// Each label's area units over the blocks whose four pixels carry it. A pinhole view's unit
+/// is a pixel's footprint at `unit_depth`.
+fn areas(label: &[u32], z: &[f32], w: usize, h: usize, rays: Rays, unit_depth: f64) -> BTreeMap<u32, u64> {
+    let (dx, dy) = match rays {
+        Rays::Orthographic([dx, dy]) => (dx as f32, dy as f32),
+        Rays::Pinhole { fx, fy, .. } => ((unit_depth / fx) as f32, (unit_depth / fy) as f32),
+    };
     let scale = 0.5 * 65536.0 / (dx * dy);
     let mut out = BTreeMap::new();
     for r in 0..h.saturating_sub(1) {
@@ -62,10 +101,18 @@ fn areas(label: &[u32], z: &[f32], w: usize, h: usize, dx: f32, dy: f32) -> BTre
             if l == 0 || label[i + 1] != l || label[i + w] != l || label[i + w + 1] != l {
                 continue;
             }
-            let (a, b, e) = (z[i + 1] - z[i], z[i + w + 1] - z[i], z[i + w] - z[i]);
-            let level = (dx * dy) * (dx * dy);
-            let units =
-                triangle_units(dy * a, dx * (a - b), level, scale) + triangle_units(dy * (b - e), dx * e, level, scale);
+            let units = match rays {
+                Rays::Orthographic(_) => {
+                    let (a, b, e) = (z[i + 1] - z[i], z[i + w + 1] - z[i], z[i + w] - z[i]);
+                    let level = (dx * dy) * (dx * dy);
+                    triangle_units(dy * a, dx * (a - b), level, scale)
+                        + triangle_units(dy * (b - e), dx * e, level, scale)
+                }
+                Rays::Pinhole { fx, fy, cx, cy } => {
+                    let k = ((1.0 / fx) as f32, (1.0 / fy) as f32, cx as f32, cy as f32);
+                    pinhole_units(c, r, [z[i], z[i + 1], z[i + w], z[i + w + 1]], k, scale)
+                }
+            };
             *out.entry(l).or_insert(0) += units;
         }
     }
@@ -89,7 +136,11 @@ pub fn cpu_counts(im: &Images, tolerance: f32) -> CpuCounts {
             (true, false) => c.n1 += 1,
             (true, true) => {
                 *c.overlap.entry((s, m)).or_insert(0) += 1;
-                let d = im.synthetic_z[i] - im.sensed_z[i];
+                // Positive where the synthetic surface lies nearer the sensor.
+                let d = match im.rays {
+                    Rays::Orthographic(_) => im.synthetic_z[i] - im.sensed_z[i],
+                    Rays::Pinhole { .. } => im.sensed_z[i] - im.synthetic_z[i],
+                };
                 if d.abs() <= tolerance {
                     c.n1_plus += 1;
                 } else if d > tolerance {
@@ -99,9 +150,12 @@ pub fn cpu_counts(im: &Images, tolerance: f32) -> CpuCounts {
             (false, false) => {}
         }
     }
-    let (dx, dy) = (im.pitch[0] as f32, im.pitch[1] as f32);
-    c.scene_area_units = areas(im.sensed_label, im.sensed_z, im.width, im.height, dx, dy);
-    c.model_area_units = areas(im.synthetic_label, im.synthetic_z, im.width, im.height, dx, dy);
+    // A pinhole view's area unit is a pixel's footprint at the farthest sensed depth.
+    let labelled = im.sensed_label.iter().zip(im.sensed_z).filter(|(&l, _)| l != 0);
+    let farthest = labelled.map(|(_, &z)| f64::from(z)).fold(0.0, f64::max);
+    let unit_depth = if farthest > 0.0 { farthest } else { 1.0 };
+    c.scene_area_units = areas(im.sensed_label, im.sensed_z, im.width, im.height, im.rays, unit_depth);
+    c.model_area_units = areas(im.synthetic_label, im.synthetic_z, im.width, im.height, im.rays, unit_depth);
     c
 }
 

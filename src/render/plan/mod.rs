@@ -21,6 +21,14 @@ pub(crate) struct Views {
 }
 
 impl Views {
+    /// The views of a `width`×`height` image cast on the CPU (a rig other than the paper's
+    /// scanner), as the GPU's effect and score passes see it: its pixels on a grid of unit
+    /// pitch (no pass reads the pitch), z as cast (no local origin), no shadow view.
+    pub fn cast(width: u32, height: u32) -> Self {
+        let range = ViewGrid { origin: [0.0; 2], pitch: [1.0; 2], width, height, z_range: (0.0, 1.0) };
+        Self { origin: DVec3::ZERO, range, shadow: None }
+    }
+
     /// 1, or 2 with a shadow view.
     pub fn count(&self) -> u64 {
         1 + u64::from(self.shadow.is_some())
