@@ -3,6 +3,7 @@
 //! (docs/design.md for the design).
 
 pub mod accuracy;
+pub mod bop;
 pub mod effects;
 pub mod error;
 pub mod exact;

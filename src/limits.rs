@@ -149,6 +149,13 @@ impl Ledger {
         }
     }
 
+    /// Gives back `bytes` that [`Ledger::charge`] took and the run no longer holds: one image
+    /// of a stream of images, once it is scored (src/bop/).
+    pub fn release(&self, bytes: u64) {
+        // Never fails: the closure always returns a value.
+        let _ = self.held.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |held| Some(held.saturating_sub(bytes)));
+    }
+
     fn refusal(&self, what: impl fmt::Display, needed: u64, held: u64) -> Option<Error> {
         (held.saturating_add(needed) > self.budget.bytes()).then(|| Error::TooLarge {
             what: what.to_string(),

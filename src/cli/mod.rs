@@ -1,9 +1,10 @@
 //! The `rangesynth` command line: `render` a scene file, run the `demo` on the embedded
-//! default scene, `verify` hypotheses against a sensed image, measure what `accuracy` costs in
-//! time, or run the paper's `experiment`. Errors come back as values;
+//! default scene, `verify` hypotheses against a sensed image, score a BOP results file (`bop`),
+//! measure what `accuracy` costs in time, or run the paper's `experiment`. Errors come back as values;
 //! `main` prints them and exits non-zero.
 
 mod accuracy;
+mod bop;
 mod experiment;
 mod verify;
 
@@ -70,6 +71,9 @@ enum Command {
     },
     /// Score the hypotheses of HYPS.json against a sensed range image; one JSON line each.
     Verify(verify::VerifyArgs),
+    /// Score a BOP results file's pose estimates against a BOP dataset's depth images under the
+    /// sensor's rig: depth-only scores and VSD, as CSV.
+    Bop(bop::BopArgs),
     /// Measure what accuracy costs in time: every shadow setting on standard scenes against
     /// exact ray casting, into DIR/accuracy.csv and DIR/accuracy.png.
     Accuracy(accuracy::AccuracyArgs),
@@ -95,6 +99,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render { scene: path, out, depth_png } => (Scene::from_file(&path, &ledger)?, out, depth_png),
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), &ledger)?, out, None),
         Command::Verify(args) => return verify::run(&options, ledger, cli.raster, &args),
+        Command::Bop(args) => return bop::run(ledger, &args),
         Command::Accuracy(args) => return accuracy::run(&options, ledger, &args),
         Command::Experiment(args) => return experiment::run(&options, ledger, cli.raster, &args),
     };

@@ -2,9 +2,48 @@
 //! along a pinhole view's optical axis divided by a scale (BOP: depth in mm = value ×
 //! `depth_scale`), 0 where there is no measurement.
 
-use super::write_atomically;
-use crate::error::{Error, Result};
+use super::{read_input_file, write_atomically};
+use crate::error::{guard_parser, Error, Result};
+use crate::limits::Ledger;
 use std::path::Path;
+
+/// A depth image as read: its values row by row (0: no measurement).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DepthPng {
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<u16>,
+}
+
+/// Reads a 16-bit greyscale PNG (the regular file at `path`, within the run's budget: the
+/// decoded image is charged before it is made). Any other PNG is refused, naming what it is.
+pub fn read_depth_png(path: &Path, ledger: &Ledger) -> Result<DepthPng> {
+    let bytes = read_input_file(path, "depth image", ledger)?;
+    guard_parser("the depth image", "the png decoder", || {
+        let bad = |e: png::DecodingError| Error::file(path, format!("not a readable PNG: {e}"));
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(&bytes));
+        // No expansion of palettes or 16-bit samples: a depth image is read as stored.
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let mut reader = decoder.read_info().map_err(bad)?;
+        let info = reader.info();
+        let (width, height) = (info.width, info.height);
+        if (info.color_type, info.bit_depth) != (png::ColorType::Grayscale, png::BitDepth::Sixteen) {
+            return Err(Error::file(
+                path,
+                format!(
+                    "a depth image must be a 16-bit greyscale PNG; this one is {:?} at {:?} bits",
+                    info.color_type, info.bit_depth
+                ),
+            ));
+        }
+        let samples = u64::from(width) * u64::from(height);
+        ledger.charge(format_args!("decoding the {width}×{height} depth image {}", path.display()), samples * 2)?;
+        let mut buffer = vec![0u8; reader.output_buffer_size()];
+        let frame = reader.next_frame(&mut buffer).map_err(bad)?;
+        let values = buffer[..frame.buffer_size()].chunks_exact(2).map(|b| u16::from_be_bytes([b[0], b[1]])).collect();
+        Ok(DepthPng { width, height, values })
+    })
+}
 
 /// The value of each pixel: `depth / scale` rounded to the nearest integer where `valid`, else
 /// 0. A depth whose value does not fit 1 to 65535 is refused (a value of 0 would read as no

@@ -12,7 +12,7 @@ mod range_image;
 mod text_formats;
 
 pub use atomic::{refuse_overwriting_inputs, write_atomically, PendingFile, StagedSet};
-pub use depth_png::{check_depth_scale, depth_png_values, write_depth_png};
+pub use depth_png::{check_depth_scale, depth_png_values, read_depth_png, write_depth_png, DepthPng};
 pub use exr_file::{parse_range_image, read_label_image, read_range_image, write_label_image, write_range_image};
 pub use input_file::{read_identified_file, read_input_file, read_input_text};
 pub(crate) use preview::write_rgb;

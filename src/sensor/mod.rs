@@ -203,6 +203,36 @@ impl Sensor {
         })
     }
 
+    /// The same rig in units `factor` times smaller (a rig in metres, with `factor` 1000, in
+    /// millimetres): every length times `factor` (witness centres, near and far, an
+    /// orthographic view's pitch and origin); angles, directions and pixels unchanged.
+    pub fn scaled(&self, factor: f64) -> Sensor {
+        let reference = match self.reference {
+            View::Orthographic(o) => View::Orthographic(Orthographic {
+                pitch: o.pitch.map(|p| p * factor),
+                origin: o.origin.map(|p| p * factor),
+                ..o
+            }),
+            View::Pinhole(p) => View::Pinhole(Pinhole { near: p.near * factor, far: p.far * factor, ..p }),
+        };
+        let witnesses = self
+            .witnesses
+            .iter()
+            .map(|w| {
+                let geometry = match w.geometry {
+                    WitnessGeometry::Pinhole { pose, intrinsics } => {
+                        let mut pose = pose;
+                        pose.w_axis = (pose.w_axis.truncate() * factor).extend(1.0);
+                        WitnessGeometry::Pinhole { pose, intrinsics }
+                    }
+                    directional => directional,
+                };
+                Witness { name: w.name.clone(), geometry }
+            })
+            .collect();
+        Sensor { reference, witnesses }
+    }
+
     /// A `size`×`size` orthographic scanner over `extent` model units, centred on the range
     /// frame's origin, at θ = `theta_deg`.
     pub fn square(size: u32, extent: f64, theta_deg: f64) -> Self {
@@ -231,6 +261,35 @@ mod tests {
     fn pinhole() -> View {
         let intrinsics = Intrinsics { width: 4, height: 2, fx: 2.0, fy: 2.0, cx: 1.5, cy: 0.5 };
         View::Pinhole(Pinhole { intrinsics, near: 0.0, far: f64::INFINITY })
+    }
+
+    /// Scaling a rig multiplies its lengths alone: a witness's centre and the near and far
+    /// limits, not its rotation, direction or pixels.
+    #[test]
+    fn a_scaled_rig_multiplies_its_lengths_alone() {
+        let turn = DMat4::from_rotation_y(0.3);
+        let witness = |geometry| Witness { name: "w".into(), geometry };
+        let k = Intrinsics { width: 4, height: 2, fx: 2.0, fy: 2.0, cx: 1.5, cy: 0.5 };
+        let rig = Sensor {
+            reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.4, far: 5.0 }),
+            witnesses: vec![
+                witness(WitnessGeometry::Pinhole {
+                    pose: DMat4::from_translation(DVec3::new(0.075, 0.0, 0.0)) * turn,
+                    intrinsics: k,
+                }),
+                witness(WitnessGeometry::Directional(Direction::Vector(DVec3::Y))),
+            ],
+        };
+        let mm = rig.scaled(1000.0);
+        assert_eq!(mm.reference, View::Pinhole(Pinhole { intrinsics: k, near: 400.0, far: 5000.0 }));
+        let expected = DMat4::from_translation(DVec3::new(75.0, 0.0, 0.0)) * turn;
+        match mm.witnesses[0].geometry {
+            WitnessGeometry::Pinhole { pose, intrinsics } => {
+                assert!(pose.abs_diff_eq(expected, 1e-12) && intrinsics == k, "{pose:?}")
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(mm.witnesses[1], rig.witnesses[1]);
     }
 
     /// A pinhole view's footprint holds every pixel whose ray meets the sphere: a sphere of

@@ -1,0 +1,262 @@
+//! Scoring the pose estimates of a BOP results file against a BOP dataset's depth images under
+//! the rig of the sensor that took them (docs/bop.md): each row's estimate is rendered under the
+//! rig, with the image's own intrinsics, and given
+//!
+//! - the depth-only scores (depth_scores.rs), against the image's depth;
+//! - where the dataset has the image's ground truth for the object, VSD (vsd.rs) as the BOP
+//!   toolkit defines it, the estimate and the ground truth rendered alone; and VSD again with
+//!   both rendered under the rig, so that what the sensor could not have measured (its
+//!   projector's shadows on the model, what its other cameras do not see) is not rendered as
+//!   visible surface.
+//!
+//! The images are cast on the CPU in f64 (src/exact/rig.rs), each within the model's footprint,
+//! as `verify` casts a rig's hypotheses. Rows are scored in order, one image's data kept while
+//! its rows follow one another, and each image's memory given back to the run's budget when the
+//! next begins.
+
+mod dataset;
+mod depth_scores;
+mod results;
+mod vsd;
+
+pub use dataset::{Camera, Dataset, GtPose, SceneFiles};
+pub use depth_scores::{depth_scores, DepthScores, Prediction};
+pub use results::{parse_results, pose_from_bop, ResultRow, RESULTS_HEADER, ROTATION_TOLERANCE};
+pub use vsd::{tolerances, vsd_errors, vsd_summary, VsdView};
+
+use crate::error::{Error, Result};
+use crate::exact::{self, render_rig, ExactImage, ExactObject};
+use crate::io::read_depth_png;
+use crate::limits::Ledger;
+use crate::mesh::{Mesh, SurfaceChoice, SurfaceRule};
+use crate::scene::load_model_as;
+use crate::sensor::{Intrinsics, Pinhole, PixelRect, Sensor, View};
+use crate::shadow::ShadowMode;
+use glam::DMat4;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// The columns a scores file adds to the results file's.
+pub const SCORE_COLUMNS: [&str; 8] = [
+    "inlier",
+    "violation",
+    "explained_holes",
+    "depth_score",
+    "vsd",
+    "vsd_recall",
+    "vsd_shadowed",
+    "vsd_shadowed_recall",
+];
+
+/// Pixels added around a model's footprint where its image is cast.
+const FOOTPRINT_MARGIN: u32 = 2;
+
+/// One row's scores; the VSD pairs (mean error, recall) are `None` where the dataset has no
+/// ground truth for the row's object in its image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowScores {
+    pub depth: DepthScores,
+    pub vsd: Option<(f64, f64)>,
+    pub vsd_shadowed: Option<(f64, f64)>,
+}
+
+impl RowScores {
+    /// The row's cells for [`SCORE_COLUMNS`]: empty where a score does not apply.
+    pub fn cells(&self) -> Vec<String> {
+        let number = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
+        let d = &self.depth;
+        [
+            Some(d.inlier),
+            Some(d.violation),
+            d.explained_holes,
+            Some(d.depth_score),
+            self.vsd.map(|v| v.0),
+            self.vsd.map(|v| v.1),
+            self.vsd_shadowed.map(|v| v.0),
+            self.vsd_shadowed.map(|v| v.1),
+        ]
+        .map(number)
+        .to_vec()
+    }
+}
+
+/// How rows are scored: the rig (its reference view's intrinsics and size are each image's),
+/// and the tolerance δ (mm) of the depth-only scores and of VSD's visibility test.
+pub struct BopSettings {
+    pub rig: Sensor,
+    pub delta: f64,
+}
+
+/// A model's image: depth (mm) where the reference view meets it, 0 elsewhere; the same where
+/// every witness sees the point, 0 where one does not.
+struct Rendering {
+    depth: Vec<f64>,
+    measured_depth: Vec<f64>,
+}
+
+impl Rendering {
+    fn of(image: ExactImage) -> Self {
+        let depth = image.label.iter().zip(&image.z).map(|(&l, &z)| if l != 0 { z } else { 0.0 }).collect();
+        let measured_depth = image.shadowed.iter().zip(&image.z).map(|(&l, &z)| if l != 0 { z } else { 0.0 }).collect();
+        Self { depth, measured_depth }
+    }
+}
+
+/// The image the rows of one (scene, image) share.
+struct ImageData {
+    key: (u32, u32),
+    sensor: Sensor,
+    intrinsics: Intrinsics,
+    /// Sensed depth, mm (0: no measurement).
+    sensed: Vec<f64>,
+    ground_truth: Vec<GtPose>,
+    /// Each ground-truth instance's rendering, made when a row first needs it.
+    truth_renderings: HashMap<usize, Arc<Rendering>>,
+    /// Bytes charged to the run for the image, given back when the next begins.
+    bytes: u64,
+}
+
+/// Scores rows of a results file in order, keeping what consecutive rows share.
+pub struct BopScorer<'a> {
+    dataset: &'a Dataset,
+    settings: &'a BopSettings,
+    /// The rig's reference view, whose intrinsics and size each image replaces.
+    reference: Pinhole,
+    ledger: &'a Ledger,
+    scenes: HashMap<u32, Arc<SceneFiles>>,
+    models: HashMap<u32, Arc<Mesh>>,
+    image: Option<ImageData>,
+}
+
+impl<'a> BopScorer<'a> {
+    pub fn new(dataset: &'a Dataset, settings: &'a BopSettings, ledger: &'a Ledger) -> Result<Self> {
+        let View::Pinhole(reference) = settings.rig.reference else {
+            return Err(Error::Scene(format!(
+                "the rig's reference view is {}; BOP depth images are a pinhole camera's (kind = \"pinhole\")",
+                settings.rig.reference.kind()
+            )));
+        };
+        if !(settings.delta.is_finite() && settings.delta >= 0.0) {
+            return Err(Error::Scene(format!("δ = {} must be a finite number ≥ 0", settings.delta)));
+        }
+        Ok(Self { dataset, settings, reference, ledger, scenes: HashMap::new(), models: HashMap::new(), image: None })
+    }
+
+    fn scene(&mut self, scene_id: u32) -> Result<Arc<SceneFiles>> {
+        if let Some(files) = self.scenes.get(&scene_id) {
+            return Ok(files.clone());
+        }
+        let files = Arc::new(self.dataset.scene(scene_id, self.ledger)?);
+        self.scenes.insert(scene_id, files.clone());
+        Ok(files)
+    }
+
+    fn model(&mut self, obj_id: u32) -> Result<Arc<Mesh>> {
+        if let Some(mesh) = self.models.get(&obj_id) {
+            return Ok(mesh.clone());
+        }
+        let path = self.dataset.model_path(obj_id)?;
+        let reference = path.to_string_lossy();
+        // One surface: the scores read depth alone.
+        let whole = SurfaceChoice { rule: Some(SurfaceRule::Whole), ..SurfaceChoice::default() };
+        let mesh = Arc::new(load_model_as(&reference, std::path::Path::new("."), self.ledger, whole, 1.0)?);
+        self.models.insert(obj_id, mesh.clone());
+        Ok(mesh)
+    }
+
+    /// Makes the row's image the current one: its camera, depth and ground truth.
+    fn image(&mut self, scene_id: u32, im_id: u32) -> Result<&mut ImageData> {
+        if self.image.as_ref().is_some_and(|image| image.key == (scene_id, im_id)) {
+            return Ok(self.image.as_mut().expect("checked above"));
+        }
+        if let Some(previous) = self.image.take() {
+            self.ledger.release(previous.bytes);
+        }
+        let files = self.scene(scene_id)?;
+        let camera = self.dataset.camera(&files, scene_id, im_id)?;
+        let path = self.dataset.depth_path(scene_id, im_id);
+        let held = self.ledger.held();
+        let png = read_depth_png(&path, self.ledger)?;
+        let pixels = u64::from(png.width) * u64::from(png.height);
+        self.ledger.charge(format_args!("the depth of {}", path.display()), pixels * 8)?;
+        let sensed = png.values.iter().map(|&v| f64::from(v) * camera.depth_scale).collect();
+        let intrinsics = camera.intrinsics((png.width, png.height));
+        let reference = View::Pinhole(Pinhole { intrinsics, ..self.reference });
+        let sensor = Sensor { reference, ..self.settings.rig.clone() };
+        sensor.validate().map_err(|e| e.concerning(&format!("scene {scene_id}, image {im_id}")))?;
+        let ground_truth = files.gt.get(&im_id).cloned().unwrap_or_default();
+        let bytes = self.ledger.held().saturating_sub(held);
+        Ok(self.image.insert(ImageData {
+            key: (scene_id, im_id),
+            sensor,
+            intrinsics,
+            sensed,
+            ground_truth,
+            truth_renderings: HashMap::new(),
+            bytes,
+        }))
+    }
+
+    /// Casts `mesh` in `pose` under the image's rig, within its footprint.
+    fn render(&self, sensor: &Sensor, mesh: &Mesh, pose: DMat4) -> Result<Rendering> {
+        let (width, height) = (sensor.width(), sensor.height());
+        let pixels = u64::from(width) * u64::from(height);
+        let casters = exact::casters(sensor);
+        let triangles = mesh.triangles.len() as u64;
+        self.ledger.check(
+            format_args!("casting a {width}×{height} image"),
+            exact::BYTES_PER_PIXEL * pixels + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
+        )?;
+        let (centre, radius) = mesh.bounding_sphere();
+        let nothing = PixelRect { col: 0, row: 0, width: 0, height: 0 };
+        let footprint =
+            sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN).unwrap_or(nothing);
+        let object = ExactObject { mesh, pose, label_base: 0 };
+        Ok(Rendering::of(render_rig(sensor, &[object], ShadowMode::Exact, footprint)?))
+    }
+
+    /// Scores one row.
+    pub fn score(&mut self, row: &ResultRow) -> Result<RowScores> {
+        let subject = format!("scene {}, image {}, object {}", row.scene_id, row.im_id, row.obj_id);
+        let about = |e: Error| e.concerning(&subject);
+        let diameter = self.dataset.diameter(row.obj_id)?;
+        let mesh = self.model(row.obj_id)?;
+        self.image(row.scene_id, row.im_id)?;
+        let image = self.image.as_ref().expect("made above");
+        let estimate = self.render(&image.sensor, &mesh, row.pose).map_err(about)?;
+        let measured: Vec<bool> = estimate.measured_depth.iter().map(|&d| d > 0.0).collect();
+        let prediction = Prediction { depth: &estimate.depth, measured: &measured };
+        let depth = depth_scores(&prediction, &image.sensed, self.settings.delta);
+        // Each ground-truth instance of the object, rendered once for the image's rows.
+        let instances: Vec<usize> =
+            (0..image.ground_truth.len()).filter(|&k| image.ground_truth[k].obj_id == row.obj_id).collect();
+        let mut truths = Vec::with_capacity(instances.len());
+        for &k in &instances {
+            let image = self.image.as_ref().expect("made above");
+            let truth = match image.truth_renderings.get(&k) {
+                Some(truth) => truth.clone(),
+                None => Arc::new(self.render(&image.sensor, &mesh, image.ground_truth[k].pose).map_err(about)?),
+            };
+            let image = self.image.as_mut().expect("made above");
+            image.truth_renderings.insert(k, truth.clone());
+            truths.push(truth);
+        }
+        let image = self.image.as_ref().expect("made above");
+        let p = image.intrinsics;
+        let view =
+            VsdView { width: p.width as usize, height: p.height as usize, fx: p.fx, fy: p.fy, cx: p.cx, cy: p.cy };
+        let delta = self.settings.delta;
+        // The instance the estimate matches best: the lowest mean error.
+        let best = |of: &dyn Fn(&Rendering) -> &[f64]| {
+            truths
+                .iter()
+                .map(|truth| vsd_summary(&vsd_errors(&view, &image.sensed, of(&estimate), of(truth), diameter, delta)))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+        };
+        Ok(RowScores {
+            depth,
+            vsd: best(&|r: &Rendering| r.depth.as_slice()),
+            vsd_shadowed: best(&|r: &Rendering| r.measured_depth.as_slice()),
+        })
+    }
+}

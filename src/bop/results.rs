@@ -1,0 +1,132 @@
+//! A BOP results file: a CSV whose header is `scene_id,im_id,obj_id,score,R,t,time`, one pose
+//! estimate a row, R 9 numbers row-major and t 3 numbers (mm), each space-separated: the
+//! format methods publish for the BOP challenges. Rows keep their text, which the scores
+//! file repeats.
+
+use crate::error::{Error, Result};
+use glam::{DMat3, DMat4, DVec3};
+use std::path::Path;
+
+/// The header a results file starts with.
+pub const RESULTS_HEADER: [&str; 7] = ["scene_id", "im_id", "obj_id", "score", "R", "t", "time"];
+
+/// How far RᵀR may be from the identity, and det R from 1, for R to count as a rotation.
+pub const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// One row: its ids, the pose it estimates, and its fields as written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResultRow {
+    pub scene_id: u32,
+    pub im_id: u32,
+    pub obj_id: u32,
+    /// Camera-from-model, mm.
+    pub pose: DMat4,
+    pub fields: Vec<String>,
+}
+
+/// The pose of a BOP R (9 numbers, row-major) and t (3 numbers): refused, with the reason,
+/// where R is not a rotation within [`ROTATION_TOLERANCE`] or a number is not finite.
+pub fn pose_from_bop(r: &[f64], t: &[f64]) -> std::result::Result<DMat4, String> {
+    if r.len() != 9 || r.iter().any(|v| !v.is_finite()) {
+        return Err(format!("R must be 9 finite numbers (row-major); it has {} numbers: {r:?}", r.len()));
+    }
+    if t.len() != 3 || t.iter().any(|v| !v.is_finite()) {
+        return Err(format!("t must be 3 finite numbers; it has {} numbers: {t:?}", t.len()));
+    }
+    // Row-major in the file; glam's constructors take columns.
+    let rotation = DMat3::from_cols_array(&[r[0], r[3], r[6], r[1], r[4], r[7], r[2], r[5], r[8]]);
+    let off_identity =
+        (rotation.transpose() * rotation - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let det = rotation.determinant();
+    if off_identity > ROTATION_TOLERANCE || (det - 1.0).abs() > ROTATION_TOLERANCE {
+        return Err(format!(
+            "R is not a rotation within {ROTATION_TOLERANCE:e}: RᵀR is {off_identity:e} from the identity and det R = {det}"
+        ));
+    }
+    Ok(DMat4::from_mat3_translation(rotation, DVec3::new(t[0], t[1], t[2])))
+}
+
+/// Numbers separated by spaces.
+fn numbers(text: &str) -> std::result::Result<Vec<f64>, String> {
+    text.split_whitespace().map(|v| v.parse::<f64>().map_err(|_| format!("{v:?} is not a number"))).collect()
+}
+
+/// Reads a results file's text: its rows in order, each refused with the file, the row (from
+/// 1, the header not counted), its ids where they were read, and the field.
+pub fn parse_results(path: &Path, text: &str) -> Result<Vec<ResultRow>> {
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
+    let header = reader.headers().map_err(|e| Error::file(path, format!("unreadable header: {e}")))?;
+    if header.iter().map(str::trim).ne(RESULTS_HEADER) {
+        return Err(Error::file(
+            path,
+            format!(
+                "the header must be exactly {}; it is {:?}",
+                RESULTS_HEADER.join(","),
+                header.iter().collect::<Vec<_>>()
+            ),
+        ));
+    }
+    let mut rows = Vec::new();
+    for (n, record) in reader.records().enumerate() {
+        let row = n + 1;
+        let record = record.map_err(|e| Error::file(path, format!("row {row}: {e}")))?;
+        let field = |i: usize| record.get(i).unwrap_or("").trim();
+        let id = |i: usize| -> Result<u32> {
+            field(i).parse().map_err(|_| {
+                Error::file(path, format!("row {row}: {} = {:?} is not a whole number", RESULTS_HEADER[i], field(i)))
+            })
+        };
+        let (scene_id, im_id, obj_id) = (id(0)?, id(1)?, id(2)?);
+        let at = |reason: String| {
+            Error::file(path, format!("row {row} (scene {scene_id}, image {im_id}, object {obj_id}): {reason}"))
+        };
+        for i in [3, 6] {
+            if field(i).parse::<f64>().is_err() {
+                return Err(at(format!("{} = {:?} is not a number", RESULTS_HEADER[i], field(i))));
+            }
+        }
+        let r = numbers(field(4)).map_err(|e| at(format!("R: {e}")))?;
+        let t = numbers(field(5)).map_err(|e| at(format!("t: {e}")))?;
+        let pose = pose_from_bop(&r, &t).map_err(at)?;
+        rows.push(ResultRow { scene_id, im_id, obj_id, pose, fields: record.iter().map(str::to_string).collect() });
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: &str = "scene_id,im_id,obj_id,score,R,t,time\n";
+
+    #[test]
+    fn a_row_reads_as_its_pose_and_keeps_its_fields() {
+        let text = format!("{HEADER}1,3,5,0.9,0 -1 0 1 0 0 0 0 1,10 20 30,0.25\n");
+        let rows = parse_results(Path::new("r.csv"), &text).unwrap();
+        assert_eq!(rows.len(), 1);
+        let row = &rows[0];
+        assert_eq!((row.scene_id, row.im_id, row.obj_id), (1, 3, 5));
+        // R maps x to y: the second row of R is (1, 0, 0).
+        assert!((row.pose.transform_point3(DVec3::X) - DVec3::new(10.0, 21.0, 30.0)).length() < 1e-12);
+        assert_eq!(row.fields[4], "0 -1 0 1 0 0 0 0 1");
+    }
+
+    #[test]
+    fn bad_rows_are_refused_naming_the_row_and_field() {
+        let cases = [
+            ("scene,im_id,obj_id,score,R,t,time\n", "the header must be exactly"),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0 2,0 0 0,1\n", "row 1 (scene 1, image 2, object 3): R is not a rotation"),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0,0 0 0,1\n", "R must be 9 finite numbers"),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0,1\n", "t must be 3 finite numbers"),
+            ("1,x,3,0.5,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "row 1: im_id = \"x\""),
+            ("1,2,3,high,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "score = \"high\""),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0 NaN,1\n", "t must be 3 finite numbers"),
+            ("1,2,3,0.5,1 0 0 0 -1 0 0 0 -1,0 0 0,1\n1,2,3\n", "row 2"),
+        ];
+        for (body, expected) in cases {
+            let text = if body.starts_with("scene,") { body.to_string() } else { format!("{HEADER}{body}") };
+            let e = parse_results(Path::new("r.csv"), &text).unwrap_err().to_string();
+            assert!(e.contains(expected) && e.contains("r.csv"), "{body:?}: expected {expected:?} in {e}");
+        }
+    }
+}
