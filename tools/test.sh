@@ -4,7 +4,7 @@
 # Every GPU test asserts that it ran on lavapipe (RANGESYNTH_EXPECT_DEVICE).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-tools/setup.sh
+tools/setup.sh --python
 icd=$(ls /usr/share/vulkan/icd.d/lvp_icd.*.json 2>/dev/null | head -n 1)
 if [ -z "$icd" ]; then
   echo "lavapipe's ICD file was not found under /usr/share/vulkan/icd.d" >&2
@@ -22,4 +22,13 @@ if [ $# -eq 0 ]; then
   RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic --test exact
   RANGESYNTH_TEST_RASTER=compute RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH=4 RANGESYNTH_TEST_SLOTS=16 \
     RANGESYNTH_TEST_CHUNKS_IN_FLIGHT=3 cargo test --locked --test verify --test effects --test portability
+fi
+# The Python package: built from this tree (`pip install .`, maturin's release build) into a
+# virtual environment of its own, and its tests run on the same device; only on a full run.
+if [ $# -eq 0 ]; then
+  venv=target/python-venv
+  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+  "$venv/bin/python" -m pip install -q --upgrade pip 'maturin>=1.7,<2' numpy pytest
+  MATURIN_PEP517_ARGS="--locked" "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation --force-reinstall .
+  (cd python/tests && ../../"$venv"/bin/python -m pytest -q)
 fi

@@ -226,6 +226,13 @@ impl Verifier {
         Ok(self.models.lock().unwrap_or_else(|p| p.into_inner()).entry(key).or_insert(model).clone())
     }
 
+    /// A model of a mesh the caller built (not a file: the Python bindings' `Mesh`), uploaded
+    /// now and not kept: the caller keeps the model for as many calls as it likes.
+    pub fn model_of_mesh(&self, mesh: Arc<Mesh>) -> Result<Arc<Model>> {
+        let gpu = GpuMesh::upload(self.renderer.context(), &mesh)?;
+        Ok(Arc::new(Model { gpu, sphere: mesh.bounding_sphere(), mesh }))
+    }
+
     /// Checks everything [`Verifier::verify`] would refuse — the settings, each hypothesis'
     /// bindings and views, and the memory the batch needs — without touching the GPU, so a
     /// caller can refuse a whole file before it writes anything.

@@ -1,0 +1,499 @@
+//! The Python package `rangesynth` (python/rangesynth/, docs/python.md): the Rust crate's
+//! renderer and verifier on numpy arrays. A thin layer that adds no logic of its own: it turns
+//! arrays and dicts into the crate's inputs and its outputs into arrays, releases the GIL while
+//! the device works, and raises every error as a `rangesynth.Error` carrying the crate's message.
+
+use glam::DMat4;
+use numpy::ndarray::Dimension;
+use numpy::{Element, IntoPyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray3};
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+use rangesynth::effects::Effects;
+use rangesynth::gpu::{list_devices, ContextOptions};
+use rangesynth::io::{read_range_image, RangeImage};
+use rangesynth::limits::{Ledger, MemoryBudget};
+use rangesynth::mesh::{load_model_file, Mesh as CrateMesh};
+use rangesynth::render::Raster;
+use rangesynth::sensor::Sensor;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::verify::{Hypothesis, Model, SensedImage, Verification, Verifier as CrateVerifier, VerifySettings};
+use rangesynth::{RenderOutput, Renderer as CrateRenderer, Scene};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+pyo3::create_exception!(
+    _rangesynth,
+    Error,
+    PyException,
+    "Every error rangesynth raises: its message is the library's."
+);
+
+/// The library's error as a Python exception.
+fn raised(e: impl std::fmt::Display) -> PyErr {
+    Error::new_err(e.to_string())
+}
+
+fn raster_of(raster: Option<&str>) -> PyResult<Raster> {
+    raster.map_or(Ok(Raster::Auto), |r| r.parse().map_err(raised))
+}
+
+/// Any array-like as a numpy array of `dtype` and `D`'s dimensions, copied where its dtype
+/// differs (numpy's `asarray`); anything else is refused, naming `what`. Strided arrays are
+/// read as they are.
+fn array<'py, T: Element, D: Dimension>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    dtype: &str,
+    what: &str,
+) -> PyResult<PyReadonlyArray<'py, T, D>> {
+    let converted = py
+        .import("numpy")?
+        .call_method1("asarray", (obj, dtype))
+        .map_err(|e| raised(format!("{what} is not an array of {dtype}: {e}")))?;
+    converted.extract::<PyReadonlyArray<'py, T, D>>().map_err(|_| {
+        let shape = converted.getattr("shape").map(|s| s.to_string()).unwrap_or_default();
+        raised(format!("{what} must have {} dimensions; its shape is {shape}", D::NDIM.unwrap_or(0)))
+    })
+}
+
+/// A Python object (a dict of a file's keys) as the crate's type, through JSON.
+fn from_keys<T: serde::de::DeserializeOwned>(py: Python<'_>, keys: &Bound<'_, PyAny>, what: &str) -> PyResult<T> {
+    let text: String = py.import("json")?.call_method1("dumps", (keys,))?.extract()?;
+    serde_json::from_str(&text).map_err(|e| raised(format!("{what}: {e}")))
+}
+
+/// A triangle mesh: vertices (V, 3), faces (F, 3) of vertex indices, and each face's surface
+/// (1, 2, …; all 1 where not given).
+#[pyclass(frozen, module = "rangesynth")]
+struct Mesh {
+    inner: Arc<CrateMesh>,
+}
+
+#[pymethods]
+impl Mesh {
+    #[new]
+    #[pyo3(signature = (vertices, faces, surfaces=None))]
+    fn new(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        surfaces: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let vertices = array::<f64, numpy::Ix2>(py, vertices, "float64", "vertices")?;
+        let faces = array::<i64, numpy::Ix2>(py, faces, "int64", "faces")?;
+        let surfaces = surfaces.map(|s| array::<i64, numpy::Ix1>(py, s, "int64", "surfaces")).transpose()?;
+        let (v, f) = (vertices.as_array(), faces.as_array());
+        if v.ncols() != 3 || f.ncols() != 3 {
+            return Err(raised(format!(
+                "vertices must be (V, 3) and faces (F, 3); they are {:?} and {:?}",
+                v.shape(),
+                f.shape()
+            )));
+        }
+        let positions: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let index = |i: i64| u32::try_from(i).map_err(|_| raised(format!("face index {i} is not a vertex index")));
+        let triangles = f
+            .rows()
+            .into_iter()
+            .map(|r| Ok([index(r[0])?, index(r[1])?, index(r[2])?]))
+            .collect::<PyResult<Vec<_>>>()?;
+        let ids: Vec<u32> = match surfaces {
+            None => vec![1; triangles.len()],
+            Some(s) => s
+                .as_array()
+                .iter()
+                .map(|&i| u32::try_from(i).map_err(|_| raised(format!("surface {i} is not 1 or more"))))
+                .collect::<PyResult<_>>()?,
+        };
+        let count = ids.iter().copied().max().unwrap_or(1);
+        let names = (1..=count).map(|s| format!("surface {s}")).collect();
+        let mesh = CrateMesh::new("mesh", positions, triangles, ids, names).map_err(raised)?;
+        Ok(Self { inner: Arc::new(mesh) })
+    }
+
+    /// A model file the command line reads (OBJ, PLY or STL).
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        let mesh = load_model_file(&path, &Ledger::default()).map_err(raised)?;
+        Ok(Self { inner: Arc::new(mesh) })
+    }
+
+    #[getter]
+    fn vertex_count(&self) -> usize {
+        self.inner.positions.len()
+    }
+
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.inner.triangles.len()
+    }
+
+    #[getter]
+    fn surface_count(&self) -> u32 {
+        self.inner.surface_count()
+    }
+}
+
+/// The arrays of a render: xyz (H, W, 3) float32 with NaN where no point was measured, label
+/// and witness (H, W) uint32, reason (H, W) uint8.
+fn render_arrays<'py>(py: Python<'py>, out: &RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+    let (width, height) = (out.sensor.width() as usize, out.sensor.height() as usize);
+    let xyz: Vec<f32> = (0..out.label.len()).flat_map(|i| out.point(i).unwrap_or([f32::NAN; 3])).collect();
+    let reason: Vec<u8> = out.reason.iter().map(|r| r.code() as u8).collect();
+    let dict = PyDict::new(py);
+    dict.set_item("xyz", xyz.into_pyarray(py).reshape([height, width, 3])?)?;
+    dict.set_item("label", out.label.clone().into_pyarray(py).reshape([height, width])?)?;
+    dict.set_item("reason", reason.into_pyarray(py).reshape([height, width])?)?;
+    if !out.sensor.witnesses.is_empty() {
+        dict.set_item("witness", out.witness.clone().into_pyarray(py).reshape([height, width])?)?;
+    }
+    Ok(dict)
+}
+
+/// A renderer on one device, made once and reused: `render(scene_path)` gives a scene's
+/// arrays. Usable from several threads; the GIL is released while it renders.
+#[pyclass(frozen, module = "rangesynth")]
+struct Renderer {
+    inner: Arc<CrateRenderer>,
+}
+
+fn context_options(device: Option<&str>) -> ContextOptions {
+    let mut options = ContextOptions::from_env();
+    if let Some(device) = device {
+        options.device = Some(device.to_string());
+    }
+    options
+}
+
+/// A renderer on `device` (a name, part of one, or a UUID from `devices()`) with a memory
+/// budget as the command line takes it ("4G") and a rasterizer ("auto", "graphics",
+/// "compute"); the GIL released while the device starts.
+fn new_renderer(
+    py: Python<'_>,
+    device: Option<String>,
+    memory_budget: Option<String>,
+    raster: Option<&str>,
+) -> PyResult<CrateRenderer> {
+    let raster = raster_of(raster)?;
+    let budget = memory_budget
+        .map(|b| MemoryBudget::parse_setting(&b, "memory_budget"))
+        .transpose()
+        .map_err(raised)?
+        .unwrap_or_default();
+    let renderer = py.detach(|| CrateRenderer::new(&context_options(device.as_deref()))).map_err(raised)?;
+    Ok(renderer.with_raster(raster).with_memory_budget(budget))
+}
+
+#[pymethods]
+impl Renderer {
+    /// `device`: a name (or part of one) or a UUID from `devices()`; `memory_budget` as the
+    /// command line takes it ("4G"); `raster`: "auto", "graphics" or "compute".
+    #[new]
+    #[pyo3(signature = (device=None, memory_budget=None, raster=None))]
+    fn new(
+        py: Python<'_>,
+        device: Option<String>,
+        memory_budget: Option<String>,
+        raster: Option<&str>,
+    ) -> PyResult<Self> {
+        let renderer = new_renderer(py, device, memory_budget, raster)?;
+        Ok(Self { inner: Arc::new(renderer) })
+    }
+
+    /// Renders a scene file: a dict of numpy arrays (see `render_scene`).
+    fn render<'py>(&self, py: Python<'py>, scene: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+        let renderer = self.inner.clone();
+        let out = py.detach(move || -> rangesynth::Result<RenderOutput> {
+            let scene = Scene::from_file(&scene, renderer.ledger())?;
+            renderer.render(&scene)
+        });
+        render_arrays(py, &out.map_err(raised)?)
+    }
+
+    #[getter]
+    fn device_name(&self) -> String {
+        self.inner.context().device_name().to_string()
+    }
+}
+
+/// Verifiers kept for the module-level functions, one per rasterizer choice: made on first
+/// use, so that a script calling `verify` in a loop builds the pipelines once.
+fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
+    static VERIFIERS: OnceLock<Mutex<HashMap<String, Arc<CrateVerifier>>>> = OnceLock::new();
+    let key = format!("{raster:?}");
+    let mut kept = VERIFIERS.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
+    if let Some(v) = kept.get(&key) {
+        return Ok(v.clone());
+    }
+    let renderer = CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster);
+    let verifier = Arc::new(CrateVerifier::new(renderer).map_err(raised)?);
+    kept.insert(key, verifier.clone());
+    Ok(verifier)
+}
+
+/// The sensed image and its sensor: an EXR path (its header gives the sensor, shadow and
+/// effects), or a dict of "xyz" (H, W, 3) and "label" (H, W) arrays with "sensor" (a dict of
+/// the `[sensor]` keys).
+fn sensed_of(py: Python<'_>, sensed: &Bound<'_, PyAny>) -> PyResult<RangeImage> {
+    if let Ok(dict) = sensed.cast::<PyDict>() {
+        let get = |key: &str| dict.get_item(key)?.ok_or_else(|| raised(format!("the sensed dict has no {key:?}")));
+        let xyz = array::<f32, numpy::Ix3>(py, &get("xyz")?, "float32", "sensed \"xyz\"")?;
+        let label = array::<u32, numpy::Ix2>(py, &get("label")?, "uint32", "sensed \"label\"")?;
+        let (xyz, label) = (xyz.as_array(), label.as_array());
+        let (height, width) = (label.nrows(), label.ncols());
+        if xyz.shape() != [height, width, 3] {
+            return Err(raised(format!(
+                "sensed \"xyz\" is {:?}; with a {height}×{width} label it must be ({height}, {width}, 3)",
+                xyz.shape()
+            )));
+        }
+        let sensor: Sensor = from_keys(py, &get("sensor")?, "sensed \"sensor\"")?;
+        let channel = |k: usize| xyz.index_axis(numpy::ndarray::Axis(2), k).iter().copied().collect::<Vec<f32>>();
+        let size = |n: usize| u32::try_from(n).map_err(|_| raised(format!("a side of {n} pixels is too large")));
+        return Ok(RangeImage {
+            width: size(width)?,
+            height: size(height)?,
+            x: channel(0),
+            y: channel(1),
+            z: channel(2),
+            label: label.iter().copied().collect(),
+            reason: None,
+            witness: None,
+            sensor: Some(sensor),
+            shadow: None,
+            effects: None,
+        });
+    }
+    let path: PathBuf = sensed
+        .extract()
+        .map_err(|_| raised("sensed must be an EXR path or a dict of \"xyz\", \"label\" and \"sensor\""))?;
+    read_range_image(&path, &Ledger::default()).map_err(raised)
+}
+
+/// The poses of an (N, 4, 4) float64 array, row-major as numpy holds them.
+fn poses_of(poses: &PyReadonlyArray3<'_, f64>) -> PyResult<Vec<DMat4>> {
+    let a = poses.as_array();
+    if a.shape()[1..] != [4, 4] {
+        return Err(raised(format!("poses must be (N, 4, 4); they are {:?}", a.shape())));
+    }
+    Ok(a.outer_iter()
+        .map(|m| DMat4::from_cols_array_2d(&std::array::from_fn(|c| std::array::from_fn(|r| m[[r, c]]))))
+        .collect())
+}
+
+/// The model of a verification: a Mesh, or a path or `builtin:` name.
+fn model_of(verifier: &CrateVerifier, model: &Bound<'_, PyAny>) -> PyResult<Arc<Model>> {
+    if let Ok(mesh) = model.cast::<Mesh>() {
+        return verifier.model_of_mesh(mesh.get().inner.clone()).map_err(raised);
+    }
+    let reference: String =
+        model.extract().map_err(|_| raised("model must be a Mesh, a file path or a builtin: name"))?;
+    verifier.model(&reference, Path::new(".")).map_err(raised)
+}
+
+/// The arrays of a batch's verifications.
+fn verification_arrays<'py>(
+    py: Python<'py>,
+    verified: &[Verification],
+    sensed: &SensedImage,
+) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    let scores = [("s", 6usize), ("s1", 0), ("s2", 1), ("s3", 2), ("s4", 3), ("s5", 4), ("s6", 5)];
+    for (name, k) in scores {
+        let column: Vec<f64> = verified
+            .iter()
+            .map(|v| {
+                let s = &v.scores;
+                [s.s1, s.s2, s.s3, s.s4, s.s5, s.s6, s.s][k]
+            })
+            .collect();
+        dict.set_item(name, column.into_pyarray(py))?;
+    }
+    let count = |of: &dyn Fn(&Verification) -> u64| verified.iter().map(of).collect::<Vec<u64>>();
+    dict.set_item("n1_plus", count(&|v| v.counts.n1_plus).into_pyarray(py))?;
+    dict.set_item("n1_minus", count(&|v| v.counts.n1_minus).into_pyarray(py))?;
+    dict.set_item("n0", count(&|v| v.counts.n0).into_pyarray(py))?;
+    dict.set_item("n1", count(&|v| v.counts.n1).into_pyarray(py))?;
+    dict.set_item("n_s", count(&|v| v.counts.synthetic_valid()).into_pyarray(py))?;
+    dict.set_item("n_i", count(&|_| sensed.valid).into_pyarray(py))?;
+    let rejected: Vec<String> = verified.iter().map(|v| v.scores.rejected.clone().unwrap_or_default()).collect();
+    let numpy = py.import("numpy")?;
+    dict.set_item("rejected", numpy.call_method1("array", (PyList::new(py, rejected)?, PyString::new(py, "U")))?)?;
+    Ok(dict)
+}
+
+/// A verification's arguments as Python gave them.
+struct VerifyCall<'a, 'py> {
+    sensed: &'a Bound<'py, PyAny>,
+    model: &'a Bound<'py, PyAny>,
+    poses: &'a Bound<'py, PyAny>,
+    bindings: Vec<(u32, u32)>,
+    shadow: Option<&'a Bound<'py, PyAny>>,
+    effects: Option<&'a Bound<'py, PyAny>>,
+    tolerance: f64,
+    /// Called with the number of poses done after each chunk.
+    progress: Option<&'a Bound<'py, PyAny>>,
+}
+
+/// Scores the call's poses of its model against its sensed image.
+fn verify_with<'py>(
+    py: Python<'py>,
+    verifier: &Arc<CrateVerifier>,
+    call: VerifyCall<'_, 'py>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let VerifyCall { sensed, model, poses, bindings, shadow, effects, tolerance, progress } = call;
+    let image = sensed_of(py, sensed)?;
+    let sensor = image.sensor.clone().ok_or_else(|| raised("the sensed image has no sensor header"))?;
+    let shadow = match shadow {
+        None => image.shadow.unwrap_or_default(),
+        Some(s) => match s.extract::<String>() {
+            Ok(mode) => ShadowSettings::of(from_keys::<ShadowMode>(py, s, &format!("shadow {mode:?}"))?),
+            Err(_) => from_keys(py, s, "shadow")?,
+        },
+    };
+    let effects: Effects = match effects {
+        None => image.effects.unwrap_or_default(),
+        Some(e) => from_keys(py, e, "effects")?,
+    };
+    let sensed = SensedImage::new(&image, &sensor).map_err(raised)?;
+    let model = model_of(verifier, model)?;
+    let poses = array::<f64, numpy::Ix3>(py, poses, "float64", "poses")?;
+    let hypotheses: Vec<Hypothesis> = poses_of(&poses)?
+        .into_iter()
+        .enumerate()
+        .map(|(i, pose)| Hypothesis { id: i.to_string(), model: model.clone(), pose, bindings: bindings.clone() })
+        .collect();
+    let settings = VerifySettings { sensor, shadow, effects, tolerance, compare_shadow: false, chunk_size: 1024 };
+    let verifier = verifier.clone();
+    let mut done = Vec::with_capacity(hypotheses.len());
+    match progress {
+        None => {
+            done = py.detach(|| verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})).map_err(raised)?;
+        }
+        Some(callback) => {
+            // Chunk by chunk, the GIL taken back to tell the callback how many are done.
+            let callback = callback.clone().unbind();
+            let result = py.detach(|| {
+                verifier.verify_each(&sensed, &settings, &hypotheses, &mut |chunk| {
+                    done.extend(chunk);
+                    let count = done.len();
+                    Python::attach(|py| callback.call1(py, (count,)).map(|_| ()))
+                        .map_err(|e| rangesynth::Error::Scene(format!("the progress callback raised: {e}")))
+                })
+            });
+            result.map_err(raised)?;
+        }
+    }
+    verification_arrays(py, &done, &sensed)
+}
+
+/// A verifier on one device, made once and reused; usable from several threads, the GIL
+/// released while it verifies.
+#[pyclass(frozen, module = "rangesynth")]
+struct Verifier {
+    inner: Arc<CrateVerifier>,
+}
+
+#[pymethods]
+impl Verifier {
+    #[new]
+    #[pyo3(signature = (device=None, memory_budget=None, raster=None))]
+    fn new(
+        py: Python<'_>,
+        device: Option<String>,
+        memory_budget: Option<String>,
+        raster: Option<&str>,
+    ) -> PyResult<Self> {
+        let renderer = new_renderer(py, device, memory_budget, raster)?;
+        let verifier = py.detach(|| CrateVerifier::new(renderer));
+        Ok(Self { inner: Arc::new(verifier.map_err(raised)?) })
+    }
+
+    /// As the module's `verify`, with `progress` called with the number of poses done after
+    /// each chunk.
+    #[pyo3(signature = (sensed, model, poses, bindings, shadow=None, effects=None, tolerance=0.1, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn verify<'py>(
+        &self,
+        py: Python<'py>,
+        sensed: &Bound<'py, PyAny>,
+        model: &Bound<'py, PyAny>,
+        poses: &Bound<'py, PyAny>,
+        bindings: Vec<(u32, u32)>,
+        shadow: Option<&Bound<'py, PyAny>>,
+        effects: Option<&Bound<'py, PyAny>>,
+        tolerance: f64,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let call = VerifyCall { sensed, model, poses, bindings, shadow, effects, tolerance, progress };
+        verify_with(py, &self.inner, call)
+    }
+}
+
+/// Renders a scene file: a dict of numpy arrays, "xyz" (H, W, 3) float32 (NaN where nothing was
+/// measured), "label" (H, W) uint32, "reason" (H, W) uint8 and, where the sensor has witnesses,
+/// "witness" (H, W) uint32 (bit k: witness k did not see the point).
+#[pyfunction]
+#[pyo3(signature = (path, raster=None))]
+fn render_scene<'py>(py: Python<'py>, path: PathBuf, raster: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
+    let raster = raster_of(raster)?;
+    let out = py.detach(move || -> rangesynth::Result<RenderOutput> {
+        let ledger = Arc::new(Ledger::default());
+        let scene = Scene::from_file(&path, &ledger)?;
+        CrateRenderer::new(&ContextOptions::from_env())?.with_ledger(ledger).with_raster(raster).render(&scene)
+    });
+    render_arrays(py, &out.map_err(raised)?)
+}
+
+/// Scores each pose of `model` against the sensed image: a dict of arrays, one element a pose:
+/// "s", "s1" … "s6" float64, the counts "n1_plus", "n1_minus", "n0", "n1", "n_s", "n_i" uint64,
+/// and "rejected" (str, empty where the pose was not rejected).
+#[pyfunction]
+#[pyo3(signature = (sensed, model, poses, bindings, shadow=None, effects=None, tolerance=0.1, raster=None))]
+#[allow(clippy::too_many_arguments)]
+fn verify<'py>(
+    py: Python<'py>,
+    sensed: &Bound<'py, PyAny>,
+    model: &Bound<'py, PyAny>,
+    poses: &Bound<'py, PyAny>,
+    bindings: Vec<(u32, u32)>,
+    shadow: Option<&Bound<'py, PyAny>>,
+    effects: Option<&Bound<'py, PyAny>>,
+    tolerance: f64,
+    raster: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let verifier = shared_verifier(raster_of(raster)?)?;
+    let call = VerifyCall { sensed, model, poses, bindings, shadow, effects, tolerance, progress: None };
+    verify_with(py, &verifier, call)
+}
+
+/// The Vulkan devices the loader lists: dicts of "index", "name", "uuid" and "kind".
+#[pyfunction]
+fn devices<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let listed = py.detach(list_devices).map_err(raised)?;
+    listed
+        .into_iter()
+        .map(|d| {
+            let dict = PyDict::new(py);
+            dict.set_item("index", d.index)?;
+            dict.set_item("name", d.name)?;
+            dict.set_item("uuid", d.uuid)?;
+            dict.set_item("kind", d.kind)?;
+            Ok(dict)
+        })
+        .collect()
+}
+
+#[pymodule]
+fn _rangesynth(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("Error", m.py().get_type::<Error>())?;
+    m.add_class::<Mesh>()?;
+    m.add_class::<Renderer>()?;
+    m.add_class::<Verifier>()?;
+    m.add_function(wrap_pyfunction!(render_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(verify, m)?)?;
+    m.add_function(wrap_pyfunction!(devices, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,145 @@
+"""The Python package against geometry worked out by hand and against itself (docs/python.md).
+
+A 16 × 12 orthographic scanner of pitch 0.25 (its first pixel centre at (-1.875, 1.375)) looks
+down at the built-in unit box (x and y from -0.5 to 0.5, top at z = 1): the pixels whose centres
+lie over the box's top, columns 6 to 9 and rows 4 to 7, hold z = 1 and the box's top label; the
+rest see nothing. Run by tools/test.sh on lavapipe after `pip install .`.
+"""
+
+import os
+import threading
+
+import numpy as np
+import pytest
+
+import rangesynth
+
+SENSOR = {
+    "kind": "orthographic",
+    "width": 16,
+    "height": 12,
+    "pitch": [0.25, 0.25],
+    "origin": [-1.875, 1.375],
+    "theta_deg": 0.0,
+}
+
+
+def scene_file(tmp_path, theta_deg=0.0, mode="none"):
+    path = tmp_path / "box.toml"
+    path.write_text(
+        "[sensor]\n"
+        + "".join(
+            f"{k} = {v!r}\n".replace("'", '"') for k, v in {**SENSOR, "theta_deg": theta_deg}.items()
+        )
+        + f'[shadow]\nmode = "{mode}"\n[[object]]\nmodel = "builtin:box"\n'
+    )
+    return path
+
+
+def test_render_scene_gives_the_boxs_top_by_hand(tmp_path):
+    out = rangesynth.render_scene(scene_file(tmp_path))
+    assert out["xyz"].shape == (12, 16, 3) and out["xyz"].dtype == np.float32
+    assert out["label"].shape == (12, 16) and out["label"].dtype == np.uint32
+    assert out["reason"].dtype == np.uint8
+    assert out["witness"].dtype == np.uint32  # the scanner's camera is witness 0
+    top = np.zeros((12, 16), dtype=bool)
+    top[4:8, 6:10] = True
+    assert np.array_equal(out["label"] != 0, top)
+    assert np.all(out["xyz"][top][:, 2] == 1.0)
+    assert np.all(np.isnan(out["xyz"][~top]))
+    xs = -1.875 + 0.25 * np.arange(16)
+    assert np.allclose(out["xyz"][5, 6:10, 0], xs[6:10])
+
+
+def sensed_dict(tmp_path):
+    out = rangesynth.render_scene(scene_file(tmp_path))
+    return {"xyz": out["xyz"], "label": out["label"], "sensor": SENSOR}
+
+
+def poses(*shifts):
+    stack = np.repeat(np.eye(4)[None], len(shifts), axis=0)
+    stack[:, 0, 3] = shifts
+    return stack
+
+
+def test_verify_scores_the_true_pose_one_and_a_moved_pose_less(tmp_path):
+    top = rangesynth.render_scene(scene_file(tmp_path))["label"].max()
+    result = rangesynth.verify(sensed_dict(tmp_path), "builtin:box", poses(0.0, 0.25, 9.0), [(top, top)])
+    for key in ["s", "s1", "s2", "s3", "s4", "s5", "s6"]:
+        assert result[key].shape == (3,) and result[key].dtype == np.float64
+    assert result["s"][0] == 1.0
+    assert result["s"][1] < 1.0
+    assert result["n_s"][0] == 16 and result["n_i"][0] == 16
+    # The box moved off the image renders nothing: rejected, with the reason.
+    assert result["s"][2] == 0.0 and "s5" in result["rejected"][2]
+    assert result["rejected"][0] == ""
+
+
+def test_a_verifier_takes_meshes_strided_poses_and_reports_progress(tmp_path):
+    verifier = rangesynth.Verifier()
+    corners = np.array([[x, y, z] for z in (0, 1) for y in (-0.5, 0.5) for x in (-0.5, 0.5)], dtype=np.float64)
+    faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 2, 6], [0, 6, 4],
+             [1, 5, 7], [1, 7, 3], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6]]
+    mesh = rangesynth.Mesh(corners, faces)
+    assert (mesh.vertex_count, mesh.triangle_count, mesh.surface_count) == (8, 12, 1)
+    label = rangesynth.render_scene(scene_file(tmp_path))["label"].max()
+    many = poses(*np.linspace(-0.5, 0.5, 8))
+    done = []
+    contiguous = verifier.verify(sensed_dict(tmp_path), mesh, many, [(label, 1)], progress=done.append)
+    strided = verifier.verify(sensed_dict(tmp_path), mesh, np.asfortranarray(many)[::1], [(label, 1)])
+    assert np.array_equal(contiguous["s"], strided["s"])
+    assert done and done[-1] == 8 and done == sorted(done)
+    # float32 poses are copied to float64.
+    single = verifier.verify(sensed_dict(tmp_path), mesh, many.astype(np.float32), [(label, 1)])
+    assert np.allclose(single["s"], contiguous["s"])
+
+
+def test_one_verifier_serves_several_threads(tmp_path):
+    verifier = rangesynth.Verifier()
+    sensed = sensed_dict(tmp_path)
+    label = int(sensed["label"].max())
+    many = poses(*np.linspace(-0.3, 0.3, 16))
+    alone = verifier.verify(sensed, "builtin:box", many, [(label, label)])["s"]
+    results = [None] * 4
+
+    def run(k):
+        results[k] = verifier.verify(sensed, "builtin:box", many, [(label, label)])["s"]
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert np.array_equal(r, alone)
+
+
+def test_errors_are_rangesynth_errors_with_the_librarys_message(tmp_path):
+    sensed = sensed_dict(tmp_path)
+    with pytest.raises(rangesynth.Error, match="poses must have 3 dimensions"):
+        rangesynth.verify(sensed, "builtin:box", np.eye(4), [(1, 1)])
+    nan = poses(0.0)
+    nan[0, 1, 3] = np.nan
+    with pytest.raises(rangesynth.Error, match="hypothesis \"0\""):
+        rangesynth.verify(sensed, "builtin:box", nan, [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="xyz"):
+        rangesynth.verify({**sensed, "xyz": sensed["xyz"][:, :, :2]}, "builtin:box", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="builtin"):
+        rangesynth.verify(sensed, "builtin:no-such-model", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="refers to vertex 7"):
+        rangesynth.Mesh(np.zeros((3, 3)), [[0, 1, 7]])
+    with pytest.raises(rangesynth.Error):
+        rangesynth.render_scene(tmp_path / "missing.toml")
+    with pytest.raises(rangesynth.Error, match="rasterizer"):
+        rangesynth.render_scene(scene_file(tmp_path), raster="fastest")
+    assert issubclass(rangesynth.Error, Exception)
+
+
+def test_devices_lists_the_device_the_renderer_runs_on():
+    listed = rangesynth.devices()
+    assert listed and all(set(d) == {"index", "name", "uuid", "kind"} for d in listed)
+    renderer = rangesynth.Renderer(device=listed[0]["uuid"])
+    assert renderer.device_name == listed[0]["name"]
+    expected = os.environ.get("RANGESYNTH_EXPECT_DEVICE")
+    if expected:
+        assert expected in renderer.device_name
