@@ -546,3 +546,37 @@ fn verify_scores_under_a_pinhole_rig_and_refuses_a_rig_that_differs() {
     let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
     assert!(line["s"].as_f64().unwrap() < 0.99, "{line}");
 }
+
+/// `--shard i/N` verifies the i-th of N contiguous ranges: the three shards' outputs of a file
+/// of 10 hypotheses, concatenated in order, are the unsharded output byte for byte, and a
+/// shard that is not i/N with i < N is refused.
+#[test]
+fn verify_shards_concatenate_to_the_unsharded_output() {
+    let (d, exr) = sensed_example("verify_shards");
+    let hypotheses: Vec<serde_json::Value> = (0..10)
+        .map(|i| {
+            let a = 0.4363323129985824 + f64::from(i) * 0.05;
+            serde_json::json!({
+                "id": format!("h{i}"),
+                "model": "builtin:step",
+                "pose": [[a.cos(), -a.sin(), 0.0, 0.3], [a.sin(), a.cos(), 0.0, -0.2], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+                "bindings": [[1, 1], [2, 2]]
+            })
+        })
+        .collect();
+    let hyps = d.join("hyps.json");
+    std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
+    let whole = d.join("whole.jsonl");
+    let out = verify(&hyps, &exr, &whole, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let mut joined = Vec::new();
+    for i in 0..3 {
+        let part = d.join(format!("part{i}.jsonl"));
+        let out = verify(&hyps, &exr, &part, &["--shard", &format!("{i}/3")]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        joined.extend(std::fs::read(&part).unwrap());
+    }
+    assert_eq!(String::from_utf8(joined).unwrap(), std::fs::read_to_string(&whole).unwrap());
+    let out = verify(&hyps, &exr, &d.join("bad.jsonl"), &["--shard", "3/3"]);
+    assert!(!out.status.success() && text(&out.stderr).contains("not i/N"), "{}", text(&out.stderr));
+}

@@ -29,6 +29,8 @@ if [ $# -eq 0 ]; then
   venv=target/python-venv
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
   "$venv/bin/python" -m pip install -q --upgrade pip 'maturin>=1.7,<2' numpy pytest
-  MATURIN_PEP517_ARGS="--locked" "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation --force-reinstall .
+  # The venv's maturin builds it (no isolated build environment to download each run).
+  PATH="$PWD/$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked" \
+    "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation --force-reinstall .
   (cd python/tests && ../../"$venv"/bin/python -m pytest -q)
 fi

@@ -39,7 +39,7 @@ class Renderer:
 
     def __init__(
         self,
-        device: Optional[str] = None,
+        device: Optional[Union[int, str]] = None,
         memory_budget: Optional[str] = None,
         raster: Optional[str] = None,
     ) -> None: ...
@@ -53,7 +53,7 @@ class Verifier:
 
     def __init__(
         self,
-        device: Optional[str] = None,
+        device: Optional[Union[int, str]] = None,
         memory_budget: Optional[str] = None,
         raster: Optional[str] = None,
     ) -> None: ...

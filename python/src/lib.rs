@@ -167,12 +167,12 @@ fn context_options(device: Option<&str>) -> ContextOptions {
     options
 }
 
-/// A renderer on `device` (a name, part of one, or a UUID from `devices()`) with a memory
+/// A renderer on `device` (an index or a UUID from `devices()`, or a name or part of one) with a memory
 /// budget as the command line takes it ("4G") and a rasterizer ("auto", "graphics",
 /// "compute"); the GIL released while the device starts.
 fn new_renderer(
     py: Python<'_>,
-    device: Option<String>,
+    device: Option<&Bound<'_, PyAny>>,
     memory_budget: Option<String>,
     raster: Option<&str>,
 ) -> PyResult<CrateRenderer> {
@@ -182,19 +182,21 @@ fn new_renderer(
         .transpose()
         .map_err(raised)?
         .unwrap_or_default();
+    // An index or a UUID from devices(), or a name: the library matches its text.
+    let device = device.map(|d| d.str().map(|text| text.to_string())).transpose()?;
     let renderer = py.detach(|| CrateRenderer::new(&context_options(device.as_deref()))).map_err(raised)?;
     Ok(renderer.with_raster(raster).with_memory_budget(budget))
 }
 
 #[pymethods]
 impl Renderer {
-    /// `device`: a name (or part of one) or a UUID from `devices()`; `memory_budget` as the
+    /// `device`: an index or a UUID from `devices()`, or a name (or part of one); `memory_budget` as the
     /// command line takes it ("4G"); `raster`: "auto", "graphics" or "compute".
     #[new]
     #[pyo3(signature = (device=None, memory_budget=None, raster=None))]
     fn new(
         py: Python<'_>,
-        device: Option<String>,
+        device: Option<&Bound<'_, PyAny>>,
         memory_budget: Option<String>,
         raster: Option<&str>,
     ) -> PyResult<Self> {
@@ -402,7 +404,7 @@ impl Verifier {
     #[pyo3(signature = (device=None, memory_budget=None, raster=None))]
     fn new(
         py: Python<'_>,
-        device: Option<String>,
+        device: Option<&Bound<'_, PyAny>>,
         memory_budget: Option<String>,
         raster: Option<&str>,
     ) -> PyResult<Self> {

@@ -138,8 +138,11 @@ def test_errors_are_rangesynth_errors_with_the_librarys_message(tmp_path):
 def test_devices_lists_the_device_the_renderer_runs_on():
     listed = rangesynth.devices()
     assert listed and all(set(d) == {"index", "name", "uuid", "kind"} for d in listed)
-    renderer = rangesynth.Renderer(device=listed[0]["uuid"])
-    assert renderer.device_name == listed[0]["name"]
+    for choice in [listed[0]["uuid"], listed[0]["index"]]:
+        renderer = rangesynth.Renderer(device=choice)
+        assert renderer.device_name == listed[0]["name"]
+    with pytest.raises(rangesynth.Error, match="no usable Vulkan device"):
+        rangesynth.Renderer(device="no-such-device")
     expected = os.environ.get("RANGESYNTH_EXPECT_DEVICE")
     if expected:
         assert expected in renderer.device_name

@@ -8,6 +8,7 @@
 //! slice finishes, so beyond the parsed input only a small summary row per hypothesis is kept;
 //! the lines go to a temporary file that replaces `--out` only once it is complete.
 
+use super::shard::Shard;
 use super::{check_validation, warn_degenerate};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -49,6 +50,12 @@ pub struct VerifyArgs {
     /// model than the one that made the image.
     #[arg(long)]
     override_effects: bool,
+    /// Verify only shard i of N (from 0): the i-th of N contiguous, near-equal ranges of the
+    /// file's hypotheses; the N outputs, concatenated in order, are the unsharded output byte
+    /// for byte. For job arrays: Kubernetes' JOB_COMPLETION_INDEX or Slurm's
+    /// SLURM_ARRAY_TASK_ID is i.
+    #[arg(long, value_name = "i/N")]
+    shard: Option<Shard>,
     /// Most hypotheses per GPU submission.
     #[arg(long, default_value_t = MAX_CHUNK)]
     chunk_size: usize,
@@ -128,9 +135,13 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     let base_dir = args.hypotheses.parent().unwrap_or(Path::new("."));
     let mut warned = std::collections::HashSet::new();
     let tolerance = file.tolerance;
+    let total = file.hypotheses.len();
+    let shard = args.shard.map_or(0..total, |shard| shard.range(total));
     let hypotheses = file
         .hypotheses
         .into_iter()
+        .skip(shard.start)
+        .take(shard.len())
         .map(|h| {
             let model = verifier
                 .model_as(&h.model, base_dir, h.surfaces, h.scale)

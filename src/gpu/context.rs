@@ -35,8 +35,8 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 pub struct ContextOptions {
     /// Khronos validation with synchronization validation.
     pub validation: bool,
-    /// Pick the device whose name contains this (case-insensitive), or whose UUID it is
-    /// (`list_devices`).
+    /// Pick the device whose name contains this (case-insensitive), or whose UUID or index
+    /// (in the loader's order) it is (`list_devices`).
     pub device: Option<String>,
     /// Use at most this Vulkan version (`vk::API_VERSION_1_2` takes the extension path even
     /// on a 1.3 device, which is how the tests cover it); `None` uses what the device has.
@@ -637,13 +637,14 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>, cap: u32) -> Re
     let devices = unsafe { instance.enumerate_physical_devices() }.vk("listing Vulkan devices")?;
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
-    for pd in devices {
+    for (index, pd) in devices.into_iter().enumerate() {
         // SAFETY: pd came from the instance.
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let name = props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
         if let Some(w) = wanted {
-            let by_uuid = super::devices::device_uuid(instance, pd).eq_ignore_ascii_case(w);
-            if !by_uuid && !name.to_lowercase().contains(&w.to_lowercase()) {
+            let by_index = w.trim().parse::<usize>() == Ok(index);
+            let by_uuid = super::devices::device_uuid(instance, pd).eq_ignore_ascii_case(w.trim());
+            if !by_index && !by_uuid && !name.to_lowercase().contains(&w.to_lowercase()) {
                 rejected.push(format!("{name} (not named {w:?})"));
                 continue;
             }

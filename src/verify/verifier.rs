@@ -129,6 +129,14 @@ pub struct Verifier {
     stage_times: Option<StageTimes>,
 }
 
+// A daemon's threads, and the Python bindings' callers on several threads, share one verifier
+// (and its renderer): a change that made either lose Send or Sync fails to compile here.
+const _: fn() = || {
+    fn shared<T: Send + Sync>() {}
+    shared::<Verifier>();
+    shared::<Renderer>();
+};
+
 impl Verifier {
     /// Fails only if the score pass's pipeline cannot be built on the renderer's device.
     pub fn new(renderer: Renderer) -> Result<Self> {
