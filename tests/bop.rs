@@ -223,7 +223,7 @@ fn reference_vsd(test: &[f64], estimate: &[f64], truth: &[f64]) -> (f64, f64) {
         (0..depth.len())
             .map(|i| {
                 let (u, v, z) = ((i % 640) as f64, (i / 640) as f64, depth[i]);
-                let (x, y) = ((u - K[2]) * z * (1.0 / K[0]), (v - K[5]) * z * (1.0 / K[4]));
+                let (x, y) = ((u - K[2]) / K[0] * z, (v - K[5]) / K[4] * z);
                 (x * x + y * y + z * z).sqrt()
             })
             .collect()

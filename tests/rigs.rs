@@ -670,3 +670,40 @@ fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
     let e = SensedImage::new(&behind, &projector_rig()).unwrap_err().to_string();
     assert!(e.contains("Z = -1") && e.contains("behind its pinhole view"), "{e}");
 }
+
+/// `verify` under an orthographic view that is not the paper's scanner (its one witness a
+/// light from a direction, not `theta_deg`): the images are cast on the CPU as under a pinhole
+/// rig, and the counts and scores are the independent CPU scorer's (orthographic areas and
+/// N1− looking down z), the true pose scoring 1.
+#[test]
+fn verify_under_an_orthographic_rig_matches_the_cpu_scorer() {
+    let view = rangesynth::sensor::Orthographic { width: 64, height: 48, pitch: [0.05, 0.05], origin: [-1.575, 1.175] };
+    let light = Witness {
+        name: "light".into(),
+        geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::new(0.4, 0.0, 1.0).normalize())),
+    };
+    let sensor = Sensor { reference: View::Orthographic(view), witnesses: vec![light] };
+    assert!(sensor.scanner().is_none());
+    let pose = DMat4::from_rotation_z(0.3) * DMat4::from_rotation_y(0.2);
+    let sensed_scene = scene(sensor.clone(), ShadowMode::Exact, &[("builtin:step", pose)]);
+    let image = RangeImage::from(&render(&sensed_scene));
+    let sensed = SensedImage::new(&image, &sensor).unwrap();
+    let bindings: Vec<(u32, u32)> = (1..=8).map(|l| (l, l)).collect();
+    let moved = DMat4::from_translation(DVec3::new(0.1, 0.0, 0.05)) * pose;
+    let hypotheses = [
+        rig_hypothesis("true", "builtin:step", pose, &bindings),
+        rig_hypothesis("moved", "builtin:step", moved, &bindings),
+    ];
+    let settings = VerifySettings { sensor: sensor.clone(), ..rig_settings(ShadowMode::Exact) };
+    let results = common::VERIFIER.verify(&sensed, &settings, &hypotheses, &mut |_| {}).expect("verifies");
+    common::assert_no_validation_messages();
+    for (h, v) in common::paired(&hypotheses, &results) {
+        let synthetic = render(&scene(sensor.clone(), ShadowMode::Exact, &[(h.model.mesh.name.as_str(), h.pose)]));
+        let cpu = cpu_counts(&Images::of(&image, &synthetic), settings.tolerance as f32);
+        assert_eq!(as_cpu(&v.counts, &sensed, sensed.valid), cpu, "{}: counts", h.id);
+        let expected = cpu_scores(&cpu, &h.bindings);
+        assert_eq!(v.scores.s, expected[6], "{}", h.id);
+    }
+    assert_eq!(results[0].scores.s, 1.0);
+    assert!(results[1].scores.s < 0.9, "{}", results[1].scores.s);
+}

@@ -285,14 +285,28 @@ fn poses_of(poses: &PyReadonlyArray3<'_, f64>) -> PyResult<Vec<DMat4>> {
         .collect())
 }
 
-/// The model of a verification: a Mesh, or a path or `builtin:` name.
-fn model_of(verifier: &CrateVerifier, model: &Bound<'_, PyAny>) -> PyResult<Arc<Model>> {
-    if let Ok(mesh) = model.cast::<Mesh>() {
-        return verifier.model_of_mesh(mesh.get().inner.clone()).map_err(raised);
+/// A verification's model as Python gave it: a Mesh, or a path or `builtin:` name.
+enum ModelArg {
+    Mesh(Arc<CrateMesh>),
+    Reference(String),
+}
+
+impl ModelArg {
+    fn of(model: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if let Ok(mesh) = model.cast::<Mesh>() {
+            return Ok(Self::Mesh(mesh.get().inner.clone()));
+        }
+        let reference = model.extract().map_err(|_| raised("model must be a Mesh, a file path or a builtin: name"))?;
+        Ok(Self::Reference(reference))
     }
-    let reference: String =
-        model.extract().map_err(|_| raised("model must be a Mesh, a file path or a builtin: name"))?;
-    verifier.model(&reference, Path::new(".")).map_err(raised)
+
+    /// The model loaded (a reference once, then kept) and uploaded: with the GIL released.
+    fn load(self, verifier: &CrateVerifier) -> rangesynth::Result<Arc<Model>> {
+        match self {
+            Self::Mesh(mesh) => verifier.model_of_mesh(mesh),
+            Self::Reference(reference) => verifier.model(&reference, Path::new(".")),
+        }
+    }
 }
 
 /// The arrays of a batch's verifications.
@@ -360,7 +374,8 @@ fn verify_with<'py>(
         Some(e) => from_keys(py, e, "effects")?,
     };
     let sensed = SensedImage::new(&image, &sensor).map_err(raised)?;
-    let model = model_of(verifier, model)?;
+    let model = ModelArg::of(model)?;
+    let model = py.detach(|| model.load(verifier)).map_err(raised)?;
     let poses = array::<f64, numpy::Ix3>(py, poses, "float64", "poses")?;
     let hypotheses: Vec<Hypothesis> = poses_of(&poses)?
         .into_iter()

@@ -4,7 +4,9 @@
 //!
 //! 1. The depth images (mm; 0 where nothing) of the test scene and of the model rendered alone
 //!    in the estimated and the ground-truth pose become distance images: the length of each
-//!    pixel's point, √(X² + Y² + Z²) with X = (c − cx)·Z/fx, Y = (r − cy)·Z/fy.
+//!    pixel's point, √(X² + Y² + Z²) with X = ((c − cx)/fx)·Z, Y = ((r − cy)/fy)·Z, in f64 and
+//!    in that order (`misc.depth_im_to_dist_im_fast`). The test depth is read as the toolkit
+//!    reads it: the PNG's value times `depth_scale` in f32 (src/bop/mod.rs).
 //! 2. The ground truth is visible where it was rendered and its distance is at most δ beyond
 //!    the test's, or the test has no measurement there ('bop19': a missing measurement counts
 //!    as visible; the difference is taken in f32, as the toolkit takes it). The estimate is
@@ -16,6 +18,8 @@
 //!
 //! τ runs over 0.05, 0.10, …, 0.50 (the toolkit's `np.arange(0.05, 0.51, 0.05)`), and so does
 //! the correctness threshold θ of BOP's recall: an error counts as correct where e < θ.
+
+use crate::error::{Error, Result};
 
 /// The ten misalignment tolerances τ, and the ten correctness thresholds θ: 0.05 + k·0.05 in
 /// f64, as numpy's arange computes them.
@@ -39,8 +43,8 @@ impl VsdView {
     /// `depth_im_to_dist_im_fast` computes each pixel of a distance image.
     fn distance(&self, i: usize, z: f64) -> f64 {
         let (c, r) = ((i % self.width) as f64, (i / self.width) as f64);
-        let x = (c - self.cx) * z * (1.0 / self.fx);
-        let y = (r - self.cy) * z * (1.0 / self.fy);
+        let x = (c - self.cx) / self.fx * z;
+        let y = (r - self.cy) / self.fy * z;
         (x * x + y * y + z * z).sqrt()
     }
 }
@@ -52,7 +56,8 @@ fn visible(model: f64, test: f64, delta: f64) -> bool {
 
 /// The ten VSD errors, one for each of [`tolerances`], of the estimate's depth image against
 /// the ground truth's, in the test image, for an object of `diameter` (mm) with visibility
-/// tolerance `delta` (mm). The depth images are row by row, `view.width` a row.
+/// tolerance `delta` (mm). The depth images are row by row, `view.width` a row; images of
+/// another size are refused.
 pub fn vsd_errors(
     view: &VsdView,
     test: &[f64],
@@ -60,7 +65,18 @@ pub fn vsd_errors(
     truth: &[f64],
     diameter: f64,
     delta: f64,
-) -> [f64; 10] {
+) -> Result<[f64; 10]> {
+    let pixels = view.width * view.height;
+    if [test.len(), estimate.len(), truth.len()] != [pixels; 3] {
+        return Err(Error::Scene(format!(
+            "VSD of a {}×{} view takes images of {pixels} pixels; these have {}, {} and {}",
+            view.width,
+            view.height,
+            test.len(),
+            estimate.len(),
+            truth.len()
+        )));
+    }
     let mut differences = Vec::new();
     let (mut union, mut intersection) = (0usize, 0usize);
     // Only a rendered pixel can be visible: the others' distances are never read.
@@ -77,13 +93,13 @@ pub fn vsd_errors(
             differences.push((truth - estimate).abs() / diameter);
         }
     }
-    tolerances().map(|tau| match union {
+    Ok(tolerances().map(|tau| match union {
         0 => 1.0,
         _ => {
             let costly = differences.iter().filter(|&&d| d >= tau).count();
             (costly + union - intersection) as f64 / union as f64
         }
-    })
+    }))
 }
 
 /// A row's VSD as `rangesynth bop` reports it: the mean of its ten errors, and the fraction of

@@ -72,6 +72,9 @@ pub fn run(ledger: Arc<Ledger>, args: &BopArgs) -> Result<()> {
     let settings = BopSettings { rig: rig.sensor.scaled(args.rig_scale), delta: args.delta };
     let text = read_input_text(&args.results, "results file", &ledger)?;
     let mut rows = parse_results(&args.results, &text)?;
+    // Each row's fields, as read, and its pose.
+    let row_bytes = rows.iter().map(|r| 160 + r.fields.iter().map(String::len).sum::<usize>() as u64).sum();
+    ledger.charge(format_args!("the rows of {}", args.results.display()), row_bytes)?;
     if let Some(path) = &args.targets {
         let targets: Vec<Target> = parse_json(&read_input_text(path, "targets file", &ledger)?)
             .with_context(|| format!("targets {}", path.display()))?;

@@ -642,9 +642,15 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>, cap: u32) -> Re
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let name = props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
         if let Some(w) = wanted {
-            let by_index = w.trim().parse::<usize>() == Ok(index);
-            let by_uuid = super::devices::device_uuid(instance, pd).eq_ignore_ascii_case(w.trim());
-            if !by_index && !by_uuid && !name.to_lowercase().contains(&w.to_lowercase()) {
+            // A number is an index alone: "1" must not pick a card whose name holds a 1.
+            let chosen = match w.trim().parse::<usize>() {
+                Ok(wanted_index) => wanted_index == index,
+                Err(_) => {
+                    super::devices::device_uuid(instance, pd, &props).eq_ignore_ascii_case(w.trim())
+                        || name.to_lowercase().contains(&w.to_lowercase())
+                }
+            };
+            if !chosen {
                 rejected.push(format!("{name} (not named {w:?})"));
                 continue;
             }

@@ -10,14 +10,22 @@ use ash::vk;
 pub struct DeviceInfo {
     pub index: usize,
     pub name: String,
-    /// The device's UUID, as 8-4-4-4-12 lowercase hex digits.
+    /// The device's UUID, as 8-4-4-4-12 lowercase hex digits (empty for a Vulkan 1.0 device).
     pub uuid: String,
     /// "discrete", "integrated", "virtual", "cpu" or "other".
     pub kind: &'static str,
 }
 
-/// A device's UUID in the usual text form.
-pub(crate) fn device_uuid(instance: &ash::Instance, pd: vk::PhysicalDevice) -> String {
+/// A device's UUID in the usual text form; empty for a Vulkan 1.0 device, which cannot say it
+/// (and which rangesynth cannot use).
+pub(crate) fn device_uuid(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+) -> String {
+    if props.api_version < vk::API_VERSION_1_1 {
+        return String::new();
+    }
     let mut id = vk::PhysicalDeviceIDProperties::default();
     let mut properties = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
     // SAFETY: pd came from the instance (Vulkan 1.1 or later, which rangesynth's devices are).
@@ -57,7 +65,7 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
                 DeviceInfo {
                     index,
                     name: props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned(),
-                    uuid: device_uuid(&instance, pd),
+                    uuid: device_uuid(&instance, pd, &props),
                     kind: kind_of(props.device_type),
                 }
             })

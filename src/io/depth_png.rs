@@ -36,8 +36,9 @@ pub fn read_depth_png(path: &Path, ledger: &Ledger) -> Result<DepthPng> {
                 ),
             ));
         }
+        // The decoded bytes and the values made from them, both held at once.
         let samples = u64::from(width) * u64::from(height);
-        ledger.charge(format_args!("decoding the {width}×{height} depth image {}", path.display()), samples * 2)?;
+        ledger.charge(format_args!("decoding the {width}×{height} depth image {}", path.display()), samples * 4)?;
         let mut buffer = vec![0u8; reader.output_buffer_size()];
         let frame = reader.next_frame(&mut buffer).map_err(bad)?;
         let values = buffer[..frame.buffer_size()].chunks_exact(2).map(|b| u16::from_be_bytes([b[0], b[1]])).collect();

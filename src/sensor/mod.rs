@@ -82,7 +82,8 @@ impl View {
     /// image; `None` where none can. An orthographic view's are the sphere's xy box over its
     /// grid; a pinhole view's hold the projections of the cube around the sphere (a convex
     /// set's projection lies within its hull's), or are the whole image where the sphere
-    /// reaches the plane of the view's centre (Z ≤ 0), which has no projection.
+    /// reaches the plane of the view's centre (Z ≤ 0), which has no projection, and none where
+    /// it lies wholly behind that plane.
     pub fn footprint(&self, centre: DVec3, radius: f64, margin: u32) -> Option<PixelRect> {
         match self {
             View::Orthographic(o) => {
@@ -98,6 +99,9 @@ impl View {
             View::Pinhole(p) => {
                 let k = &p.intrinsics;
                 let full = PixelRect { col: 0, row: 0, width: k.width, height: k.height };
+                if centre.z + radius <= 0.0 {
+                    return None; // wholly behind the view
+                }
                 // (A NaN centre has no projection either.)
                 if centre.z - radius <= 0.0 || centre.is_nan() || radius.is_nan() {
                     return Some(full);
@@ -196,7 +200,7 @@ impl Sensor {
             Error::Scene(format!(
                 "{what} renders the paper's scanner (an orthographic [sensor] with theta_deg and no \
                  [[sensor.witness]]) only so far; this sensor has a {} reference view and {} witnesses: render it \
-                 with [shadow] mode = \"exact\" (or \"none\") and no effects",
+                 with [shadow] mode = \"exact\", \"depth\" or \"none\" (cast on the CPU)",
                 self.reference.kind(),
                 self.witnesses.len()
             ))
@@ -296,7 +300,7 @@ mod tests {
     /// radius 0.5 at (0, 0, 4) under fx = fy = 2, (cx, cy) = (1.5, 0.5) projects within
     /// u, v = 1.5 ± 2·0.5/3.5 and 0.5 ± 2·0.5/3.5 (its cube's nearest face at Z = 3.5): columns
     /// 1..=2 and rows 0..=1, one more each way with margin 1, clipped to the 4×2 image. A sphere
-    /// reaching Z ≤ 0 has the whole image; one behind the view, or beside it, none or the whole.
+    /// reaching Z ≤ 0 has the whole image; one wholly behind the view, or beside it, none.
     #[test]
     fn a_pinhole_footprint_holds_the_projected_sphere() {
         let view = pinhole();
@@ -305,6 +309,7 @@ mod tests {
         assert_eq!(view.footprint(DVec3::new(0.0, 0.0, 4.0), 0.5, 1), rect(0, 0, 4, 2));
         assert_eq!(view.footprint(DVec3::new(0.0, 0.0, 0.2), 0.5, 0), rect(0, 0, 4, 2));
         assert_eq!(view.footprint(DVec3::new(40.0, 0.0, 4.0), 0.5, 1), None);
+        assert_eq!(view.footprint(DVec3::new(0.0, 0.0, -0.6), 0.5, 1), None);
     }
 
     /// Orthographic points lie over their pixel centres at z; pinhole ones at depth Z along

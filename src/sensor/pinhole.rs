@@ -28,6 +28,10 @@ pub struct Pinhole {
     pub far: f64,
 }
 
+/// The focal lengths a view may have, in pixels (and the largest |cx|, |cy|).
+pub const MIN_FOCAL: f64 = 1e-6;
+pub const MAX_FOCAL: f64 = 1e9;
+
 impl Intrinsics {
     /// Checks the size and intrinsics; `owner` (`[sensor]`, `[[sensor.witness]] 1 ("ir")`)
     /// starts the message of a refusal, which names the key.
@@ -37,14 +41,18 @@ impl Intrinsics {
         if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
             return bad(format!("width = {w}, height = {h}: each side must lie between 1 and {MAX_IMAGE_SIDE} pixels"));
         }
+        // The score pass reads 1/fx, 1/fy, cx and cy as f32 (src/verify/area.rs): bounds far
+        // beyond any camera's keep them normal, finite f32s there.
         for (key, value) in [("fx", self.fx), ("fy", self.fy)] {
-            if !(value.is_finite() && value > 0.0) {
-                return bad(format!("{key} = {value} must be a positive, finite focal length in pixels"));
+            if !(value.is_finite() && (MIN_FOCAL..=MAX_FOCAL).contains(&value)) {
+                return bad(format!(
+                    "{key} = {value} must be a focal length in pixels between {MIN_FOCAL:e} and {MAX_FOCAL:e}"
+                ));
             }
         }
         for (key, value) in [("cx", self.cx), ("cy", self.cy)] {
-            if !value.is_finite() {
-                return bad(format!("{key} = {value} must be finite"));
+            if !(value.is_finite() && value.abs() <= MAX_FOCAL) {
+                return bad(format!("{key} = {value} must be finite, within ±{MAX_FOCAL:e} pixels"));
             }
         }
         Ok(())
@@ -134,6 +142,10 @@ mod tests {
             (Intrinsics { fy: -1.0, ..k }, "fy = -1"),
             (Intrinsics { fx: f64::NAN, ..k }, "fx = NaN"),
             (Intrinsics { cx: f64::INFINITY, ..k }, "cx = inf"),
+            // Beyond the score pass's f32: 1/fx would be subnormal, cy not a float.
+            (Intrinsics { fx: 1e10, ..k }, "fx = 10000000000"),
+            (Intrinsics { fy: 1e-9, ..k }, "fy = 0.000000001"),
+            (Intrinsics { cy: 2e9, ..k }, "cy = 2000000000"),
             (Intrinsics { width: 0, ..k }, "width = 0"),
             (Intrinsics { height: MAX_IMAGE_SIDE + 1, ..k }, "width = 640, height = 16385"),
         ] {

@@ -123,6 +123,14 @@ impl SensedImage {
         // A pinhole view's area unit is a pixel's footprint at the farthest sensed depth.
         let farthest = (0..n).filter(|&i| image.label[i] != 0).map(|i| f64::from(image.z[i])).fold(0.0, f64::max);
         let blocks = BlockGeometry::of(&sensor.reference, if farthest > 0.0 { farthest } else { 1.0 });
+        let unit = blocks.sides.map(|side| side as f32);
+        if !(unit.iter().all(|side| side.is_normal()) && blocks.scale().is_normal()) {
+            return Err(Error::Scene(format!(
+                "the sensed image's farthest depth {farthest} makes an area unit of {:?} (a pixel's sides there), \
+                 beyond the f32 arithmetic of the score pass",
+                blocks.sides
+            )));
+        }
         let mut segment_area_units = vec![0u64; segments.len()];
         let (w, h) = (image.width as usize, image.height as usize);
         for r in 0..h.saturating_sub(1) {
