@@ -32,5 +32,8 @@ if [ $# -eq 0 ]; then
   # The venv's maturin builds it (no isolated build environment to download each run).
   PATH="$PWD/$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked" \
     "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation --force-reinstall .
-  (cd python/tests && ../../"$venv"/bin/python -m pytest -q)
+  # The command line `cargo test` built, against which the package's results are compared.
+  target_dir=${CARGO_TARGET_DIR:-target}
+  [[ "$target_dir" = /* ]] || target_dir="$PWD/$target_dir"
+  (cd python/tests && RANGESYNTH_CLI="$target_dir/debug/rangesynth" ../../"$venv"/bin/python -m pytest -q)
 fi

@@ -6,7 +6,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Error", "Mesh", "Renderer", "Verifier", "devices", "render_scene", "verify"]
+__all__ = ["Error", "Mesh", "Renderer", "Verifier", "devices", "read_range_image", "render_scene", "verify"]
 
 _Path = Union[str, "PathLike[str]"]
 _Keys = Mapping[str, Any]
@@ -91,3 +91,7 @@ def verify(
 
 def devices() -> List[Dict[str, Any]]:
     """The Vulkan devices the loader lists: "index", "name", "uuid", "kind"."""
+
+def read_range_image(path: _Path) -> Dict[str, Any]:
+    """A range EXR's "xyz", "label", and "reason", "witness" and "sensor" (a dict of the
+    [sensor] keys) where the file has them."""

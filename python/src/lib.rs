@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 use rangesynth::effects::Effects;
 use rangesynth::gpu::{list_devices, ContextOptions};
-use rangesynth::io::{read_range_image, RangeImage};
+use rangesynth::io::{read_range_image as read_range_image_file, RangeImage};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::{load_model_file, Mesh as CrateMesh};
 use rangesynth::render::Raster;
@@ -134,6 +134,31 @@ impl Mesh {
     fn surface_count(&self) -> u32 {
         self.inner.surface_count()
     }
+}
+
+/// A range EXR's arrays, as `render` writes it and `render_scene` returns them: "xyz",
+/// "label", and "reason" and "witness" where the file has them, and its "sensor" as a dict of
+/// the `[sensor]` keys where its header has one.
+#[pyfunction]
+fn read_range_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let image = py.detach(|| read_range_image_file(&path, &Ledger::default())).map_err(raised)?;
+    let (width, height) = (image.width as usize, image.height as usize);
+    let xyz: Vec<f32> = (0..image.label.len()).flat_map(|i| [image.x[i], image.y[i], image.z[i]]).collect();
+    let dict = PyDict::new(py);
+    dict.set_item("xyz", xyz.into_pyarray(py).reshape([height, width, 3])?)?;
+    dict.set_item("label", image.label.into_pyarray(py).reshape([height, width])?)?;
+    if let Some(reason) = image.reason {
+        let reason: Vec<u8> = reason.iter().map(|&r| r as u8).collect();
+        dict.set_item("reason", reason.into_pyarray(py).reshape([height, width])?)?;
+    }
+    if let Some(witness) = image.witness {
+        dict.set_item("witness", witness.into_pyarray(py).reshape([height, width])?)?;
+    }
+    if let Some(sensor) = image.sensor {
+        let text = serde_json::to_string(&sensor).map_err(raised)?;
+        dict.set_item("sensor", py.import("json")?.call_method1("loads", (text,))?)?;
+    }
+    Ok(dict)
 }
 
 /// The arrays of a render: xyz (H, W, 3) float32 with NaN where no point was measured, label
@@ -271,7 +296,7 @@ fn sensed_of(py: Python<'_>, sensed: &Bound<'_, PyAny>) -> PyResult<RangeImage> 
     let path: PathBuf = sensed
         .extract()
         .map_err(|_| raised("sensed must be an EXR path or a dict of \"xyz\", \"label\" and \"sensor\""))?;
-    read_range_image(&path, &Ledger::default()).map_err(raised)
+    read_range_image_file(&path, &Ledger::default()).map_err(raised)
 }
 
 /// The poses of an (N, 4, 4) float64 array, row-major as numpy holds them.
@@ -512,5 +537,6 @@ fn _rangesynth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add_function(wrap_pyfunction!(verify, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
+    m.add_function(wrap_pyfunction!(read_range_image, m)?)?;
     Ok(())
 }

@@ -6,7 +6,9 @@ lie over the box's top, columns 6 to 9 and rows 4 to 7, hold z = 1 and the box's
 rest see nothing. Run by tools/test.sh on lavapipe after `pip install .`.
 """
 
+import json
 import os
+import subprocess
 import threading
 
 import numpy as np
@@ -146,3 +148,48 @@ def test_devices_lists_the_device_the_renderer_runs_on():
     expected = os.environ.get("RANGESYNTH_EXPECT_DEVICE")
     if expected:
         assert expected in renderer.device_name
+
+
+def command_line():
+    """The rangesynth command line that `cargo test` built (tools/test.sh names it)."""
+    path = os.environ.get("RANGESYNTH_CLI", "")
+    assert os.path.isfile(path), "RANGESYNTH_CLI must name the rangesynth binary (tools/test.sh sets it)"
+    return path
+
+
+def test_render_and_verify_equal_the_command_lines_bit_for_bit(tmp_path):
+    scene = scene_file(tmp_path, theta_deg=30.0, mode="depth")
+    out = tmp_path / "out"
+    subprocess.run([command_line(), "render", str(scene), "--out", str(out)], check=True, capture_output=True)
+    exr = rangesynth.read_range_image(out / "range.exr")
+    ours = rangesynth.render_scene(scene)
+    for key in ["xyz", "label", "reason", "witness"]:
+        assert ours[key].dtype == exr[key].dtype
+        np.testing.assert_array_equal(ours[key], exr[key])
+    assert exr["sensor"]["theta_deg"] == 30.0
+    label = int(exr["label"].max())
+    many = poses(*np.linspace(-0.4, 0.4, 9))
+    hypotheses = [
+        {"id": f"h{i}", "model": "builtin:box", "pose": p.tolist(), "bindings": [[label, label]]}
+        for i, p in enumerate(many)
+    ]
+    file = tmp_path / "hypotheses.json"
+    file.write_text(json.dumps({"tolerance": 0.05, "hypotheses": hypotheses}))
+    scores = tmp_path / "scores.jsonl"
+    command = [command_line(), "verify", str(file), "--scene", str(out / "range.exr"), "--out", str(scores)]
+    subprocess.run(command, check=True, capture_output=True)
+    lines = [json.loads(line) for line in scores.read_text().splitlines()]
+    result = rangesynth.verify(str(out / "range.exr"), "builtin:box", many, [(label, label)], tolerance=0.05)
+    assert [line["s"] for line in lines] == result["s"].tolist()
+    assert [line["counts"]["n1_plus"] for line in lines] == result["n1_plus"].tolist()
+
+
+def test_a_batch_of_1024_poses_equals_1024_single_calls(tmp_path):
+    sensed = sensed_dict(tmp_path)
+    label = int(sensed["label"].max())
+    rng = np.random.default_rng(39)
+    many = poses(*rng.uniform(-0.6, 0.6, 1024))
+    verifier = rangesynth.Verifier()
+    batch = verifier.verify(sensed, "builtin:box", many, [(label, label)])
+    single = np.concatenate([verifier.verify(sensed, "builtin:box", p[None], [(label, label)])["s"] for p in many])
+    assert np.array_equal(batch["s"], single)
