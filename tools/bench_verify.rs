@@ -17,6 +17,9 @@
 //! Before them all, a table of the peak resident memory while verifying batches of 16, 1,024
 //! and 4,096 with each rasterizer (a chunk, one submission, is at most 1,024). `-- --rasters` runs only these four.
 //!
+//! A pinhole rig beside the scanner on the same triangles and pixel count (`rig_costs`; `-- --rigs`
+//! runs only it).
+//!
 //! A second table gives each sensor effect's cost (src/effects.rs): milliseconds per
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
 //! batch without effects, measured in the same run (each the best of five).
@@ -50,6 +53,9 @@ fn main() -> anyhow::Result<()> {
     let compute = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Compute))?;
     // First, before other tables leave freed memory resident.
     memory_by_batch(&[&verifier, &compute], &sensed, &scene, quick)?;
+    if std::env::args().any(|a| a == "--rigs") {
+        return rig_costs(&verifier, &sensed, &scene);
+    }
     if std::env::args().any(|a| a == "--rasters") {
         raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
         grouping_costs(&sensed, &scene, quick)?;
@@ -90,6 +96,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     effect_costs(&verifier, &sensed, &scene)?;
+    rig_costs(&verifier, &sensed, &scene)?;
     raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
     filling_costs(&[&verifier, &compute], quick)
 }
@@ -479,6 +486,57 @@ fn hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>, n: usize) -> Ve
             Hypothesis { id: format!("h{i}"), model: model.clone(), pose, bindings: vec![(1, 1), (2, 1)] }
         })
         .collect()
+}
+
+/// A pinhole rig beside the paper's scanner on the same triangles and pixel count: the
+/// sphere:100 at 256², depth-mode shadows, a batch of 64. The rig is a 256² camera whose pixel
+/// covers the scanner's pitch at the model's depth (fx = 5 / 0.02) and a projector as far to
+/// its side as the model is deep (the 45° the scanner's θ gives); each hypothesis is the
+/// scanner's turned to face the camera 5 units away. A rig's images are cast on the CPU until
+/// the GPU renders pinhole views (docs/sensors-and-rigs.md, "What renders a rig").
+fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
+    use rangesynth::sensor::{Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
+    let model = verifier.model("builtin:sphere:100", Path::new("."))?;
+    let k = Intrinsics { width: 256, height: 256, fx: 250.0, fy: 250.0, cx: 127.5, cy: 127.5 };
+    let projector = Witness {
+        name: "projector".into(),
+        geometry: WitnessGeometry::Pinhole {
+            pose: DMat4::from_translation(DVec3::new(5.0, 0.0, 0.0))
+                * DMat4::from_rotation_y(-std::f64::consts::FRAC_PI_4),
+            intrinsics: k,
+        },
+    };
+    let rig = Sensor {
+        reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }),
+        witnesses: vec![projector],
+    };
+    let facing = DMat4::from_translation(DVec3::new(0.0, 0.0, 5.0)) * DMat4::from_rotation_x(std::f64::consts::PI);
+    let scanner_hypotheses = hypotheses(&model, 64);
+    let rig_hypotheses: Vec<Hypothesis> =
+        scanner_hypotheses.iter().map(|h| Hypothesis { pose: facing * h.pose, ..h.clone() }).collect();
+    let rig_scene = Scene {
+        sensor: rig.clone(),
+        objects: scene
+            .objects
+            .iter()
+            .map(|o| rangesynth::scene::SceneObject { pose: facing * o.pose, ..o.clone() })
+            .collect(),
+        ..scene.clone()
+    };
+    let rig_sensed = SensedImage::new(&RangeImage::from(&verifier.renderer().render(&rig_scene)?), &rig)?;
+    println!("a pinhole rig beside the scanner: sphere:100, 256², depth-mode shadows, a batch of 64");
+    println!("{:<28} {:>8} {:>8}", "sensor", "hyp/s", "ratio");
+    let rate = |sensed: &SensedImage, settings: &VerifySettings, batch: &[Hypothesis]| -> anyhow::Result<f64> {
+        verifier.verify(sensed, settings, &batch[..1], &mut |_| {})?;
+        let start = Instant::now();
+        verifier.verify(sensed, settings, batch, &mut |_| {})?;
+        Ok(batch.len() as f64 / start.elapsed().as_secs_f64())
+    };
+    let scanner = rate(sensed, &settings(scene.sensor.clone(), ShadowMode::Depth), &scanner_hypotheses)?;
+    let pinhole = rate(&rig_sensed, &settings(rig, ShadowMode::Depth), &rig_hypotheses)?;
+    println!("{:<28} {:>8.1} {:>7.2}×", "the scanner (GPU)", scanner, 1.0);
+    println!("{:<28} {:>8.1} {:>7.2}×", "camera + projector (CPU)", pinhole, pinhole / scanner);
+    Ok(())
 }
 
 /// Each effect's cost per hypothesis, against no effects.
