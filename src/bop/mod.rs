@@ -179,13 +179,13 @@ impl<'a> BopScorer<'a> {
         // once if this one fails (the scorer charges its ledger from one thread).
         let held = self.ledger.held();
         let taken = |ledger: &Ledger| ledger.held().saturating_sub(held);
-        let read = || -> Result<(crate::io::DepthPng, u64)> {
+        let read = || -> Result<crate::io::DepthPng> {
             let png = read_depth_png(&path, self.ledger)?;
             let pixels = u64::from(png.width) * u64::from(png.height);
             self.ledger.charge(format_args!("the depth of {}", path.display()), pixels * 8)?;
-            Ok((png, pixels))
+            Ok(png)
         };
-        let (png, _) = read().inspect_err(|_| self.ledger.release(taken(self.ledger)))?;
+        let png = read().inspect_err(|_| self.ledger.release(taken(self.ledger)))?;
         // As the BOP toolkit reads it: the value times the scale, in f32.
         let scale = camera.depth_scale as f32;
         let sensed = png.values.iter().map(|&v| f64::from(f32::from(v) * scale)).collect();
