@@ -1,18 +1,25 @@
 //! rangesynth: realistic range images (triangulation shadows included) for verifying 3D
 //! object hypotheses, rendered with explicit Vulkan. See README.md and the book in docs/
 //! (docs/design.md for the design).
+//!
+//! The feature `tools` (on by default) adds the accuracy sweep, the paper's experiment and
+//! their plots, and the command line that runs them; an embedder that needs neither (the
+//! Python package) leaves it out and does not compile them or their plotting crate.
 
+#[cfg(feature = "tools")]
 pub mod accuracy;
 pub mod bop;
 pub mod effects;
 pub mod error;
 pub mod exact;
 mod exact_array;
+#[cfg(feature = "tools")]
 pub mod experiment;
 pub mod gpu;
 pub mod io;
 pub mod limits;
 pub mod mesh;
+#[cfg(feature = "tools")]
 mod plot;
 pub mod pose;
 pub mod raster_choice;

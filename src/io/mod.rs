@@ -15,6 +15,7 @@ pub use atomic::{refuse_overwriting_inputs, write_atomically, PendingFile, Stage
 pub use depth_png::{check_depth_scale, depth_png_values, read_depth_png, write_depth_png, DepthPng};
 pub use exr_file::{parse_range_image, read_label_image, read_range_image, write_label_image, write_range_image};
 pub use input_file::{read_identified_file, read_input_file, read_input_text};
+#[cfg(feature = "tools")]
 pub(crate) use preview::write_rgb;
 pub use preview::{reason_colour, write_label_preview, write_range_preview, SHADOW_COLOUR};
 pub use range_image::RangeImage;
