@@ -707,3 +707,30 @@ fn verify_under_an_orthographic_rig_matches_the_cpu_scorer() {
     assert_eq!(results[0].scores.s, 1.0);
     assert!(results[1].scores.s < 0.9, "{}", results[1].scores.s);
 }
+
+/// The pinhole score pass corrects a device's square root as the orthographic one does
+/// (tests/verify.rs): stood in for on lavapipe by putting the root 2 ulp low and 3 high before
+/// the correction, every count of a pinhole rig's verification, the areas included, stays the
+/// exact root's.
+#[test]
+fn pinhole_areas_are_the_hosts_bits_where_the_devices_square_root_errs() {
+    let sensed_scene = scene(projector_rig(), ShadowMode::None, &[("builtin:box", turned_box_pose())]);
+    let image = RangeImage::from(&render(&sensed_scene));
+    let sensed = SensedImage::new(&image, &projector_rig()).unwrap();
+    let bindings: Vec<(u32, u32)> = (1..=6).map(|l| (l, l)).collect();
+    let settings = rig_settings(ShadowMode::None);
+    let hypothesis = rig_hypothesis("true", "builtin:box", turned_box_pose(), &bindings);
+    let exact = common::VERIFIER.verify(&sensed, &settings, std::slice::from_ref(&hypothesis), &mut |_| {}).unwrap();
+    assert!(exact[0].counts.surface_area_units.iter().any(|&a| a > 0), "areas counted");
+    for ulps in [0, -2, 3] {
+        let verifier = rangesynth::verify::Verifier::new(common::test_renderer(None))
+            .and_then(|v| v.with_sqrt_error_for_tests(ulps))
+            .expect("verifier");
+        let model = verifier.model("builtin:box", std::path::Path::new(".")).expect("model");
+        let h = Hypothesis { model, ..hypothesis.clone() };
+        let out = verifier.verify(&sensed, &settings, &[h], &mut |_| {}).expect("verification runs");
+        assert_eq!(out[0].counts, exact[0].counts, "the root {ulps} ulp off");
+        let messages = verifier.renderer().context().take_validation_messages();
+        assert!(messages.is_empty(), "validation reported:\n{}", messages.join("\n"));
+    }
+}
