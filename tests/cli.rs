@@ -234,12 +234,12 @@ fn verify_scores_the_example_and_ranks_the_correct_hypothesis_first() {
     assert!(lines[2]["rejected"].as_str().unwrap().contains("s5"), "{}", lines[2]);
 }
 
-#[test]
-fn verify_runs_a_batch_of_1024_from_the_cli() {
-    let (d, exr) = sensed_example("verify_1024");
-    let hypotheses: Vec<serde_json::Value> = (0..1024)
+/// A hypothesis file in `d` of `n` hypotheses of the example's step, turned from its sensed
+/// pose (25°) by `step` radians more each.
+fn turning_steps(d: &Path, n: u32, step: f64) -> PathBuf {
+    let hypotheses: Vec<serde_json::Value> = (0..n)
         .map(|i| {
-            let a = 0.4363323129985824 + f64::from(i) * 0.0005; // 25° and on
+            let a = 0.4363323129985824 + f64::from(i) * step;
             serde_json::json!({
                 "id": format!("h{i}"),
                 "model": "builtin:step",
@@ -250,6 +250,13 @@ fn verify_runs_a_batch_of_1024_from_the_cli() {
         .collect();
     let hyps = d.join("hyps.json");
     std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
+    hyps
+}
+
+#[test]
+fn verify_runs_a_batch_of_1024_from_the_cli() {
+    let (d, exr) = sensed_example("verify_1024");
+    let hyps = turning_steps(&d, 1024, 0.0005);
     let scores = d.join("scores.jsonl");
     let out = verify(&hyps, &exr, &scores, &["--chunk-size", "300"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -553,19 +560,7 @@ fn verify_scores_under_a_pinhole_rig_and_refuses_a_rig_that_differs() {
 #[test]
 fn verify_shards_concatenate_to_the_unsharded_output() {
     let (d, exr) = sensed_example("verify_shards");
-    let hypotheses: Vec<serde_json::Value> = (0..10)
-        .map(|i| {
-            let a = 0.4363323129985824 + f64::from(i) * 0.05;
-            serde_json::json!({
-                "id": format!("h{i}"),
-                "model": "builtin:step",
-                "pose": [[a.cos(), -a.sin(), 0.0, 0.3], [a.sin(), a.cos(), 0.0, -0.2], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-                "bindings": [[1, 1], [2, 2]]
-            })
-        })
-        .collect();
-    let hyps = d.join("hyps.json");
-    std::fs::write(&hyps, serde_json::json!({ "hypotheses": hypotheses }).to_string()).unwrap();
+    let hyps = turning_steps(&d, 10, 0.05);
     let whole = d.join("whole.jsonl");
     let out = verify(&hyps, &exr, &whole, &[]);
     assert!(out.status.success(), "{}", text(&out.stderr));

@@ -142,18 +142,10 @@ impl Mesh {
 #[pyfunction]
 fn read_range_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let image = py.detach(|| read_range_image_file(&path, &Ledger::default())).map_err(raised)?;
-    let (width, height) = (image.width as usize, image.height as usize);
     let xyz: Vec<f32> = (0..image.label.len()).flat_map(|i| [image.x[i], image.y[i], image.z[i]]).collect();
-    let dict = PyDict::new(py);
-    dict.set_item("xyz", xyz.into_pyarray(py).reshape([height, width, 3])?)?;
-    dict.set_item("label", image.label.into_pyarray(py).reshape([height, width])?)?;
-    if let Some(reason) = image.reason {
-        let reason: Vec<u8> = reason.iter().map(|&r| r as u8).collect();
-        dict.set_item("reason", reason.into_pyarray(py).reshape([height, width])?)?;
-    }
-    if let Some(witness) = image.witness {
-        dict.set_item("witness", witness.into_pyarray(py).reshape([height, width])?)?;
-    }
+    let reason = image.reason.map(|codes| codes.iter().map(|&r| r as u8).collect());
+    let size = (image.width as usize, image.height as usize);
+    let dict = image_arrays(py, size, xyz, image.label, reason, image.witness)?;
     if let Some(sensor) = image.sensor {
         let text = serde_json::to_string(&sensor).map_err(raised)?;
         dict.set_item("sensor", py.import("json")?.call_method1("loads", (text,))?)?;
@@ -161,20 +153,35 @@ fn read_range_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, 
     Ok(dict)
 }
 
-/// The arrays of a render: xyz (H, W, 3) float32 with NaN where no point was measured, label
-/// and witness (H, W) uint32, reason (H, W) uint8.
-fn render_arrays<'py>(py: Python<'py>, out: &RenderOutput) -> PyResult<Bound<'py, PyDict>> {
-    let (width, height) = (out.sensor.width() as usize, out.sensor.height() as usize);
-    let xyz: Vec<f32> = (0..out.label.len()).flat_map(|i| out.point(i).unwrap_or([f32::NAN; 3])).collect();
-    let reason: Vec<u8> = out.reason.iter().map(|r| r.code() as u8).collect();
+/// A range image's arrays: "xyz" (H, W, 3) float32, NaN where no point was measured; "label"
+/// (H, W) uint32; and "reason" (H, W) uint8 and "witness" (H, W) uint32 where given.
+fn image_arrays<'py>(
+    py: Python<'py>,
+    (width, height): (usize, usize),
+    xyz: Vec<f32>,
+    label: Vec<u32>,
+    reason: Option<Vec<u8>>,
+    witness: Option<Vec<u32>>,
+) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
     dict.set_item("xyz", xyz.into_pyarray(py).reshape([height, width, 3])?)?;
-    dict.set_item("label", out.label.clone().into_pyarray(py).reshape([height, width])?)?;
-    dict.set_item("reason", reason.into_pyarray(py).reshape([height, width])?)?;
-    if !out.sensor.witnesses.is_empty() {
-        dict.set_item("witness", out.witness.clone().into_pyarray(py).reshape([height, width])?)?;
+    dict.set_item("label", label.into_pyarray(py).reshape([height, width])?)?;
+    if let Some(reason) = reason {
+        dict.set_item("reason", reason.into_pyarray(py).reshape([height, width])?)?;
+    }
+    if let Some(witness) = witness {
+        dict.set_item("witness", witness.into_pyarray(py).reshape([height, width])?)?;
     }
     Ok(dict)
+}
+
+/// The arrays of a render (`image_arrays`), its witness bits where the sensor has witnesses.
+fn render_arrays<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+    let size = (out.sensor.width() as usize, out.sensor.height() as usize);
+    let xyz: Vec<f32> = (0..out.label.len()).flat_map(|i| out.point(i).unwrap_or([f32::NAN; 3])).collect();
+    let reason = out.reason.iter().map(|r| r.code() as u8).collect();
+    let witness = (!out.sensor.witnesses.is_empty()).then_some(out.witness);
+    image_arrays(py, size, xyz, out.label, Some(reason), witness)
 }
 
 /// A renderer on one device, made once and reused: `render(scene_path)` gives a scene's
@@ -236,7 +243,7 @@ impl Renderer {
             let scene = Scene::from_file(&scene, renderer.ledger())?;
             renderer.render(&scene)
         });
-        render_arrays(py, &out.map_err(raised)?)
+        render_arrays(py, out.map_err(raised)?)
     }
 
     #[getter]
@@ -248,15 +255,14 @@ impl Renderer {
 /// Verifiers kept for the module-level functions, one per rasterizer choice: made on first
 /// use, so that a script calling `verify` in a loop builds the pipelines once.
 fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
-    static VERIFIERS: OnceLock<Mutex<HashMap<String, Arc<CrateVerifier>>>> = OnceLock::new();
-    let key = format!("{raster:?}");
+    static VERIFIERS: OnceLock<Mutex<HashMap<Raster, Arc<CrateVerifier>>>> = OnceLock::new();
     let mut kept = VERIFIERS.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
-    if let Some(v) = kept.get(&key) {
+    if let Some(v) = kept.get(&raster) {
         return Ok(v.clone());
     }
     let renderer = CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster);
     let verifier = Arc::new(CrateVerifier::new(renderer).map_err(raised)?);
-    kept.insert(key, verifier.clone());
+    kept.insert(raster, verifier.clone());
     Ok(verifier)
 }
 
@@ -486,7 +492,7 @@ fn render_scene<'py>(py: Python<'py>, path: PathBuf, raster: Option<&str>) -> Py
         let scene = Scene::from_file(&path, &ledger)?;
         CrateRenderer::new(&ContextOptions::from_env())?.with_ledger(ledger).with_raster(raster).render(&scene)
     });
-    render_arrays(py, &out.map_err(raised)?)
+    render_arrays(py, out.map_err(raised)?)
 }
 
 /// Scores each pose of `model` against the sensed image: a dict of arrays, one element a pose:

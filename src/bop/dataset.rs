@@ -81,6 +81,12 @@ struct GtEntry {
     obj_id: u32,
 }
 
+/// A dataset's JSON file as `T`; a parse error names the file.
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str, ledger: &Ledger) -> Result<T> {
+    let text = read_input_text(path, what, ledger)?;
+    parse_json(&text).map_err(|e| Error::file(path, e.to_string()))
+}
+
 /// An id written as a JSON object's key ("1", "000001").
 fn id_of(key: &str, path: &Path, what: &str) -> Result<u32> {
     key.parse().map_err(|_| Error::file(path, format!("{what} id {key:?} is not a whole number")))
@@ -93,9 +99,7 @@ impl Dataset {
             return Err(Error::Scene(format!("--split {split:?} must name one directory of the dataset")));
         }
         let info_path = root.join("models").join("models_info.json");
-        let text = read_input_text(&info_path, "models_info.json", ledger)?;
-        let entries: BTreeMap<String, ModelInfo> =
-            parse_json(&text).map_err(|e| Error::file(&info_path, e.to_string()))?;
+        let entries: BTreeMap<String, ModelInfo> = read_json(&info_path, "models_info.json", ledger)?;
         let mut diameters = BTreeMap::new();
         for (key, info) in entries {
             let id = id_of(&key, &info_path, "object")?;
@@ -140,9 +144,7 @@ impl Dataset {
     pub fn scene(&self, scene_id: u32, ledger: &Ledger) -> Result<SceneFiles> {
         let dir = self.scene_dir(scene_id);
         let camera_path = dir.join("scene_camera.json");
-        let text = read_input_text(&camera_path, "scene_camera.json", ledger)?;
-        let entries: BTreeMap<String, CameraEntry> =
-            parse_json(&text).map_err(|e| Error::file(&camera_path, e.to_string()))?;
+        let entries: BTreeMap<String, CameraEntry> = read_json(&camera_path, "scene_camera.json", ledger)?;
         let mut files = SceneFiles::default();
         for (key, entry) in entries {
             let im_id = id_of(&key, &camera_path, "image")?;
@@ -176,9 +178,7 @@ impl Dataset {
         }
         let gt_path = dir.join("scene_gt.json");
         if gt_path.exists() {
-            let text = read_input_text(&gt_path, "scene_gt.json", ledger)?;
-            let entries: BTreeMap<String, Vec<GtEntry>> =
-                parse_json(&text).map_err(|e| Error::file(&gt_path, e.to_string()))?;
+            let entries: BTreeMap<String, Vec<GtEntry>> = read_json(&gt_path, "scene_gt.json", ledger)?;
             for (key, objects) in entries {
                 let im_id = id_of(&key, &gt_path, "image")?;
                 let poses = objects

@@ -220,9 +220,8 @@ impl<'a> BopScorer<'a> {
             exact::BYTES_PER_PIXEL * pixels + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
         )?;
         let (centre, radius) = mesh.bounding_sphere();
-        let nothing = PixelRect { col: 0, row: 0, width: 0, height: 0 };
-        let footprint =
-            sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN).unwrap_or(nothing);
+        let footprint = sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN);
+        let footprint = footprint.unwrap_or(PixelRect::EMPTY);
         let object = ExactObject { mesh, pose, label_base: 0 };
         Ok(Rendering::of(render_rig(sensor, &[object], ShadowMode::Exact, footprint)?))
     }

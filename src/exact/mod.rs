@@ -180,7 +180,10 @@ pub fn render_rig(sensor: &Sensor, objects: &[ExactObject], mode: ShadowMode, re
     let test_witnesses = match mode {
         ShadowMode::Exact | ShadowMode::Depth => true,
         ShadowMode::None => false,
-        ShadowMode::Label => sensor.require_scanner("[shadow] mode = \"label\"").map(|_| true)?,
+        ShadowMode::Label => {
+            sensor.require_scanner("[shadow] mode = \"label\"")?;
+            true
+        }
     };
     rig::render_rig(sensor, objects, test_witnesses, region)
 }

@@ -23,6 +23,11 @@ pub struct PixelRect {
     pub height: u32,
 }
 
+impl PixelRect {
+    /// No pixels.
+    pub const EMPTY: PixelRect = PixelRect { col: 0, row: 0, width: 0, height: 0 };
+}
+
 impl ViewGrid {
     /// Every pixel of the grid.
     pub fn full(&self) -> PixelRect {

@@ -187,13 +187,9 @@ pub(crate) fn count_batch(
     // Each hypothesis' pixels that its model can cover (with a margin), in the range view.
     let footprints: Vec<Option<PixelRect>> = items
         .iter()
-        .zip(&views)
-        .map(|(item, views)| {
+        .map(|item| {
             let (centre, radius) = posed_sphere(item);
-            match settings.scanner {
-                Some(_) => views.range.footprint(centre, radius, FOOTPRINT_MARGIN),
-                None => settings.sensor.reference.footprint(centre, radius, FOOTPRINT_MARGIN),
-            }
+            settings.sensor.reference.footprint(centre, radius, FOOTPRINT_MARGIN)
         })
         .collect();
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
@@ -204,8 +200,7 @@ pub(crate) fn count_batch(
         let image = match settings.scanner {
             Some(_) => render_exact(settings.sensor, &[object])?,
             None => {
-                let nothing = PixelRect { col: 0, row: 0, width: 0, height: 0 };
-                render_rig(settings.sensor, &[object], settings.shadow.mode, footprint.unwrap_or(nothing))?
+                render_rig(settings.sensor, &[object], settings.shadow.mode, footprint.unwrap_or(PixelRect::EMPTY))?
             }
         };
         HostView::new(ctx, &image, views.origin.z, "exact range view")

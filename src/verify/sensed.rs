@@ -88,20 +88,14 @@ impl SensedImage {
         if image.z.len() != n || n != (image.width as usize) * (image.height as usize) {
             return Err(Error::Scene("the sensed image's channels do not match its size".into()));
         }
-        if let Some(i) = (0..n).find(|&i| image.label[i] != 0 && !image.z[i].is_finite()) {
-            return Err(Error::Scene(format!(
-                "the sensed image has label {} but Z = {} at pixel ({}, {})",
-                image.label[i],
-                image.z[i],
-                i % image.width as usize,
-                i / image.width as usize
-            )));
-        }
-        // A pinhole view sees only what lies in front of its centre.
+        // A labelled pixel needs a finite depth, and under a pinhole view one in front of its
+        // centre.
         let pinhole = matches!(sensor.reference, View::Pinhole(_));
-        if let Some(i) = (0..n).find(|&i| pinhole && image.label[i] != 0 && image.z[i] <= 0.0) {
+        let unmeasurable = |z: f32| !z.is_finite() || (pinhole && z <= 0.0);
+        if let Some(i) = (0..n).find(|&i| image.label[i] != 0 && unmeasurable(image.z[i])) {
+            let behind = if image.z[i].is_finite() { " ≤ 0, behind its pinhole view," } else { "" };
             return Err(Error::Scene(format!(
-                "the sensed image has label {} but depth Z = {} ≤ 0 at pixel ({}, {}), behind its pinhole view",
+                "the sensed image has label {} but Z = {}{behind} at pixel ({}, {})",
                 image.label[i],
                 image.z[i],
                 i % image.width as usize,
