@@ -184,6 +184,14 @@ fn render_arrays<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py,
     image_arrays(py, size, xyz, out.label, Some(reason), witness)
 }
 
+/// Renders a scene file, its inputs charged to an account of the renderer's budget for this
+/// call alone: a renderer kept for many calls would otherwise hold every scene it ever loaded
+/// against its budget, and refuse one in the end.
+fn render_file(renderer: &CrateRenderer, path: &Path) -> rangesynth::Result<RenderOutput> {
+    let scene = Scene::from_file(path, &Ledger::new(renderer.memory_budget()))?;
+    renderer.render(&scene)
+}
+
 /// A renderer on one device, made once and reused: `render(scene_path)` gives a scene's
 /// arrays. Usable from several threads; the GIL is released while it renders.
 #[pyclass(frozen, module = "rangesynth")]
@@ -238,11 +246,7 @@ impl Renderer {
 
     /// Renders a scene file: a dict of numpy arrays (see `render_scene`).
     fn render<'py>(&self, py: Python<'py>, scene: PathBuf) -> PyResult<Bound<'py, PyDict>> {
-        let renderer = self.inner.clone();
-        let out = py.detach(move || -> rangesynth::Result<RenderOutput> {
-            let scene = Scene::from_file(&scene, renderer.ledger())?;
-            renderer.render(&scene)
-        });
+        let out = py.detach(|| render_file(&self.inner, &scene));
         render_arrays(py, out.map_err(raised)?)
     }
 
@@ -486,12 +490,9 @@ impl Verifier {
 #[pyfunction]
 #[pyo3(signature = (path, raster=None))]
 fn render_scene<'py>(py: Python<'py>, path: PathBuf, raster: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
-    let raster = raster_of(raster)?;
-    let out = py.detach(move || -> rangesynth::Result<RenderOutput> {
-        let ledger = Arc::new(Ledger::default());
-        let scene = Scene::from_file(&path, &ledger)?;
-        CrateRenderer::new(&ContextOptions::from_env())?.with_ledger(ledger).with_raster(raster).render(&scene)
-    });
+    // The renderer of the verifier kept for this rasterizer: its pipelines are built once.
+    let verifier = shared_verifier(raster_of(raster)?)?;
+    let out = py.detach(|| render_file(verifier.renderer(), &path));
     render_arrays(py, out.map_err(raised)?)
 }
 

@@ -193,3 +193,13 @@ def test_a_batch_of_1024_poses_equals_1024_single_calls(tmp_path):
     batch = verifier.verify(sensed, "builtin:box", many, [(label, label)])
     single = np.concatenate([verifier.verify(sensed, "builtin:box", p[None], [(label, label)])["s"] for p in many])
     assert np.array_equal(batch["s"], single)
+
+
+def test_a_renderer_kept_for_many_calls_does_not_hold_each_scene_against_its_budget(tmp_path):
+    # Each call's scene is charged for that call alone: 100 renders of a scene whose parse the
+    # budget holds a few times over fit a 1 MiB budget.
+    renderer = rangesynth.Renderer(memory_budget="1M")
+    scene = scene_file(tmp_path)
+    first = renderer.render(scene)
+    for _ in range(100):
+        assert np.array_equal(renderer.render(scene)["label"], first["label"])
