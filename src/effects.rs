@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 /// Why a pixel of `range.exr` holds no point (its `reason` channel); 0 is a valid point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum Reason {
     Valid = 0,
     /// No surface in front of the sensor at this pixel.
@@ -71,6 +72,7 @@ impl Reason {
 /// One effect's pass: what it is called in the pass timings, and the reason it records
 /// (`None` for the effects that change z rather than lose points).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Effect {
     Grazing,
     Range,

@@ -8,6 +8,7 @@ use crate::shader_contract::COVERAGE_MEMBERS;
 
 /// Which rasterizer renders the views.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
 pub enum Raster {
     /// Per view: compute where the device's [`Crossover`] says so, else graphics.
     #[default]

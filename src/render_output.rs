@@ -9,6 +9,7 @@ use crate::sensor::{Sensor, View};
 use crate::shadow::ShadowSettings;
 
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct RenderOutput {
     pub sensor: Sensor,
     pub shadow: ShadowSettings,

@@ -110,6 +110,7 @@ fn check(name: &str, scene: &Scene, out: &RenderOutput, reference: &Reference) -
         ShadowMode::None => reference.label.clone(),
         ShadowMode::Depth | ShadowMode::Exact => reference.label_shadowed(),
         ShadowMode::Label => reference.label_paper_shadowed(),
+        other => panic!("the conformance suite has no reference for shadow mode {other:?}"),
     };
     let near_boundary = near_label_change(&expected, w, h);
     let allowed: Vec<bool> =

@@ -28,12 +28,14 @@ fi
 if [ $# -eq 0 ]; then
   venv=target/python-venv
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-  "$venv/bin/python" -m pip install -q --upgrade pip 'maturin>=1.7,<2' numpy pytest
+  "$venv/bin/python" -m pip install -q --upgrade pip 'maturin>=1.7,<2' numpy pytest ray
   # The venv's maturin builds it (no isolated build environment to download each run).
   PATH="$PWD/$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked" \
     "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation --force-reinstall .
-  # The command line `cargo test` built, against which the package's results are compared.
+  # The command line `cargo test` built, against which the package's results are compared;
+  # validation on, as in the Rust suites (python/tests/conftest.py fails a test on a message).
   target_dir=${CARGO_TARGET_DIR:-target}
   [[ "$target_dir" = /* ]] || target_dir="$PWD/$target_dir"
-  (cd python/tests && RANGESYNTH_CLI="$target_dir/debug/rangesynth" ../../"$venv"/bin/python -m pytest -q)
+  (cd python/tests && RANGESYNTH_CLI="$target_dir/debug/rangesynth" RANGESYNTH_VALIDATION=1 \
+    ../../"$venv"/bin/python -m pytest -q)
 fi

@@ -3,6 +3,26 @@
 The Rust crate does the work; this package hands it numpy arrays (docs/python.md).
 """
 
-from ._rangesynth import Error, Mesh, Renderer, Verifier, devices, read_range_image, render_scene, verify
+from ._rangesynth import (
+    Error,
+    Mesh,
+    Renderer,
+    Verifier,
+    devices,
+    read_range_image,
+    render_scene,
+    validation_messages,
+    verify,
+)
 
-__all__ = ["Error", "Mesh", "Renderer", "Verifier", "devices", "read_range_image", "render_scene", "verify"]
+__all__ = [
+    "Error",
+    "Mesh",
+    "Renderer",
+    "Verifier",
+    "devices",
+    "read_range_image",
+    "render_scene",
+    "validation_messages",
+    "verify",
+]

@@ -8,20 +8,23 @@ use numpy::ndarray::Dimension;
 use numpy::{Element, IntoPyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray3};
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use rangesynth::effects::Effects;
-use rangesynth::gpu::{list_devices, ContextOptions};
+use rangesynth::gpu::{list_devices, ContextOptions, GpuContext};
 use rangesynth::io::{read_range_image as read_range_image_file, RangeImage};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::{load_model_file, Mesh as CrateMesh};
 use rangesynth::render::Raster;
+use rangesynth::render_set::{label_map, LabelEntry};
 use rangesynth::sensor::Sensor;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
-use rangesynth::verify::{Hypothesis, Model, SensedImage, Verification, Verifier as CrateVerifier, VerifySettings};
+use rangesynth::verify::{
+    Hypothesis, Model, Record, SensedImage, Verification, Verifier as CrateVerifier, VerifySettings,
+};
 use rangesynth::{RenderOutput, Renderer as CrateRenderer, Scene};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 pyo3::create_exception!(
     _rangesynth,
@@ -40,18 +43,38 @@ fn raster_of(raster: Option<&str>) -> PyResult<Raster> {
 }
 
 /// Any array-like as a numpy array of `dtype` and `D`'s dimensions, copied where its dtype
-/// differs (numpy's `asarray`); anything else is refused, naming `what`. Strided arrays are
-/// read as they are.
+/// differs; anything else is refused, naming `what`. Strided arrays are read as they are. A
+/// conversion that would change a value is refused, not made: real numbers for a float dtype;
+/// integers within the dtype's range for an integer one (numpy's own cast would truncate 2.5
+/// to 2 and wrap -1 to 4294967295).
 fn array<'py, T: Element, D: Dimension>(
     py: Python<'py>,
     obj: &Bound<'py, PyAny>,
     dtype: &str,
     what: &str,
 ) -> PyResult<PyReadonlyArray<'py, T, D>> {
-    let converted = py
-        .import("numpy")?
-        .call_method1("asarray", (obj, dtype))
-        .map_err(|e| raised(format!("{what} is not an array of {dtype}: {e}")))?;
+    let numpy = py.import("numpy")?;
+    let not_an_array = |e: PyErr| raised(format!("{what} is not an array of {dtype}: {e}"));
+    let given = numpy.call_method1("asarray", (obj,)).map_err(not_an_array)?;
+    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
+    let wanted_kind: String = numpy.call_method1("dtype", (dtype,))?.getattr("kind")?.extract()?;
+    let integers = wanted_kind != "f";
+    let acceptable = if integers { "iu" } else { "iuf" };
+    if !acceptable.contains(kind.as_str()) {
+        let of = if integers { "integers" } else { "real numbers" };
+        let given_dtype = given.getattr("dtype")?.str()?;
+        return Err(raised(format!(
+            "{what} is not an array of {dtype}: it must hold {of}, and its dtype is {given_dtype}"
+        )));
+    }
+    if integers && given.getattr("size")?.extract::<usize>()? > 0 {
+        let range = numpy.call_method1("iinfo", (dtype,))?;
+        let (lowest, highest) = (given.call_method0("min")?, given.call_method0("max")?);
+        if lowest.lt(range.getattr("min")?)? || highest.gt(range.getattr("max")?)? {
+            return Err(raised(format!("{what} holds {lowest} to {highest}, outside {dtype}'s range")));
+        }
+    }
+    let converted = numpy.call_method1("asarray", (given, dtype)).map_err(not_an_array)?;
     converted.extract::<PyReadonlyArray<'py, T, D>>().map_err(|_| {
         let shape = converted.getattr("shape").map(|s| s.to_string()).unwrap_or_default();
         raised(format!("{what} must have {} dimensions; its shape is {shape}", D::NDIM.unwrap_or(0)))
@@ -62,6 +85,13 @@ fn array<'py, T: Element, D: Dimension>(
 fn from_keys<T: serde::de::DeserializeOwned>(py: Python<'_>, keys: &Bound<'_, PyAny>, what: &str) -> PyResult<T> {
     let text: String = py.import("json")?.call_method1("dumps", (keys,))?.extract()?;
     serde_json::from_str(&text).map_err(|e| raised(format!("{what}: {e}")))
+}
+
+/// The crate's value as a Python object of a file's keys (a dict for a `[sensor]`), through
+/// JSON: `from_keys`'s reverse.
+fn keys_of<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(raised)?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// A triangle mesh: vertices (V, 3), faces (F, 3) of vertex indices, and each face's surface
@@ -147,8 +177,7 @@ fn read_range_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, 
     let size = (image.width as usize, image.height as usize);
     let dict = image_arrays(py, size, xyz, image.label, reason, image.witness)?;
     if let Some(sensor) = image.sensor {
-        let text = serde_json::to_string(&sensor).map_err(raised)?;
-        dict.set_item("sensor", py.import("json")?.call_method1("loads", (text,))?)?;
+        dict.set_item("sensor", keys_of(py, &sensor)?)?;
     }
     Ok(dict)
 }
@@ -175,21 +204,103 @@ fn image_arrays<'py>(
     Ok(dict)
 }
 
-/// The arrays of a render (`image_arrays`), its witness bits where the sensor has witnesses.
-fn render_arrays<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+/// The arrays of a render (`image_arrays`), its witness bits where the sensor has witnesses,
+/// "labels", the scene's labels table as a structured array (`labels_table`), and "sensor", a
+/// dict of its `[sensor]` keys: a sensed image that `verify` takes as it is.
+fn render_arrays<'py>(py: Python<'py>, (labels, out): (Vec<LabelEntry>, RenderOutput)) -> PyResult<Bound<'py, PyDict>> {
     let size = (out.sensor.width() as usize, out.sensor.height() as usize);
     let xyz: Vec<f32> = (0..out.label.len()).flat_map(|i| out.point(i).unwrap_or([f32::NAN; 3])).collect();
     let reason = out.reason.iter().map(|r| r.code() as u8).collect();
     let witness = (!out.sensor.witnesses.is_empty()).then_some(out.witness);
-    image_arrays(py, size, xyz, out.label, Some(reason), witness)
+    let dict = image_arrays(py, size, xyz, out.label, Some(reason), witness)?;
+    dict.set_item("labels", labels_table(py, &labels)?)?;
+    dict.set_item("sensor", keys_of(py, &out.sensor)?)?;
+    Ok(dict)
+}
+
+/// The labels table as the command line's `labels.json` has it: a numpy structured array of
+/// `label`, `object` (the scene file's object, from 0), `model`, `surface` (from 1) and
+/// `surface_name`, one row a label.
+fn labels_table<'py>(py: Python<'py>, labels: &[LabelEntry]) -> PyResult<Bound<'py, PyAny>> {
+    let longest =
+        |text: &dyn Fn(&LabelEntry) -> &str| labels.iter().map(|e| text(e).chars().count()).max().unwrap_or(0).max(1);
+    let dtype = PyList::new(
+        py,
+        [
+            ("label", "<u4".to_string()),
+            ("object", "<u8".to_string()),
+            ("model", format!("<U{}", longest(&|e| &e.model))),
+            ("surface", "<u4".to_string()),
+            ("surface_name", format!("<U{}", longest(&|e| &e.surface_name))),
+        ],
+    )?;
+    let rows = labels
+        .iter()
+        .map(|e| {
+            PyTuple::new(
+                py,
+                [
+                    e.label.into_pyobject(py)?.into_any(),
+                    e.object.into_pyobject(py)?.into_any(),
+                    e.model.as_str().into_pyobject(py)?.into_any(),
+                    e.surface.into_pyobject(py)?.into_any(),
+                    e.surface_name.as_str().into_pyobject(py)?.into_any(),
+                ],
+            )
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    py.import("numpy")?.call_method1("array", (PyList::new(py, rows)?, dtype))
 }
 
 /// Renders a scene file, its inputs charged to an account of the renderer's budget for this
 /// call alone: a renderer kept for many calls would otherwise hold every scene it ever loaded
-/// against its budget, and refuse one in the end.
-fn render_file(renderer: &CrateRenderer, path: &Path) -> rangesynth::Result<RenderOutput> {
+/// against its budget, and refuse one in the end. With the scene's labels table.
+fn render_file(renderer: &CrateRenderer, path: &Path) -> rangesynth::Result<(Vec<LabelEntry>, RenderOutput)> {
     let scene = Scene::from_file(path, &Ledger::new(renderer.memory_budget()))?;
-    renderer.render(&scene)
+    Ok((label_map(&scene)?, renderer.render(&scene)?))
+}
+
+/// The device contexts this process made, so that `validation_messages` can collect what
+/// Vulkan validation (on where RANGESYNTH_VALIDATION=1) reported on each, and what the
+/// contexts of renderers and verifiers since dropped had reported.
+#[derive(Default)]
+struct ValidationLog {
+    contexts: Vec<Weak<GpuContext>>,
+    dropped: Vec<String>,
+}
+
+fn validation_log() -> std::sync::MutexGuard<'static, ValidationLog> {
+    static LOG: OnceLock<Mutex<ValidationLog>> = OnceLock::new();
+    LOG.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// `renderer`, its context watched by the validation log.
+fn watched(renderer: CrateRenderer) -> CrateRenderer {
+    validation_log().contexts.push(Arc::downgrade(renderer.context()));
+    renderer
+}
+
+/// Keeps what validation reported on a context about to be dropped.
+fn keep_messages(context: &GpuContext) {
+    let messages = context.take_validation_messages();
+    validation_log().dropped.extend(messages);
+}
+
+/// The messages Vulkan validation reported since the last call, on every device context this
+/// process made (validation is on where RANGESYNTH_VALIDATION=1): the test suite's check that
+/// a run was clean.
+#[pyfunction]
+fn validation_messages() -> Vec<String> {
+    let mut log = validation_log();
+    let mut messages = std::mem::take(&mut log.dropped);
+    log.contexts.retain(|context| match context.upgrade() {
+        Some(context) => {
+            messages.extend(context.take_validation_messages());
+            true
+        }
+        None => false,
+    });
+    messages
 }
 
 /// A renderer on one device, made once and reused: `render(scene_path)` gives a scene's
@@ -225,7 +336,7 @@ fn new_renderer(
     // An index or a UUID from devices(), or a name: the library matches its text.
     let device = device.map(|d| d.str().map(|text| text.to_string())).transpose()?;
     let renderer = py.detach(|| CrateRenderer::new(&context_options(device.as_deref()))).map_err(raised)?;
-    Ok(renderer.with_raster(raster).with_memory_budget(budget))
+    Ok(watched(renderer.with_raster(raster).with_memory_budget(budget)))
 }
 
 #[pymethods]
@@ -254,6 +365,18 @@ impl Renderer {
     fn device_name(&self) -> String {
         self.inner.context().device_name().to_string()
     }
+
+    /// Whether Vulkan validation is on (RANGESYNTH_VALIDATION=1 where the renderer was made).
+    #[getter]
+    fn validation_enabled(&self) -> bool {
+        self.inner.context().validation_enabled()
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        keep_messages(self.inner.context());
+    }
 }
 
 /// Verifiers kept for the module-level functions, one per rasterizer choice: made on first
@@ -264,7 +387,7 @@ fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
     if let Some(v) = kept.get(&raster) {
         return Ok(v.clone());
     }
-    let renderer = CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster);
+    let renderer = watched(CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster));
     let verifier = Arc::new(CrateVerifier::new(renderer).map_err(raised)?);
     kept.insert(raster, verifier.clone());
     Ok(verifier)
@@ -344,11 +467,15 @@ impl ModelArg {
     }
 }
 
-/// The arrays of a batch's verifications.
+/// The arrays of a batch's verifications of a model of `surfaces` surfaces: the scores, and
+/// the counts as the command line's JSON lines have them (`Record`): the scalars, and
+/// "surface_population" (N, surfaces) and "overlaps", each pose's (K, 3) array of
+/// [scene label, model surface, pixels].
 fn verification_arrays<'py>(
     py: Python<'py>,
     verified: &[Verification],
     sensed: &SensedImage,
+    surfaces: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
     let scores = [("s", 6usize), ("s1", 0), ("s2", 1), ("s3", 2), ("s4", 3), ("s5", 4), ("s6", 5)];
@@ -362,15 +489,26 @@ fn verification_arrays<'py>(
             .collect();
         dict.set_item(name, column.into_pyarray(py))?;
     }
-    let count = |of: &dyn Fn(&Verification) -> u64| verified.iter().map(of).collect::<Vec<u64>>();
-    dict.set_item("n1_plus", count(&|v| v.counts.n1_plus).into_pyarray(py))?;
-    dict.set_item("n1_minus", count(&|v| v.counts.n1_minus).into_pyarray(py))?;
-    dict.set_item("n0", count(&|v| v.counts.n0).into_pyarray(py))?;
-    dict.set_item("n1", count(&|v| v.counts.n1).into_pyarray(py))?;
-    dict.set_item("n_s", count(&|v| v.counts.synthetic_valid()).into_pyarray(py))?;
-    dict.set_item("n_i", count(&|_| sensed.valid).into_pyarray(py))?;
-    let rejected: Vec<String> = verified.iter().map(|v| v.scores.rejected.clone().unwrap_or_default()).collect();
+    let records: Vec<Record<'_>> = verified.iter().map(|v| Record::new(v, sensed)).collect();
+    let counts: Vec<_> = records.iter().map(|r| &r.scores.counts).collect();
+    let scalar =
+        |of: &dyn Fn(&rangesynth::verify::CountsRecord) -> u64| counts.iter().map(|&c| of(c)).collect::<Vec<u64>>();
+    dict.set_item("n1_plus", scalar(&|c| c.n1_plus).into_pyarray(py))?;
+    dict.set_item("n1_minus", scalar(&|c| c.n1_minus).into_pyarray(py))?;
+    dict.set_item("n0", scalar(&|c| c.n0).into_pyarray(py))?;
+    dict.set_item("n1", scalar(&|c| c.n1).into_pyarray(py))?;
+    dict.set_item("n_s", scalar(&|c| c.n_s).into_pyarray(py))?;
+    dict.set_item("n_i", scalar(&|c| c.n_i).into_pyarray(py))?;
+    let population: Vec<u64> = counts.iter().flat_map(|c| c.surface_population.iter().copied()).collect();
+    dict.set_item("surface_population", population.into_pyarray(py).reshape([verified.len(), surfaces])?)?;
     let numpy = py.import("numpy")?;
+    let overlaps = numpy.call_method1("empty", (verified.len(), "O"))?;
+    for (i, c) in counts.iter().enumerate() {
+        let rows: Vec<u64> = c.overlaps.iter().flatten().copied().collect();
+        overlaps.set_item(i, rows.into_pyarray(py).reshape([c.overlaps.len(), 3])?)?;
+    }
+    dict.set_item("overlaps", overlaps)?;
+    let rejected: Vec<String> = verified.iter().map(|v| v.scores.rejected.clone().unwrap_or_default()).collect();
     dict.set_item("rejected", numpy.call_method1("array", (PyList::new(py, rejected)?, PyString::new(py, "U")))?)?;
     Ok(dict)
 }
@@ -438,7 +576,7 @@ fn verify_with<'py>(
             result.map_err(raised)?;
         }
     }
-    verification_arrays(py, &done, &sensed)
+    verification_arrays(py, &done, &sensed, model.mesh.surface_count() as usize)
 }
 
 /// A verifier on one device, made once and reused; usable from several threads, the GIL
@@ -446,6 +584,12 @@ fn verify_with<'py>(
 #[pyclass(frozen, module = "rangesynth")]
 struct Verifier {
     inner: Arc<CrateVerifier>,
+}
+
+impl Drop for Verifier {
+    fn drop(&mut self) {
+        keep_messages(self.inner.renderer().context());
+    }
 }
 
 #[pymethods]
@@ -486,7 +630,8 @@ impl Verifier {
 
 /// Renders a scene file: a dict of numpy arrays, "xyz" (H, W, 3) float32 (NaN where nothing was
 /// measured), "label" (H, W) uint32, "reason" (H, W) uint8 and, where the sensor has witnesses,
-/// "witness" (H, W) uint32 (bit k: witness k did not see the point).
+/// "witness" (H, W) uint32 (bit k: witness k did not see the point); with "labels", the labels
+/// table, and "sensor", the scene's `[sensor]` keys, so that `verify` takes it as a sensed image.
 #[pyfunction]
 #[pyo3(signature = (path, raster=None))]
 fn render_scene<'py>(py: Python<'py>, path: PathBuf, raster: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
@@ -545,5 +690,6 @@ fn _rangesynth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(verify, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     m.add_function(wrap_pyfunction!(read_range_image, m)?)?;
+    m.add_function(wrap_pyfunction!(validation_messages, m)?)?;
     Ok(())
 }

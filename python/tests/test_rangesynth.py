@@ -126,6 +126,23 @@ def test_errors_are_rangesynth_errors_with_the_librarys_message(tmp_path):
         rangesynth.verify(sensed, "builtin:box", nan, [(1, 1)])
     with pytest.raises(rangesynth.Error, match="xyz"):
         rangesynth.verify({**sensed, "xyz": sensed["xyz"][:, :, :2]}, "builtin:box", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="poses is not an array of float64: it must hold real numbers"):
+        rangesynth.verify(sensed, "builtin:box", [[["a"] * 4] * 4], [(1, 1)])
+    # Labels are converted only where no value changes: not from floats, nor from -1.
+    with pytest.raises(rangesynth.Error, match="sensed \"label\" is not an array of uint32: it must hold integers"):
+        rangesynth.verify({**sensed, "label": sensed["label"] + 0.5}, "builtin:box", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="holds -1 to"):
+        rangesynth.verify({**sensed, "label": sensed["label"].astype(np.int64) - 1}, "builtin:box", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="face index -1 is not a vertex index"):
+        rangesynth.Mesh(np.zeros((3, 3)), [[0, 1, 2], [-1, 1, 2]])
+    ints = rangesynth.verify({**sensed, "label": sensed["label"].astype(np.int64)}, "builtin:box", poses(0.0), [(1, 1)])
+    assert ints["s"][0] == rangesynth.verify(sensed, "builtin:box", poses(0.0), [(1, 1)])["s"][0]
+    # The sensed arrays are 12 × 16; a sensor of another size is refused, naming both.
+    wider = {**sensed, "sensor": {**SENSOR, "width": 17}}
+    with pytest.raises(rangesynth.Error, match="17"):
+        rangesynth.verify(wider, "builtin:box", poses(0.0), [(1, 1)])
+    with pytest.raises(rangesynth.Error, match="binding"):
+        rangesynth.verify(sensed, "builtin:box", poses(0.0), [(1, 9)])
     with pytest.raises(rangesynth.Error, match="builtin"):
         rangesynth.verify(sensed, "builtin:no-such-model", poses(0.0), [(1, 1)])
     with pytest.raises(rangesynth.Error, match="refers to vertex 7"):
@@ -140,7 +157,8 @@ def test_errors_are_rangesynth_errors_with_the_librarys_message(tmp_path):
 def test_devices_lists_the_device_the_renderer_runs_on():
     listed = rangesynth.devices()
     assert listed and all(set(d) == {"index", "name", "uuid", "kind"} for d in listed)
-    for choice in [listed[0]["uuid"], listed[0]["index"]]:
+    # NVIDIA's tools write a UUID with "GPU-" before it.
+    for choice in [listed[0]["uuid"], "GPU-" + listed[0]["uuid"], listed[0]["index"]]:
         renderer = rangesynth.Renderer(device=choice)
         assert renderer.device_name == listed[0]["name"]
     with pytest.raises(rangesynth.Error, match="no usable Vulkan device"):
@@ -148,6 +166,11 @@ def test_devices_lists_the_device_the_renderer_runs_on():
     expected = os.environ.get("RANGESYNTH_EXPECT_DEVICE")
     if expected:
         assert expected in renderer.device_name
+
+
+def test_validation_is_on_in_the_packages_renderers():
+    # conftest.py fails a test on any message; that means something only where it is on.
+    assert rangesynth.Renderer().validation_enabled
 
 
 def command_line():
@@ -180,8 +203,20 @@ def test_render_and_verify_equal_the_command_lines_bit_for_bit(tmp_path):
     subprocess.run(command, check=True, capture_output=True)
     lines = [json.loads(line) for line in scores.read_text().splitlines()]
     result = rangesynth.verify(str(out / "range.exr"), "builtin:box", many, [(label, label)], tolerance=0.05)
-    assert [line["s"] for line in lines] == result["s"].tolist()
-    assert [line["counts"]["n1_plus"] for line in lines] == result["n1_plus"].tolist()
+    for key in ["s", "s1", "s2", "s3", "s4", "s5", "s6"]:
+        assert [line[key] for line in lines] == result[key].tolist()
+    for i, line in enumerate(lines):
+        counts = line["counts"]
+        for key in ["n1_plus", "n1_minus", "n0", "n1", "n_s", "n_i"]:
+            assert counts[key] == result[key][i], key
+        assert counts["surface_population"] == result["surface_population"][i].tolist()
+        assert counts["overlaps"] == result["overlaps"][i].tolist()
+    assert any(len(o) for o in result["overlaps"]), "some pose overlaps the box's label"
+    # The labels table is the command line's labels.json.
+    labels = json.loads((out / "labels.json").read_text())["labels"]
+    table = ours["labels"]
+    assert table.dtype.names == ("label", "object", "model", "surface", "surface_name")
+    assert [dict(zip(table.dtype.names, row.tolist())) for row in table] == labels
 
 
 def test_a_batch_of_1024_poses_equals_1024_single_calls(tmp_path):

@@ -170,6 +170,7 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
             let k = p.intrinsics;
             format!("{}×{} pinhole, fx {} fy {} cx {} cy {}", k.width, k.height, k.fx, k.fy, k.cx, k.cy)
         }
+        _ => format!("{}×{}", s.width(), s.height()),
     };
     let witnesses = witnesses_text(s);
     println!(

@@ -646,7 +646,10 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>, cap: u32) -> Re
             let chosen = match w.trim().parse::<usize>() {
                 Ok(wanted_index) => wanted_index == index,
                 Err(_) => {
-                    super::devices::device_uuid(instance, pd, &props).eq_ignore_ascii_case(w.trim())
+                    // NVIDIA's tools (nvidia-smi, NVIDIA_VISIBLE_DEVICES) write the same UUID
+                    // with a "GPU-" before it.
+                    let uuid = w.trim().strip_prefix("GPU-").unwrap_or(w.trim());
+                    super::devices::device_uuid(instance, pd, &props).eq_ignore_ascii_case(uuid)
                         || name.to_lowercase().contains(&w.to_lowercase())
                 }
             };

@@ -7,6 +7,7 @@ use ash::vk;
 
 /// One device as the loader lists it.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct DeviceInfo {
     pub index: usize,
     pub name: String,

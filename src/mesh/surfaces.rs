@@ -33,6 +33,7 @@ pub const DEFAULT_CREASE_DEG: f64 = 30.0;
 /// How a model's triangles are grouped into surfaces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum SurfaceRule {
     /// The file's own: OBJ groups, a PLY face property `surface`, `segment` or `label`.
     Groups,

@@ -37,6 +37,7 @@ pub struct Sensor {
 
 /// Where pixels live and range is measured.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum View {
     Orthographic(Orthographic),
     Pinhole(Pinhole),

@@ -22,6 +22,7 @@ pub struct Witness {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum WitnessGeometry {
     /// A centre: `pose` is reference-from-witness (its translation the centre in the
     /// reference frame, its rotation the witness's x-right, y-down, z-forward axes), and

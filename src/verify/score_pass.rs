@@ -114,6 +114,7 @@ impl ScorePass {
 
     /// The pass on a device whose square root errs by `ulps`, which it corrects: for the test
     /// standing in for such a device on lavapipe.
+    #[cfg(feature = "test-hooks")]
     pub fn with_sqrt_error(ctx: &Arc<GpuContext>, ulps: i32) -> Result<Self> {
         Self::with_sqrt((true, ulps), ctx)
     }

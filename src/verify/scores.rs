@@ -13,6 +13,7 @@ use super::sensed::SensedImage;
 use serde::Serialize;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Scores {
     pub s1: f64,
     pub s2: f64,

@@ -78,6 +78,7 @@ pub struct VerifySettings {
 }
 
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct Verification {
     pub id: String,
     pub counts: Counts,
@@ -194,8 +195,8 @@ impl Verifier {
 
     /// This verifier as on a device whose square root errs by `ulps`, which the score pass
     /// corrects: for the test that stands in for such a device (NVIDIA's approximates it) on
-    /// lavapipe, whose root is exact. Not for use.
-    #[doc(hidden)]
+    /// lavapipe, whose root is exact. Only with the feature `test-hooks`.
+    #[cfg(feature = "test-hooks")]
     pub fn with_sqrt_error_for_tests(self, ulps: i32) -> Result<Self> {
         let score_pass = ScorePass::with_sqrt_error(self.renderer.context(), ulps)?;
         Ok(Self { score_pass, ..self })

@@ -57,6 +57,7 @@ pub fn rig_reference(scene: &Scene) -> RigReference {
     let (width, height) = match scene.sensor.reference {
         View::Pinhole(view) => (view.intrinsics.width, view.intrinsics.height),
         View::Orthographic(view) => (view.width, view.height),
+        _ => panic!("the reference knows no such view"),
     };
     let bases = scene.label_bases().expect("labels fit");
     let mut triangles = Vec::new();
@@ -86,6 +87,7 @@ pub fn rig_reference(scene: &Scene) -> RigReference {
                     let y = view.origin[1] - f64::from(row) * view.pitch[1];
                     (DVec3::new(x, y, top), DVec3::NEG_Z, (0.0, f64::INFINITY), true)
                 }
+                _ => panic!("the reference knows no such view"),
             };
             let hits: Vec<(f64, &Triangle)> = triangles
                 .iter()
@@ -123,6 +125,7 @@ pub fn rig_reference(scene: &Scene) -> RigReference {
                         };
                         (d, f64::INFINITY, true)
                     }
+                    _ => panic!("the reference knows no such witness"),
                 };
                 let length = toward.length();
                 let faces = lit.dot(toward / length) > FACING_TOLERANCE;

@@ -37,6 +37,7 @@ impl<'a> Images<'a> {
                     let k = p.intrinsics;
                     Rays::Pinhole { fx: k.fx, fy: k.fy, cx: k.cx, cy: k.cy }
                 }
+                _ => panic!("the scorer knows no such view"),
             },
             sensed_label: &sensed.label,
             sensed_z: &sensed.z,

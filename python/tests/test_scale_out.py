@@ -1,0 +1,87 @@
+"""Scale-out (docs/python.md, "Scale-out"): the command line's `--shard` and the Ray example.
+
+The Ray example runs on a local Ray cluster on this machine's CPUs, each actor's verifier on
+lavapipe, and must give the scores one process gives, pose for pose.
+"""
+
+import importlib.util
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import ray
+
+import rangesynth
+from test_rangesynth import command_line, poses, scene_file
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ray_verify.py"
+
+
+def load_example():
+    spec = importlib.util.spec_from_file_location("ray_verify", EXAMPLE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def sensed_exr(tmp_path):
+    out = tmp_path / "out"
+    subprocess.run([command_line(), "render", str(scene_file(tmp_path, theta_deg=30.0, mode="depth")), "--out", str(out)],
+                   check=True, capture_output=True)
+    return out / "range.exr"
+
+
+def test_shards_concatenated_are_the_unsharded_output_and_the_ray_examples_ranges(tmp_path):
+    exr = sensed_exr(tmp_path)
+    label = int(rangesynth.read_range_image(exr)["label"].max())
+    hypotheses = [
+        {"id": f"h{i}", "model": "builtin:box", "pose": p.tolist(), "bindings": [[label, label]]}
+        for i, p in enumerate(poses(*np.linspace(-0.4, 0.4, 11)))
+    ]
+    file = tmp_path / "hypotheses.json"
+    file.write_text(json.dumps({"hypotheses": hypotheses}))
+
+    def run(name, *extra):
+        out = tmp_path / name
+        subprocess.run([command_line(), "verify", str(file), "--scene", str(exr), "--out", str(out), *extra],
+                       check=True, capture_output=True)
+        return out.read_bytes()
+
+    whole = run("whole.jsonl")
+    shards = [run(f"shard{i}.jsonl", "--shard", f"{i}/3") for i in range(3)]
+    assert b"".join(shards) == whole
+    # The Ray example splits a batch into the same ranges: 11 in three are 3, 4 and 4.
+    ranges = load_example().shard_ranges(11, 3)
+    assert ranges == [(0, 3), (3, 7), (7, 11)]
+    for shard, (start, end) in zip(shards, ranges):
+        ids = [json.loads(line)["id"] for line in shard.decode().splitlines()]
+        assert ids == [f"h{i}" for i in range(start, end)]
+
+
+def test_the_ray_examples_scores_equal_one_process(tmp_path):
+    example = load_example()
+    exr = sensed_exr(tmp_path)
+    label = int(rangesynth.read_range_image(exr)["label"].max())
+    many = poses(*np.random.default_rng(41).uniform(-0.5, 0.5, 37))
+    bindings = [(label, label)]
+    alone = rangesynth.Verifier().verify(str(exr), "builtin:box", many, bindings, tolerance=0.05)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        actors = example.make_actors(2)
+        spread = example.verify_on_actors(actors, str(exr), "builtin:box", many, bindings, tolerance=0.05)
+        messages = sum(ray.get([actor.validation_messages.remote() for actor in actors]), [])
+        env = ray.remote(num_cpus=0)(lambda: os.environ.get("RANGESYNTH_VALIDATION"))
+        validation = ray.get(env.remote(), timeout=120)
+    finally:
+        ray.shutdown()
+    assert validation == "1", "the actors' verifiers validate as this process's do"
+    assert not messages, "Vulkan validation reported in an actor:\n" + "\n".join(messages)
+    assert set(spread) == set(alone)
+    for key in alone:
+        if key == "overlaps":
+            assert all(np.array_equal(a, b) for a, b in zip(spread[key], alone[key]))
+        else:
+            np.testing.assert_array_equal(spread[key], alone[key], err_msg=key)
+    assert len(set(spread["s"])) > 1, "the poses score differently"
