@@ -44,17 +44,25 @@ class VerifierActor:
     def verify(self, sensed, model, poses, bindings, options):
         return self.verifier.verify(sensed, model, poses, bindings, **options)
 
+    def describe(self):
+        """The device this actor verifies on, and whether Vulkan validation is on there."""
+        return {"device": self.verifier.device_name, "validation": self.verifier.validation_enabled}
+
     def validation_messages(self):
         return rangesynth.validation_messages()
 
 
 def make_actors(count=None):
     """One actor per GPU of the cluster, each with a GPU of its own; without GPUs, `count`
-    actors (default: one) on the CPUs."""
+    actors (default: one), each with a CPU of its own. More actors than the cluster has GPUs
+    (or CPUs) would wait for one for ever, so that is refused."""
     gpus = int(ray.cluster_resources().get("GPU", 0))
-    if gpus:
-        return [VerifierActor.options(num_gpus=1).remote() for _ in range(count or gpus)]
-    return [VerifierActor.options(num_cpus=1).remote() for _ in range(count or 1)]
+    resource, each = ("GPU", {"num_gpus": 1}) if gpus else ("CPU", {"num_cpus": 1})
+    count = count or gpus or 1
+    available = int(ray.cluster_resources().get(resource, 0))
+    if count > available:
+        raise ValueError(f"{count} actors need {count} {resource}s; the cluster has {available}")
+    return [VerifierActor.options(**each).remote() for _ in range(count)]
 
 
 def shard_ranges(total, parts):
@@ -62,17 +70,20 @@ def shard_ranges(total, parts):
     return [(total * i // parts, total * (i + 1) // parts) for i in range(parts)]
 
 
-def verify_on_actors(actors, sensed, model, poses, bindings, **options):
+def verify_on_actors(actors, sensed, model, poses, bindings, timeout=None, **options):
     """Verifies `poses` (N, 4, 4), split across `actors`, as `Verifier.verify` would on one
-    device: one dict of arrays, one element per pose, in the poses' order. `options` are
-    `verify`'s keywords (shadow, effects, tolerance)."""
+    device: one dict of arrays, one element per pose, in the poses' order. `sensed` and `model`
+    are as `verify` takes them; a path is opened by each actor on its own node, so it must name
+    a file on a filesystem every node shares. `options` are `verify`'s keywords (shadow,
+    effects, tolerance); `timeout`, in seconds, bounds the wait for the results."""
     poses = np.asarray(poses, dtype=np.float64)
-    sensed_ref = ray.put(sensed)  # shipped once to each node, not once per actor
+    sensed_ref = ray.put(sensed)  # a dict of arrays goes to the object store once, not once per actor
     parts = ray.get(
         [
             actor.verify.remote(sensed_ref, model, poses[start:end], bindings, options)
             for actor, (start, end) in zip(actors, shard_ranges(len(poses), len(actors)))
-        ]
+        ],
+        timeout=timeout,
     )
     return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
 
@@ -90,8 +101,13 @@ def main():
     ray.init(address=args.address)
     bindings = [tuple(int(k) for k in pair.split(":")) for pair in args.bindings]
     actors = make_actors(args.actors)
+    for k, described in enumerate(ray.get([actor.describe.remote() for actor in actors])):
+        print(f"actor {k}: {described['device']}")
     options = {"shadow": args.shadow} if args.shadow else {}
-    result = verify_on_actors(actors, args.sensed, args.model, np.load(args.poses), bindings, **options)
+    # Absolute paths, which each actor opens on its own node (a shared filesystem's).
+    model = args.model if args.model.startswith("builtin:") else str(Path(args.model).resolve())
+    sensed = str(Path(args.sensed).resolve())
+    result = verify_on_actors(actors, sensed, model, np.load(args.poses), bindings, **options)
     out = args.poses.with_name("scores.npz")
     np.savez(out, **{k: v for k, v in result.items() if k != "overlaps"})
     best = int(np.argmax(result["s"]))

@@ -6,7 +6,8 @@ One batch of 1,024 `builtin:box` poses about the example's sensed step (docs/exa
 `rangesynth.Verifier.verify` with the sensed image as numpy arrays. Both sides use the same
 device and the same settings, and both warm up first. The two sides take turns call by call
 (the library's process waits for a line, verifies, and answers with its time), and each side's
-fastest call counts, as does the median of the pairs' ratios. The Python call's time includes everything it adds
+fastest call counts, as does the median of the pairs' ratios. Calls of one pose, timed the
+same way, give a call's fixed cost. The Python call's time includes everything it adds
 to the batch: it reads the arrays, prepares the sensed image, builds the hypotheses and returns
 numpy arrays. The library's time is `Verifier::verify` alone.
 
@@ -47,9 +48,9 @@ def poses():
     return stack
 
 
-def library_seconds(library):
+def library_seconds(library, batch):
     """One call through the library, in its own process, which answers with its seconds."""
-    library.stdin.write("verify\n")
+    library.stdin.write(f"{len(batch)}\n")
     library.stdin.flush()
     return float(library.stdout.readline())
 
@@ -82,15 +83,21 @@ def main():
         with subprocess.Popen([binary, str(poses_file)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                               text=True) as library:
             assert library.stdout.readline().strip() == "ready"
-            pairs = [(library_seconds(library), python_seconds(verifier, sensed, batch)) for _ in range(rounds)]
+            rows = []
+            for poses_a_call, calls in [(BATCH, rounds), (1, 10 * rounds)]:
+                part = batch[:poses_a_call]
+                pairs = [(library_seconds(library, part), python_seconds(verifier, sensed, part)) for _ in range(calls)]
+                rows.append((poses_a_call, calls, pairs))
             library.stdin.close()
-    best_library, best_python = min(p[0] for p in pairs), min(p[1] for p in pairs)
-    median_ratio = float(np.median([p[1] / p[0] for p in pairs]))
-    print(f"device: {rangesynth.Renderer().device_name}")
-    print(f"a batch of {BATCH} poses, one call, {rounds} calls a side in turns:")
-    print(f"{'library (ms)':>14} {'Python (ms)':>12} {'ratio of fastest':>17} {'median ratio':>13}")
-    print(f"{best_library * 1e3:>14.1f} {best_python * 1e3:>12.1f} {best_python / best_library:>17.3f} "
-          f"{median_ratio:>13.3f}")
+    print(f"device: {verifier.device_name}")
+    print("one call a batch, the two sides in turns:")
+    print(f"{'poses':>6} {'calls':>6} {'library (ms)':>13} {'Python (ms)':>12} {'ratio of fastest':>17} "
+          f"{'median ratio':>13} {'difference (ms)':>16}")
+    for poses_a_call, calls, pairs in rows:
+        best_library, best_python = min(p[0] for p in pairs), min(p[1] for p in pairs)
+        median_ratio = float(np.median([p[1] / p[0] for p in pairs]))
+        print(f"{poses_a_call:>6} {calls:>6} {best_library * 1e3:>13.2f} {best_python * 1e3:>12.2f} "
+              f"{best_python / best_library:>17.3f} {median_ratio:>13.3f} {(best_python - best_library) * 1e3:>16.2f}")
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
 //! The Rust side of `tools/bench_python.py`, which measures what a call through Python costs
 //! over the same call through the library. It takes a JSON file of poses (each 16 numbers,
 //! row-major). It renders the sensed image the Python side renders (docs/example/sensed.toml)
-//! and prepares it once, and warms up. Then, for each line read from its input, it verifies the
-//! whole batch of `builtin:box` poses in one `Verifier::verify` call and prints the call's
-//! seconds on a line, so that the Python side's calls and its take turns one by one. The
+//! and prepares it once, and warms up. Then, for each line read from its input (a number n), it
+//! verifies the batch's first n `builtin:box` poses in one `Verifier::verify` call and prints
+//! the call's seconds on a line, so that the Python side's calls and its take turns one by one. The
 //! settings match the Python side's call: depth-mode shadows, no effects, tolerance 0.1,
 //! bindings (1, 1) and (2, 1), the default rasterizer and device.
 
@@ -55,9 +55,9 @@ fn main() -> anyhow::Result<()> {
     writeln!(out, "ready")?;
     out.flush()?;
     for line in std::io::stdin().lock().lines() {
-        line?;
+        let count: usize = line?.trim().parse()?;
         let start = Instant::now();
-        verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})?;
+        verifier.verify(&sensed, &settings, &hypotheses[..count.min(hypotheses.len())], &mut |_| {})?;
         writeln!(out, "{}", start.elapsed().as_secs_f64())?;
         out.flush()?;
     }

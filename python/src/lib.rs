@@ -1,16 +1,21 @@
 //! The Python package `rangesynth` (python/rangesynth/, docs/python.md): the Rust crate's
-//! renderer and verifier on numpy arrays. A thin layer that adds no logic of its own: it turns
-//! arrays and dicts into the crate's inputs and its outputs into arrays, releases the GIL while
-//! the device works, and raises every error as a `rangesynth.Error` carrying the crate's message.
+//! renderer and verifier on numpy arrays. A thin layer that adds no rendering or scoring of its
+//! own: it turns arrays and dicts into the crate's inputs (src/arrays.rs) and its outputs into
+//! arrays, releases the GIL while the device works, raises every error as a `rangesynth.Error`
+//! carrying the crate's message, and keeps validation's messages for the tests
+//! (src/validation.rs).
 
+mod arrays;
+mod validation;
+
+use arrays::{array, from_keys, keys_of};
 use glam::DMat4;
-use numpy::ndarray::Dimension;
-use numpy::{Element, IntoPyArray, PyArrayMethods, PyReadonlyArray, PyReadonlyArray3};
+use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray3};
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use rangesynth::effects::Effects;
-use rangesynth::gpu::{list_devices, ContextOptions, GpuContext};
+use rangesynth::gpu::{list_devices, ContextOptions};
 use rangesynth::io::{read_range_image as read_range_image_file, RangeImage};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::{load_model_file, Mesh as CrateMesh};
@@ -24,7 +29,7 @@ use rangesynth::verify::{
 use rangesynth::{RenderOutput, Renderer as CrateRenderer, Scene};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, OnceLock, Weak};
+use std::sync::{Arc, Mutex, OnceLock};
 
 pyo3::create_exception!(
     _rangesynth,
@@ -40,58 +45,6 @@ fn raised(e: impl std::fmt::Display) -> PyErr {
 
 fn raster_of(raster: Option<&str>) -> PyResult<Raster> {
     raster.map_or(Ok(Raster::Auto), |r| r.parse().map_err(raised))
-}
-
-/// Any array-like as a numpy array of `dtype` and `D`'s dimensions, copied where its dtype
-/// differs; anything else is refused, naming `what`. Strided arrays are read as they are. A
-/// conversion that would change a value is refused, not made: real numbers for a float dtype;
-/// integers within the dtype's range for an integer one (numpy's own cast would truncate 2.5
-/// to 2 and wrap -1 to 4294967295).
-fn array<'py, T: Element, D: Dimension>(
-    py: Python<'py>,
-    obj: &Bound<'py, PyAny>,
-    dtype: &str,
-    what: &str,
-) -> PyResult<PyReadonlyArray<'py, T, D>> {
-    let numpy = py.import("numpy")?;
-    let not_an_array = |e: PyErr| raised(format!("{what} is not an array of {dtype}: {e}"));
-    let given = numpy.call_method1("asarray", (obj,)).map_err(not_an_array)?;
-    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
-    let wanted_kind: String = numpy.call_method1("dtype", (dtype,))?.getattr("kind")?.extract()?;
-    let integers = wanted_kind != "f";
-    let acceptable = if integers { "iu" } else { "iuf" };
-    if !acceptable.contains(kind.as_str()) {
-        let of = if integers { "integers" } else { "real numbers" };
-        let given_dtype = given.getattr("dtype")?.str()?;
-        return Err(raised(format!(
-            "{what} is not an array of {dtype}: it must hold {of}, and its dtype is {given_dtype}"
-        )));
-    }
-    if integers && given.getattr("size")?.extract::<usize>()? > 0 {
-        let range = numpy.call_method1("iinfo", (dtype,))?;
-        let (lowest, highest) = (given.call_method0("min")?, given.call_method0("max")?);
-        if lowest.lt(range.getattr("min")?)? || highest.gt(range.getattr("max")?)? {
-            return Err(raised(format!("{what} holds {lowest} to {highest}, outside {dtype}'s range")));
-        }
-    }
-    let converted = numpy.call_method1("asarray", (given, dtype)).map_err(not_an_array)?;
-    converted.extract::<PyReadonlyArray<'py, T, D>>().map_err(|_| {
-        let shape = converted.getattr("shape").map(|s| s.to_string()).unwrap_or_default();
-        raised(format!("{what} must have {} dimensions; its shape is {shape}", D::NDIM.unwrap_or(0)))
-    })
-}
-
-/// A Python object (a dict of a file's keys) as the crate's type, through JSON.
-fn from_keys<T: serde::de::DeserializeOwned>(py: Python<'_>, keys: &Bound<'_, PyAny>, what: &str) -> PyResult<T> {
-    let text: String = py.import("json")?.call_method1("dumps", (keys,))?.extract()?;
-    serde_json::from_str(&text).map_err(|e| raised(format!("{what}: {e}")))
-}
-
-/// The crate's value as a Python object of a file's keys (a dict for a `[sensor]`), through
-/// JSON: `from_keys`'s reverse.
-fn keys_of<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(value).map_err(raised)?;
-    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// A triangle mesh: vertices (V, 3), faces (F, 3) of vertex indices, and each face's surface
@@ -205,8 +158,9 @@ fn image_arrays<'py>(
 }
 
 /// The arrays of a render (`image_arrays`), its witness bits where the sensor has witnesses,
-/// "labels", the scene's labels table as a structured array (`labels_table`), and "sensor", a
-/// dict of its `[sensor]` keys: a sensed image that `verify` takes as it is.
+/// "labels", the scene's labels table as a structured array (`labels_table`), and "sensor",
+/// "shadow" and "effects", dicts of the scene's tables: a sensed image that `verify` takes as it
+/// is, with the settings it was rendered under.
 fn render_arrays<'py>(py: Python<'py>, (labels, out): (Vec<LabelEntry>, RenderOutput)) -> PyResult<Bound<'py, PyDict>> {
     let size = (out.sensor.width() as usize, out.sensor.height() as usize);
     let xyz: Vec<f32> = (0..out.label.len()).flat_map(|i| out.point(i).unwrap_or([f32::NAN; 3])).collect();
@@ -215,6 +169,8 @@ fn render_arrays<'py>(py: Python<'py>, (labels, out): (Vec<LabelEntry>, RenderOu
     let dict = image_arrays(py, size, xyz, out.label, Some(reason), witness)?;
     dict.set_item("labels", labels_table(py, &labels)?)?;
     dict.set_item("sensor", keys_of(py, &out.sensor)?)?;
+    dict.set_item("shadow", keys_of(py, &out.shadow)?)?;
+    dict.set_item("effects", keys_of(py, &out.effects)?)?;
     Ok(dict)
 }
 
@@ -260,49 +216,6 @@ fn render_file(renderer: &CrateRenderer, path: &Path) -> rangesynth::Result<(Vec
     Ok((label_map(&scene)?, renderer.render(&scene)?))
 }
 
-/// The device contexts this process made, so that `validation_messages` can collect what
-/// Vulkan validation (on where RANGESYNTH_VALIDATION=1) reported on each, and what the
-/// contexts of renderers and verifiers since dropped had reported.
-#[derive(Default)]
-struct ValidationLog {
-    contexts: Vec<Weak<GpuContext>>,
-    dropped: Vec<String>,
-}
-
-fn validation_log() -> std::sync::MutexGuard<'static, ValidationLog> {
-    static LOG: OnceLock<Mutex<ValidationLog>> = OnceLock::new();
-    LOG.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner())
-}
-
-/// `renderer`, its context watched by the validation log.
-fn watched(renderer: CrateRenderer) -> CrateRenderer {
-    validation_log().contexts.push(Arc::downgrade(renderer.context()));
-    renderer
-}
-
-/// Keeps what validation reported on a context about to be dropped.
-fn keep_messages(context: &GpuContext) {
-    let messages = context.take_validation_messages();
-    validation_log().dropped.extend(messages);
-}
-
-/// The messages Vulkan validation reported since the last call, on every device context this
-/// process made (validation is on where RANGESYNTH_VALIDATION=1): the test suite's check that
-/// a run was clean.
-#[pyfunction]
-fn validation_messages() -> Vec<String> {
-    let mut log = validation_log();
-    let mut messages = std::mem::take(&mut log.dropped);
-    log.contexts.retain(|context| match context.upgrade() {
-        Some(context) => {
-            messages.extend(context.take_validation_messages());
-            true
-        }
-        None => false,
-    });
-    messages
-}
-
 /// A renderer on one device, made once and reused: `render(scene_path)` gives a scene's
 /// arrays. Usable from several threads; the GIL is released while it renders.
 #[pyclass(frozen, module = "rangesynth")]
@@ -336,7 +249,7 @@ fn new_renderer(
     // An index or a UUID from devices(), or a name: the library matches its text.
     let device = device.map(|d| d.str().map(|text| text.to_string())).transpose()?;
     let renderer = py.detach(|| CrateRenderer::new(&context_options(device.as_deref()))).map_err(raised)?;
-    Ok(watched(renderer.with_raster(raster).with_memory_budget(budget)))
+    Ok(validation::watched(renderer.with_raster(raster).with_memory_budget(budget)))
 }
 
 #[pymethods]
@@ -373,12 +286,6 @@ impl Renderer {
     }
 }
 
-impl Drop for Renderer {
-    fn drop(&mut self) {
-        keep_messages(self.inner.context());
-    }
-}
-
 /// Verifiers kept for the module-level functions, one per rasterizer choice: made on first
 /// use, so that a script calling `verify` in a loop builds the pipelines once.
 fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
@@ -387,7 +294,8 @@ fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
     if let Some(v) = kept.get(&raster) {
         return Ok(v.clone());
     }
-    let renderer = watched(CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster));
+    let renderer =
+        validation::watched(CrateRenderer::new(&ContextOptions::from_env()).map_err(raised)?.with_raster(raster));
     let verifier = Arc::new(CrateVerifier::new(renderer).map_err(raised)?);
     kept.insert(raster, verifier.clone());
     Ok(verifier)
@@ -395,7 +303,8 @@ fn shared_verifier(raster: Raster) -> PyResult<Arc<CrateVerifier>> {
 
 /// The sensed image and its sensor: an EXR path (its header gives the sensor, shadow and
 /// effects), or a dict of "xyz" (H, W, 3) and "label" (H, W) arrays with "sensor" (a dict of
-/// the `[sensor]` keys).
+/// the `[sensor]` keys) and, where given, "shadow" and "effects" (dicts of those tables' keys),
+/// as a render's dict has them.
 fn sensed_of(py: Python<'_>, sensed: &Bound<'_, PyAny>) -> PyResult<RangeImage> {
     if let Ok(dict) = sensed.cast::<PyDict>() {
         let get = |key: &str| dict.get_item(key)?.ok_or_else(|| raised(format!("the sensed dict has no {key:?}")));
@@ -410,6 +319,8 @@ fn sensed_of(py: Python<'_>, sensed: &Bound<'_, PyAny>) -> PyResult<RangeImage> 
             )));
         }
         let sensor: Sensor = from_keys(py, &get("sensor")?, "sensed \"sensor\"")?;
+        let shadow = dict.get_item("shadow")?.map(|k| from_keys(py, &k, "sensed \"shadow\"")).transpose()?;
+        let effects = dict.get_item("effects")?.map(|k| from_keys(py, &k, "sensed \"effects\"")).transpose()?;
         let channel = |k: usize| xyz.index_axis(numpy::ndarray::Axis(2), k).iter().copied().collect::<Vec<f32>>();
         let size = |n: usize| u32::try_from(n).map_err(|_| raised(format!("a side of {n} pixels is too large")));
         return Ok(RangeImage {
@@ -422,8 +333,8 @@ fn sensed_of(py: Python<'_>, sensed: &Bound<'_, PyAny>) -> PyResult<RangeImage> 
             reason: None,
             witness: None,
             sensor: Some(sensor),
-            shadow: None,
-            effects: None,
+            shadow,
+            effects,
         });
     }
     let path: PathBuf = sensed
@@ -586,12 +497,6 @@ struct Verifier {
     inner: Arc<CrateVerifier>,
 }
 
-impl Drop for Verifier {
-    fn drop(&mut self) {
-        keep_messages(self.inner.renderer().context());
-    }
-}
-
 #[pymethods]
 impl Verifier {
     #[new]
@@ -605,6 +510,17 @@ impl Verifier {
         let renderer = new_renderer(py, device, memory_budget, raster)?;
         let verifier = py.detach(|| CrateVerifier::new(renderer));
         Ok(Self { inner: Arc::new(verifier.map_err(raised)?) })
+    }
+
+    #[getter]
+    fn device_name(&self) -> String {
+        self.inner.renderer().context().device_name().to_string()
+    }
+
+    /// Whether Vulkan validation is on (RANGESYNTH_VALIDATION=1 where the verifier was made).
+    #[getter]
+    fn validation_enabled(&self) -> bool {
+        self.inner.renderer().context().validation_enabled()
     }
 
     /// As the module's `verify`, with `progress` called with the number of poses done after
@@ -642,8 +558,10 @@ fn render_scene<'py>(py: Python<'py>, path: PathBuf, raster: Option<&str>) -> Py
 }
 
 /// Scores each pose of `model` against the sensed image: a dict of arrays, one element a pose:
-/// "s", "s1" … "s6" float64, the counts "n1_plus", "n1_minus", "n0", "n1", "n_s", "n_i" uint64,
-/// and "rejected" (str, empty where the pose was not rejected).
+/// "s", "s1" … "s6" float64; the counts "n1_plus", "n1_minus", "n0", "n1", "n_s", "n_i" uint64,
+/// "surface_population" (N, the model's surfaces) uint64 and "overlaps" (each pose's (K, 3)
+/// array of [scene label, model surface, pixels]); and "rejected" (str, empty where the pose
+/// was not rejected).
 #[pyfunction]
 #[pyo3(signature = (sensed, model, poses, bindings, shadow=None, effects=None, tolerance=0.1, raster=None))]
 #[allow(clippy::too_many_arguments)]
@@ -690,6 +608,6 @@ fn _rangesynth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(verify, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     m.add_function(wrap_pyfunction!(read_range_image, m)?)?;
-    m.add_function(wrap_pyfunction!(validation_messages, m)?)?;
+    m.add_function(wrap_pyfunction!(validation::validation_messages, m)?)?;
     Ok(())
 }

@@ -14,7 +14,10 @@ import rangesynth
 @pytest.fixture(autouse=True)
 def no_validation_messages():
     assert os.environ.get("RANGESYNTH_VALIDATION") == "1", "tools/test.sh turns validation on"
-    rangesynth.validation_messages()  # what an earlier test left is that test's failure
+    # What validation reported between tests (a renderer an earlier test left to the garbage
+    # collector, torn down since) fails this one, naming it as earlier.
+    earlier = rangesynth.validation_messages()
+    assert not earlier, "Vulkan validation reported after an earlier test:\n" + "\n".join(earlier)
     yield
     messages = rangesynth.validation_messages()
     assert not messages, "Vulkan validation reported:\n" + "\n".join(messages)

@@ -1,7 +1,7 @@
-"""The Python examples of the README and docs/python.md run, and print what they say they print.
+"""The Python examples of the README and docs/python.md run, and print what they should.
 
-Each is the first ```python block under its heading, run from the repository root; the line it
-prints is compared with the comment on its print line.
+Each is the first ```python block under its heading, run from the repository root; what it
+prints must match the pattern given here, which the block's comment states where it can.
 """
 
 import contextlib
@@ -25,6 +25,7 @@ def example(document, heading):
     "document, heading, printed",
     [
         ("README.md", "## Python", r"^25\.0 1\.0$"),
+        ("docs/python.md", "## A first session", r"^0\.\d\d of the poses score above 0\.5$"),
         ("docs/python.md", "## Entry points", r"^\[1\.\s+0\.508\d*\] \['' ''\]$"),
     ],
 )

@@ -31,9 +31,9 @@ pub const DEMO_SCENE: &str = include_str!("demo_scene.toml");
 #[derive(Parser)]
 #[command(name = "rangesynth", version, about = "Realistic (triangulation-shadowed) range images on any Vulkan device")]
 pub struct Cli {
-    /// Use the Vulkan device whose name contains this, or whose UUID or index (in the Vulkan
-    /// loader's order, as Python's rangesynth.devices() lists them) it is (also
-    /// RANGESYNTH_DEVICE).
+    /// Use the Vulkan device whose name contains this, or whose UUID (nvidia-smi's GPU-… form
+    /// too) or index (in the Vulkan loader's order, as Python's rangesynth.devices() lists
+    /// them) it is (also RANGESYNTH_DEVICE).
     #[arg(long, global = true)]
     device: Option<String>,
     /// Turn on Vulkan validation with synchronization validation (also RANGESYNTH_VALIDATION=1).

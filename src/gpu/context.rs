@@ -112,7 +112,25 @@ enum Vulkan13Commands {
 struct DebugMessenger {
     loader: ext::debug_utils::Instance,
     messenger: vk::DebugUtilsMessengerEXT,
-    messages: *mut Mutex<Vec<String>>,
+    messages: ValidationLog,
+}
+
+/// The messages validation reported on one context, oldest first: a handle that outlives the
+/// context, so that what the layer reports while the context is destroyed (objects left
+/// alive) can still be read.
+#[derive(Clone, Default)]
+pub struct ValidationLog(Arc<Mutex<Vec<String>>>);
+
+impl ValidationLog {
+    /// The messages so far; taking them empties the log.
+    pub fn take(&self) -> Vec<String> {
+        std::mem::take(&mut *self.0.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+
+    /// Whether the context it was made for is gone (no messenger writes to it any more).
+    pub fn is_closed(&self) -> bool {
+        Arc::strong_count(&self.0) == 1
+    }
 }
 
 // SAFETY: the raw pointer is a Box owned by the messenger, only read through its Mutex.
@@ -425,11 +443,13 @@ impl GpuContext {
     /// Validation messages (warnings and errors) collected so far, oldest first; taking
     /// them empties the log.
     pub fn take_validation_messages(&self) -> Vec<String> {
-        match &self.debug {
-            // SAFETY: the Box lives as long as the messenger, i.e. as long as self.
-            Some(d) => std::mem::take(&mut *unsafe { &*d.messages }.lock().unwrap_or_else(|p| p.into_inner())),
-            None => Vec::new(),
-        }
+        self.debug.as_ref().map(|d| d.messages.take()).unwrap_or_default()
+    }
+
+    /// The log of this context's validation messages, which stays readable after the context
+    /// is dropped; `None` where validation is off.
+    pub fn validation_log(&self) -> Option<ValidationLog> {
+        self.debug.as_ref().map(|d| d.messages.clone())
     }
 
     /// Gives a Vulkan object a name that validation messages will show.
@@ -575,7 +595,7 @@ fn validation_available(entry: &ash::Entry) -> Result<bool> {
 impl DebugMessenger {
     fn new(entry: &ash::Entry, instance: &ash::Instance) -> Result<Self> {
         let loader = ext::debug_utils::Instance::new(entry, instance);
-        let messages = Box::into_raw(Box::new(Mutex::new(Vec::new())));
+        let messages = ValidationLog::default();
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
                 vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
@@ -586,27 +606,20 @@ impl DebugMessenger {
                     | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
             )
             .pfn_user_callback(Some(collect_message))
-            .user_data(messages.cast());
-        // SAFETY: `messages` stays alive until the messenger is destroyed in Drop.
-        match unsafe { loader.create_debug_utils_messenger(&info, None) } {
-            Ok(messenger) => Ok(Self { loader, messenger, messages }),
-            Err(e) => {
-                // SAFETY: the messenger was not created, so nothing refers to the Box.
-                drop(unsafe { Box::from_raw(messages) });
-                Err(Error::vulkan("creating the validation messenger", e))
-            }
-        }
+            .user_data(Arc::as_ptr(&messages.0).cast_mut().cast());
+        // SAFETY: the messenger holds `messages` (an Arc) until it is destroyed in Drop.
+        let messenger = unsafe { loader.create_debug_utils_messenger(&info, None) }
+            .map_err(|e| Error::vulkan("creating the validation messenger", e))?;
+        Ok(Self { loader, messenger, messages })
     }
 }
 
 impl Drop for DebugMessenger {
     fn drop(&mut self) {
-        // SAFETY: the instance is still alive (its owner drops the messenger first); once the
-        // messenger is gone nothing refers to the Box.
-        unsafe {
-            self.loader.destroy_debug_utils_messenger(self.messenger, None);
-            drop(Box::from_raw(self.messages));
-        }
+        // SAFETY: the instance is still alive (its owner drops the messenger first); the log
+        // the messenger writes to lives until after it is destroyed (a field, dropped after
+        // this).
+        unsafe { self.loader.destroy_debug_utils_messenger(self.messenger, None) };
     }
 }
 
@@ -616,7 +629,8 @@ unsafe extern "system" fn collect_message(
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
     user: *mut c_void,
 ) -> vk::Bool32 {
-    // SAFETY: the layer passes valid callback data; `user` is our Box<Mutex<Vec<String>>>.
+    // SAFETY: the layer passes valid callback data; `user` is the Mutex inside the messenger's
+    // ValidationLog, alive while the messenger is.
     unsafe {
         let message = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
         let log = &*(user as *const Mutex<Vec<String>>);
@@ -648,7 +662,8 @@ fn choose_device(instance: &ash::Instance, wanted: Option<&str>, cap: u32) -> Re
                 Err(_) => {
                     // NVIDIA's tools (nvidia-smi, NVIDIA_VISIBLE_DEVICES) write the same UUID
                     // with a "GPU-" before it.
-                    let uuid = w.trim().strip_prefix("GPU-").unwrap_or(w.trim());
+                    let w = w.trim();
+                    let uuid = if w.get(..4).is_some_and(|p| p.eq_ignore_ascii_case("GPU-")) { &w[4..] } else { w };
                     super::devices::device_uuid(instance, pd, &props).eq_ignore_ascii_case(uuid)
                         || name.to_lowercase().contains(&w.to_lowercase())
                 }
@@ -765,5 +780,23 @@ mod tests {
         }
         let messages = ctx.take_validation_messages();
         assert!(messages.iter().any(|m| m.contains("00912")), "{messages:?}");
+    }
+
+    /// What validation reports while a context is destroyed (here, a buffer left alive) is
+    /// read from its log after the context is gone.
+    #[test]
+    fn the_log_outlives_its_context() {
+        let ctx = GpuContext::new(&ContextOptions { validation: true, ..Default::default() })
+            .expect("a Vulkan device with validation");
+        let log = ctx.validation_log().expect("validation is on");
+        let info = vk::BufferCreateInfo::default().size(16).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+        // SAFETY: a valid buffer, deliberately never destroyed, so that destroying the device
+        // reports it.
+        unsafe { ctx.device.create_buffer(&info, None) }.expect("a buffer");
+        assert!(!log.is_closed());
+        drop(ctx);
+        assert!(log.is_closed());
+        let messages = log.take();
+        assert!(messages.iter().any(|m| m.contains("vkDestroyDevice")), "{messages:?}");
     }
 }

@@ -14,7 +14,7 @@ mod upload;
 
 pub use barrier::{barrier, Access, BufferTransition, ImageTransition};
 pub use compute::ComputePipeline;
-pub use context::{ContextOptions, GpuContext, DEVICE_ENV, VALIDATION_ENV};
+pub use context::{ContextOptions, GpuContext, ValidationLog, DEVICE_ENV, VALIDATION_ENV};
 pub use descriptors::{SetShape, StorageSet};
 pub use devices::{list_devices, DeviceInfo};
 pub use encoder::{Encoder, Step};
