@@ -6,8 +6,8 @@
 //! pixel's label, z and plane. The second travels from that point p toward the camera, along
 //! d_cam; rotated by R_y(−θ) it travels down −z too, so both rays ask one question of a
 //! `VerticalCaster`: which triangles lie over (x, y), and at what heights. Each caster
-//! answers it from a bounding-volume hierarchy (parry3d-f64's) over the triangles' extents,
-//! with an exact f64 point-in-triangle test, edges included.
+//! answers it from a grid over the triangles' xy bounds (src/exact/column_grid.rs), with an
+//! exact f64 point-in-triangle test, edges included.
 //!
 //! The point is shadowed when its surface's lit side turns away from the camera (n · d_cam ≤ 0,
 //! however thin the surface, as in depth mode) or when any surface lies above p on the camera
@@ -16,6 +16,7 @@
 //! lowest label, and they do not shadow each other (the GPU paths' allowance for depths
 //! worked out from snapped corners has no cause here). Rows are cast in parallel (rayon).
 
+mod column_grid;
 mod ray_caster;
 mod rig;
 
@@ -24,10 +25,8 @@ use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::sensor::{PixelRect, Scanner, Sensor};
 use crate::shadow::ShadowMode;
+use column_grid::ColumnGrid;
 use glam::{DMat4, DVec2, DVec3};
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Vector as BvhVector;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
 pub use crate::shader_contract::TIE_RELATIVE;
@@ -36,8 +35,16 @@ pub use crate::shader_contract::TIE_RELATIVE;
 /// one seen exactly edge-on, up to the rounding of its posed corners, is not measured.
 const FACING_TOLERANCE: f64 = 1e-9;
 
-/// Bytes a caster takes per triangle (corners, label, bounds and their hierarchy).
-pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + 48 + 96;
+/// Bytes a caster takes per triangle: corners and label, and a hierarchy over their bounds
+/// (src/exact/ray_caster.rs) or a grid (src/exact/column_grid.rs), whichever is larger.
+pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + {
+    let hierarchy = 48 + 96;
+    if column_grid::BYTES_PER_TRIANGLE > hierarchy {
+        column_grid::BYTES_PER_TRIANGLE
+    } else {
+        hierarchy
+    }
+};
 /// Bytes exact mode takes per triangle under the paper's scanner (its two casters) and per
 /// pixel (the image it returns), for memory budgets.
 pub const BYTES_PER_TRIANGLE: u64 = 2 * CASTER_BYTES_PER_TRIANGLE;
@@ -82,31 +89,22 @@ struct Triangle {
     label: u32,
 }
 
-/// Triangles in one frame, with a hierarchy over their bounds: answers which triangles lie
+/// Triangles in one frame, with a grid over their xy bounds: answers which triangles lie
 /// over a point (x, y), and at what heights.
 struct VerticalCaster {
     triangles: Vec<Triangle>,
-    bvh: Bvh,
+    grid: ColumnGrid,
 }
 
 impl VerticalCaster {
     fn new(triangles: Vec<Triangle>) -> Self {
-        let to_bvh = |v: DVec3| BvhVector::new(v.x, v.y, v.z);
-        let bounds: Vec<Aabb> = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.corners;
-                Aabb::new(to_bvh(a.min(b).min(c)), to_bvh(a.max(b).max(c)))
-            })
-            .collect();
-        Self { bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &bounds), triangles }
+        let grid = ColumnGrid::new(triangles.iter().map(|t| t.corners.map(DVec3::truncate)));
+        Self { triangles, grid }
     }
 
     /// (height, index, triangle) of every triangle whose xy projection holds p, edges included.
     fn hits(&self, p: DVec2) -> impl Iterator<Item = (f64, u32, &Triangle)> + '_ {
-        let column = Aabb::new(BvhVector::new(p.x, p.y, -f64::MAX), BvhVector::new(p.x, p.y, f64::MAX));
-        let leaves: Vec<u32> = self.bvh.intersect_aabb(&column).collect();
-        leaves.into_iter().filter_map(move |i| {
+        self.grid.candidates(p).filter_map(move |i| {
             let t = &self.triangles[i as usize];
             height_over(&t.corners, p).map(|z| (z, i, t))
         })
@@ -116,7 +114,7 @@ impl VerticalCaster {
     /// `tie` of it, the lowest label, and of that label's triangles (a point on an edge, or a
     /// vertex) the first in scene order, whose plane gives z and which way the surface faces.
     fn front(&self, p: DVec2, tie: f64) -> Option<(f64, &Triangle)> {
-        let hits: Vec<(f64, u32, &Triangle)> = self.hits(p).collect();
+        let hits: smallvec::SmallVec<[(f64, u32, &Triangle); 16]> = self.hits(p).collect();
         let top = hits.iter().map(|h| h.0).max_by(f64::total_cmp)?;
         let (z, _, triangle) = hits.into_iter().filter(|h| h.0 >= top - tie).min_by_key(|h| (h.2.label, h.1))?;
         Some((z, triangle))
@@ -200,9 +198,13 @@ pub fn render_exact(sensor: &Sensor, objects: &[ExactObject]) -> Result<ExactIma
 /// The paper's scanner: a ray down −z at each pixel centre, then one toward the camera.
 fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImage> {
     sensor.validate()?;
-    let range = VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY));
     let to_camera = sensor.to_shadow_frame();
-    let camera = VerticalCaster::new(posed_triangles(objects, to_camera));
+    // The two casters are built side by side: for a dense model at a small image, building
+    // them is most of the work.
+    let (range, camera) = rayon::join(
+        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY)),
+        || VerticalCaster::new(posed_triangles(objects, to_camera)),
+    );
     let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     if !scale.is_finite() {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
