@@ -9,7 +9,9 @@ shadow ray from each hit toward the camera (a render and a shadow test, no score
 two ways: each hypothesis posing the vertices and building its own scene (Embree's BVH), and
 one scene of the model built once, each hypothesis moving the rays into the model's frame (a
 ray tracer's best case). The fastest of three batches of 16 counts. The ratio is the faster
-Embree's time over rangesynth's: above 1, rangesynth is ahead.
+Embree's time over rangesynth's: above 1, rangesynth is ahead. Embree casts in f32, rangesynth's
+exact mode in f64; Embree's time includes making its numpy ray arrays, rangesynth's the GPU's
+render (label and depth modes) and the scores.
 
 Run from the repository root: `python3 tools/bench_embree.py`. It makes a virtual environment,
 target/embree-venv, with Open3D's CPU wheel and numpy, and reruns itself there.
@@ -37,7 +39,8 @@ def in_venv():
     python = VENV / "bin" / "python"
     if not python.exists():
         subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "numpy", "open3d-cpu"], check=True)
+    if subprocess.run([str(python), "-c", "import numpy, open3d"], capture_output=True).returncode != 0:
+        subprocess.run([str(python), "-m", "pip", "install", "-q", "numpy", "open3d-cpu"], check=True)
     os.execv(str(python), [str(python), __file__, "--in-venv"])
 
 

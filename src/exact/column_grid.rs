@@ -10,22 +10,24 @@
 //! move with the pose): building it is one pass to count and one to fill, with no sorting.
 //! It has about as many cells as triangles. Where large triangles would list themselves in
 //! more than [`ENTRIES_PER_TRIANGLE`] cells each on average, the grid is made coarser until
-//! they do not, which bounds its memory.
+//! they do not, which bounds its memory: each time along the axis the triangles span more
+//! cells of, so that long thin triangles lying along one axis keep the other axis fine.
 
 use glam::DVec2;
 
 /// The most cell entries the grid holds per triangle, on average.
 pub const ENTRIES_PER_TRIANGLE: u64 = 8;
 
-/// Bytes the grid takes per triangle at most: its bounds, a cell's start and its entries.
-pub const BYTES_PER_TRIANGLE: u64 = 32 + 4 + 4 * ENTRIES_PER_TRIANGLE;
+/// Bytes the grid takes per triangle at most: its bounds, its cells' starts (at most two cells
+/// a triangle, as `cells_for` rounds) and its entries.
+pub const BYTES_PER_TRIANGLE: u64 = 32 + 2 * 8 + 4 * ENTRIES_PER_TRIANGLE;
 
 pub(super) struct ColumnGrid {
     /// Each triangle's xy bounds: min x, min y, max x, max y.
     bounds: Vec<[f64; 4]>,
     cells: Cells,
     /// Where each cell's entries start in `entries`, and where the last ends.
-    starts: Vec<u32>,
+    starts: Vec<usize>,
     /// Triangle indices, cell by cell, each cell's in ascending order.
     entries: Vec<u32>,
 }
@@ -55,14 +57,21 @@ impl Cells {
         ((c0, c1), (r0, r1))
     }
 
-    fn entries_of(&self, b: &[f64; 4]) -> u64 {
-        let ((c0, c1), (r0, r1)) = self.reached(b);
-        (c1 - c0 + 1) as u64 * (r1 - r0 + 1) as u64
+    /// The entries the bounds take in this grid, and the columns and the rows they span.
+    fn entries_of(&self, bounds: &[[f64; 4]]) -> (u64, u64, u64) {
+        bounds.iter().fold((0, 0, 0), |(entries, columns, rows), b| {
+            let ((c0, c1), (r0, r1)) = self.reached(b);
+            let (across, down) = ((c1 - c0 + 1) as u64, (r1 - r0 + 1) as u64);
+            (entries + across * down, columns + across, rows + down)
+        })
     }
 
-    /// This grid with half the columns and rows (at least one each).
-    fn coarser(self) -> Self {
-        let (columns, rows) = (self.columns.div_ceil(2), self.rows.div_ceil(2));
+    /// This grid with half the columns (`along_x`) or half the rows, at least one; the other
+    /// axis as it is, unless it has one cell already.
+    fn coarser(self, along_x: bool) -> Self {
+        let along_x = (along_x && self.columns > 1) || self.rows == 1;
+        let (columns, rows) =
+            if along_x { (self.columns.div_ceil(2), self.rows) } else { (self.columns, self.rows.div_ceil(2)) };
         let per_unit = DVec2::new(
             self.per_unit.x * columns as f64 / self.columns as f64,
             self.per_unit.y * rows as f64 / self.rows as f64,
@@ -82,11 +91,16 @@ impl ColumnGrid {
             .collect();
         let mut cells = Self::cells_for(&bounds);
         let limit = ENTRIES_PER_TRIANGLE * bounds.len() as u64;
-        while cells.columns * cells.rows > 1 && bounds.iter().map(|b| cells.entries_of(b)).sum::<u64>() > limit {
-            cells = cells.coarser();
+        while cells.columns * cells.rows > 1 {
+            let (entries, columns, rows) = cells.entries_of(&bounds);
+            if entries <= limit {
+                break;
+            }
+            // Halve the axis the triangles span more cells of: there halving saves the most.
+            cells = cells.coarser(columns >= rows);
         }
         // Each cell's count at its index + 1, then their running sum: where each cell starts.
-        let mut starts = vec![0u32; cells.columns * cells.rows + 1];
+        let mut starts = vec![0usize; cells.columns * cells.rows + 1];
         for b in &bounds {
             let ((c0, c1), (r0, r1)) = cells.reached(b);
             for row in r0..=r1 {
@@ -98,13 +112,13 @@ impl ColumnGrid {
         for i in 1..starts.len() {
             starts[i] += starts[i - 1];
         }
-        let mut entries = vec![0u32; starts[starts.len() - 1] as usize];
+        let mut entries = vec![0u32; starts[starts.len() - 1]];
         // Filling a cell moves its start on to its end, the next cell's start; moved back after.
         for (index, b) in (0..).zip(&bounds) {
             let ((c0, c1), (r0, r1)) = cells.reached(b);
             for row in r0..=r1 {
                 for cell in row * cells.columns + c0..=row * cells.columns + c1 {
-                    entries[starts[cell] as usize] = index;
+                    entries[starts[cell]] = index;
                     starts[cell] += 1;
                 }
             }
@@ -146,7 +160,7 @@ impl ColumnGrid {
     pub fn candidates(&self, p: DVec2) -> impl Iterator<Item = u32> + '_ {
         let (column, row) = self.cells.of(p.x, p.y);
         let cell = row * self.cells.columns + column;
-        self.entries[self.starts[cell] as usize..self.starts[cell + 1] as usize].iter().copied().filter(move |&i| {
+        self.entries[self.starts[cell]..self.starts[cell + 1]].iter().copied().filter(move |&i| {
             let b = &self.bounds[i as usize];
             b[0] <= p.x && p.x <= b[2] && b[1] <= p.y && p.y <= b[3]
         })
@@ -179,20 +193,50 @@ mod tests {
 
     /// The candidates are the triangles whose closed bounds hold the point, for points on
     /// every lattice node (bound edges and corners included) and off the union: small
-    /// triangles, large ones that coarsen the grid, and flat ones (a zero-width union).
+    /// triangles, large ones that coarsen the grid, a union that is one point, and lattices
+    /// moved off the origin (so that a cell index rounds `x − origin`).
     #[test]
     fn candidates_are_the_triangles_whose_bounds_hold_the_point() {
-        for (seed, count, spread) in [(1, 200, 1.0), (2, 5000, 1.0), (3, 3, 1.0), (4, 40, 0.0)] {
-            let triangles = lattice_triangles(seed, count, spread);
+        let cases =
+            [(1, 200, 1.0, 0.0), (2, 5000, 1.0, -0.3), (3, 3, 1.0, 1e6), (4, 40, 0.0, 0.0), (5, 300, 1.0, 2.5e5)];
+        for (seed, count, spread, offset) in cases {
+            let triangles: Vec<[DVec2; 3]> =
+                lattice_triangles(seed, count, spread).into_iter().map(|t| t.map(|c| c + offset)).collect();
             let grid = ColumnGrid::new(triangles.iter().copied());
             for i in -2..=19 {
                 for j in -2..=19 {
-                    let p = DVec2::new(i as f64 / 16.0, j as f64 / 16.0) * spread.max(1.0);
+                    let p = DVec2::new(i as f64 / 16.0, j as f64 / 16.0) * spread.max(1.0) + offset;
                     assert_eq!(grid.candidates(p).collect::<Vec<_>>(), brute_force(&grid.bounds, p), "{p}");
                 }
             }
             assert!(grid.entries.len() as u64 <= ENTRIES_PER_TRIANGLE * count as u64);
         }
+    }
+
+    /// Triangles flat in y (a union of zero height), and long thin triangles along x: the grid
+    /// coarsens along x, keeping its rows, until its entries fit the bound.
+    #[test]
+    fn triangles_long_in_x_coarsen_the_columns() {
+        let flat: Vec<[DVec2; 3]> = (0..100)
+            .map(|k| [DVec2::new(k as f64, 0.0), DVec2::new(k as f64 + 1.0, 0.0), DVec2::new(k as f64 + 0.5, 0.0)])
+            .collect();
+        let grid = ColumnGrid::new(flat.iter().copied());
+        assert_eq!(grid.cells.rows, 1);
+        for p in [DVec2::new(3.0, 0.0), DVec2::new(3.5, 0.0), DVec2::new(3.5, 1e-9)] {
+            assert_eq!(grid.candidates(p).collect::<Vec<_>>(), brute_force(&grid.bounds, p), "{p}");
+        }
+        let long: Vec<[DVec2; 3]> = (0..400)
+            .map(|k| {
+                let y = k as f64 / 400.0;
+                [DVec2::new(0.0, y), DVec2::new(1.0, y), DVec2::new(1.0, y + 0.001)]
+            })
+            .collect();
+        let grid = ColumnGrid::new(long.iter().copied());
+        assert!(grid.cells.columns < grid.cells.rows, "{}×{}", grid.cells.columns, grid.cells.rows);
+        assert!(grid.entries.len() as u64 <= ENTRIES_PER_TRIANGLE * 400);
+        let p = DVec2::new(0.5, 0.2);
+        assert_eq!(grid.candidates(p).collect::<Vec<_>>(), brute_force(&grid.bounds, p));
+        assert!(grid.candidates(p).count() <= 3);
     }
 
     /// Triangles spanning the whole union each reach every cell of a fine grid; the grid
@@ -208,7 +252,8 @@ mod tests {
     }
 
     /// NaN and infinite corners do not panic, and the candidates are still those whose bounds
-    /// hold the point (a NaN corner drops out of its bounds, as glam's min and max drop it).
+    /// hold the point (whatever glam's min and max make of a NaN corner: the exact test after
+    /// rejects the triangle).
     #[test]
     fn non_finite_corners_are_binned_by_their_bounds() {
         let triangles =

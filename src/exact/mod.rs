@@ -205,8 +205,12 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
         || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY)),
         || VerticalCaster::new(posed_triangles(objects, to_camera)),
     );
-    let scale = range.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
-    if !scale.is_finite() {
+    let largest = |caster: &VerticalCaster| {
+        caster.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()))
+    };
+    // The camera's frame too: turning corners near f64's largest values can take them beyond.
+    let scale = largest(&range);
+    if !(scale.is_finite() && largest(&camera).is_finite()) {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
     }
     let tie = TIE_RELATIVE * scale;
