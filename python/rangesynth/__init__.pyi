@@ -70,6 +70,11 @@ class Verifier:
         progress: Optional[Callable[[int], None]] = None,
     ) -> Dict[str, np.ndarray]:
         """As verify(), calling progress(poses done) after each chunk."""
+    @property
+    def device_name(self) -> str: ...
+    @property
+    def validation_enabled(self) -> bool:
+        """Whether Vulkan validation is on (RANGESYNTH_VALIDATION=1 where it was made)."""
 
 def render_scene(path: _Path, raster: Optional[str] = None) -> Dict[str, Any]:
     """A scene file's "xyz" (H, W, 3) float32 (NaN where nothing was measured), "label"
