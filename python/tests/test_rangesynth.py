@@ -180,10 +180,29 @@ def command_line():
     return path
 
 
-def test_render_and_verify_equal_the_command_lines_bit_for_bit(tmp_path):
+def rendered_by_command_line(tmp_path):
+    """The box scene at θ = 30° with depth-mode shadows, and the directory the command line's
+    `render` wrote it to."""
     scene = scene_file(tmp_path, theta_deg=30.0, mode="depth")
     out = tmp_path / "out"
     subprocess.run([command_line(), "render", str(scene), "--out", str(out)], check=True, capture_output=True)
+    return scene, out
+
+
+def hypotheses_file(tmp_path, many, label, **keys):
+    """A hypotheses file of the box at each of `many` poses, ids h0, h1, …, its label bound to
+    the box's surface; `keys` are the file's other top-level keys."""
+    hypotheses = [
+        {"id": f"h{i}", "model": "builtin:box", "pose": p.tolist(), "bindings": [[label, label]]}
+        for i, p in enumerate(many)
+    ]
+    file = tmp_path / "hypotheses.json"
+    file.write_text(json.dumps({**keys, "hypotheses": hypotheses}))
+    return file
+
+
+def test_render_and_verify_equal_the_command_lines_bit_for_bit(tmp_path):
+    scene, out = rendered_by_command_line(tmp_path)
     exr = rangesynth.read_range_image(out / "range.exr")
     ours = rangesynth.render_scene(scene)
     for key in ["xyz", "label", "reason", "witness"]:
@@ -192,12 +211,7 @@ def test_render_and_verify_equal_the_command_lines_bit_for_bit(tmp_path):
     assert exr["sensor"]["theta_deg"] == 30.0
     label = int(exr["label"].max())
     many = poses(*np.linspace(-0.4, 0.4, 9))
-    hypotheses = [
-        {"id": f"h{i}", "model": "builtin:box", "pose": p.tolist(), "bindings": [[label, label]]}
-        for i, p in enumerate(many)
-    ]
-    file = tmp_path / "hypotheses.json"
-    file.write_text(json.dumps({"tolerance": 0.05, "hypotheses": hypotheses}))
+    file = hypotheses_file(tmp_path, many, label, tolerance=0.05)
     scores = tmp_path / "scores.jsonl"
     command = [command_line(), "verify", str(file), "--scene", str(out / "range.exr"), "--out", str(scores)]
     subprocess.run(command, check=True, capture_output=True)

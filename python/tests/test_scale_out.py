@@ -15,7 +15,7 @@ import pytest
 import ray
 
 import rangesynth
-from test_rangesynth import command_line, poses, scene_file
+from test_rangesynth import command_line, hypotheses_file, poses, rendered_by_command_line
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ray_verify.py"
 
@@ -28,21 +28,13 @@ def load_example():
 
 
 def sensed_exr(tmp_path):
-    out = tmp_path / "out"
-    subprocess.run([command_line(), "render", str(scene_file(tmp_path, theta_deg=30.0, mode="depth")), "--out", str(out)],
-                   check=True, capture_output=True)
-    return out / "range.exr"
+    return rendered_by_command_line(tmp_path)[1] / "range.exr"
 
 
 def test_shards_concatenated_are_the_unsharded_output_and_the_ray_examples_ranges(tmp_path):
     exr = sensed_exr(tmp_path)
     label = int(rangesynth.read_range_image(exr)["label"].max())
-    hypotheses = [
-        {"id": f"h{i}", "model": "builtin:box", "pose": p.tolist(), "bindings": [[label, label]]}
-        for i, p in enumerate(poses(*np.linspace(-0.4, 0.4, 11)))
-    ]
-    file = tmp_path / "hypotheses.json"
-    file.write_text(json.dumps({"hypotheses": hypotheses}))
+    file = hypotheses_file(tmp_path, poses(*np.linspace(-0.4, 0.4, 11)), label)
 
     def run(name, *extra):
         out = tmp_path / name
