@@ -33,14 +33,15 @@ pub struct RenderOutput {
     /// Row-major: bit k set where witness k (the sensor's, in file order) does not see the
     /// point; 0 on valid pixels and where no surface was hit.
     pub witness: Vec<u32>,
-    /// The passes recorded, in order, with their GPU times; in mode `exact`, first the CPU's
-    /// ray casting, timed on the wall clock.
+    /// The passes recorded, in order, with their GPU times; in mode `exact` and under a rig
+    /// cast on the CPU, first the CPU's ray casting, timed on the wall clock.
     pub timings: Vec<PassTime>,
 }
 
 /// One recorded pass and its time in milliseconds: on the GPU (`None` on a device without
 /// timestamps), or for exact mode's rays on the CPU's wall clock. Names: `range`, `shadow`,
-/// `shadow mask`, `exact rays` (CPU), `exact upload`, and each effect's
+/// `shadow mask`, `exact rays` (CPU), `pinhole views` (a rig's, pinhole reference view and
+/// witnesses' label test), `cast upload` (either's image, for the effects), and each effect's
 /// [`Effect::pass_name`](crate::effects::Effect::pass_name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PassTime {

@@ -70,10 +70,25 @@ fn projector_image() -> Intrinsics {
 /// (b > x0); from column 345 the camera sees the near face, lit up to column 470 (x = 1.2 at
 /// depth 4), and beyond it the plane again, lit (the projector's shadow on that side lies
 /// under the box's far edge, which the camera does not see).
+///
+/// In every shadow mode: `exact` and `depth` cast on the CPU, `label` drawn on the GPU (whose
+/// f32 depths and points are held to 4e-7 of the depth, a few f32 roundings, where the CPU's
+/// are held to 1e-6 absolute).
 #[test]
 fn a_box_on_a_plane_casts_the_projectors_geometric_shadow() {
-    let rig = box_on_plane(vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
-    let out = render(&rig);
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::Label] {
+        let mut rig =
+            box_on_plane(vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
+        rig.shadow.mode = mode;
+        let tolerance = if mode == ShadowMode::Label { 4e-7 * 5.0 } else { 1e-6 };
+        let checked = box_shadow_row(&render(&rig), tolerance, &format!("{mode:?}"));
+        assert_eq!(checked, 640 - 5, "{mode:?}");
+    }
+}
+
+/// Checks row 240 of a render of the box on the plane against the worked shadow band, depths
+/// and points within `tolerance`; returns how many columns it checked.
+fn box_shadow_row(out: &rangesynth::RenderOutput, tolerance: f64, what: &str) -> usize {
     let plane = 1; // the plane's one surface; the box's are 2 to 7
     let row = 240;
     let mut checked = 0;
@@ -88,23 +103,24 @@ fn a_box_on_a_plane_casts_the_projectors_geometric_shadow() {
             _ => None, // within a pixel of an edge
         };
         let Some((label, reason, depth)) = expected else { continue };
-        assert_eq!(out.reason[i], reason, "column {col} (X = {x})");
-        assert_eq!(out.witness[i], u32::from(reason == Reason::Shadow), "column {col}");
+        assert_eq!(out.reason[i], reason, "{what}: column {col} (X = {x})");
+        assert_eq!(out.witness[i], u32::from(reason == Reason::Shadow), "{what}: column {col}");
         if label == plane {
-            assert_eq!(out.label_unshadowed[i], plane, "column {col}");
+            assert_eq!(out.label_unshadowed[i], plane, "{what}: column {col}");
         } else {
-            assert_ne!(out.label_unshadowed[i], plane, "column {col}: the box");
+            assert_ne!(out.label_unshadowed[i], plane, "{what}: column {col}: the box");
         }
         if !depth.is_nan() {
-            assert!((f64::from(out.z[i]) - depth).abs() < 1e-6, "column {col}: Z = {}", out.z[i]);
+            assert!((f64::from(out.z[i]) - depth).abs() < tolerance, "{what}: column {col}: Z = {}", out.z[i]);
             let [px, py, _] = out.point(i).unwrap_or([f32::NAN; 3]);
             if reason == Reason::Valid {
-                assert!((f64::from(px) - depth * x / 5.0).abs() < 1e-6 && py.abs() < 1e-6, "column {col}: X = {px}");
+                let close = (f64::from(px) - depth * x / 5.0).abs() < tolerance && f64::from(py).abs() < tolerance;
+                assert!(close, "{what}: column {col}: X = {px}, Y = {py}");
             }
         }
         checked += 1;
     }
-    assert_eq!(checked, 640 - 5);
+    checked
 }
 
 /// Witness 0 a light straight along the camera's axis, which sees the whole plane beside
@@ -150,14 +166,15 @@ fn a_point_outside_a_witnesss_field_of_view_is_lost_by_that_witness() {
     }
 }
 
-/// The pixels whose label, depth (to 1e-6 of it) or witness bits (where `witnesses_tested`,
-/// else 0) differ from the reference's, and how many of them are interior: their four
+/// The pixels whose label, depth (to `depth_tolerance` of it) or witness bits (where
+/// `witnesses_tested`, else 0) differ from the reference's, and how many of them are interior: their four
 /// neighbours in the reference all carry their label and bits, so that no surface edge or
 /// shadow edge passes by.
 fn differences(
     out: &rangesynth::RenderOutput,
     truth: &common::rig_reference::RigReference,
     witnesses_tested: bool,
+    depth_tolerance: f64,
 ) -> (usize, usize) {
     let (w, h) = (i64::from(truth.width), i64::from(truth.height));
     let interior = |i: usize| {
@@ -178,7 +195,7 @@ fn differences(
             out.label_unshadowed[i] != truth.label[i]
                 || out.witness[i] != bits
                 || (truth.label[i] != 0
-                    && (f64::from(out.z[i]) - truth.depth[i]).abs() > 1e-6 * truth.depth[i].abs().max(1.0))
+                    && (f64::from(out.z[i]) - truth.depth[i]).abs() > depth_tolerance * truth.depth[i].abs().max(1.0))
         })
         .collect();
     let interior_wrong = wrong.iter().filter(|&&i| interior(i)).count();
@@ -208,7 +225,7 @@ fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
         ("builtin:cylinder:16", tilt(DVec3::new(0.45, 0.25, 1.5), 0.0), 0.2),
     ];
     let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
-    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None] {
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None, ShadowMode::Label] {
         let mut rig = scene(sensor.clone(), mode, &posed);
         for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
             object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
@@ -217,13 +234,86 @@ fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
         let truth = rig_reference(&rig);
         let tested = mode != ShadowMode::None;
         assert!(out.shadow_pass == tested, "{mode:?}: the witnesses were tested");
-        let (wrong, wrong_interior) = differences(&out, &truth, tested);
+        let (wrong, wrong_interior) = differences(&out, &truth, tested, 1e-6);
         let lost = if tested { truth.witness.iter().filter(|&&bits| bits != 0).count() } else { 0 };
         eprintln!("{mode:?}: {wrong} pixels differ from the reference, {wrong_interior} interior; {lost} lost");
         assert_eq!(wrong_interior, 0, "{mode:?}: {wrong} pixels differ, {wrong_interior} interior");
         if tested {
             assert!(lost > 200, "the rig loses pixels to its witnesses: {lost}");
         }
+    }
+}
+
+/// The GPU draws a pinhole view between its `near` and `far` (depth along the optical axis)
+/// as the brute-force reference casts it: a plane tilted 57° to the axis, crossing depths
+/// from about 1.6 to 4.4 over the image, and a ball on it which the near plane cuts open, so
+/// that its inside is seen; with near = 2.5 and far = 3.5 a band of rows is kept. No interior
+/// pixel differs in label or depth (to 4e-7 of it). In mode `label`, a projector beside the
+/// camera and above it: the plane's witness bits are the reference's too; the ball's inside is not tested,
+/// as the label test cannot see a surface shadow itself (the projector sees the ball's outside,
+/// of the same label, in front of its inside).
+#[test]
+fn a_pinhole_view_draws_what_lies_between_its_near_and_far() {
+    let k = Intrinsics { width: 64, height: 48, fx: 40.0, fy: 40.0, cx: 31.5, cy: 23.5 };
+    let witnesses = vec![projector("projector", DVec3::new(0.6, 0.6, 0.0), Intrinsics { width: 96, cx: 47.5, ..k })];
+    let sensor = Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 2.5, far: 3.5 }), witnesses };
+    let tilted = facing_camera(DVec3::new(0.0, 0.0, 3.0)) * DMat4::from_rotation_x(1.0);
+    for mode in [ShadowMode::None, ShadowMode::Label] {
+        let rig = scene(sensor.clone(), mode, &[("builtin:plane:20", tilted), ("builtin:sphere:24", tilted)]);
+        let out = render(&rig);
+        let truth = rig_reference(&rig);
+        // Labels and depths alone here: the witness bits are checked below.
+        let mut unbitten = out.clone();
+        unbitten.witness.fill(0);
+        let (wrong, interior) = differences(&unbitten, &truth, false, 4e-7);
+        let drawn = truth.label.iter().filter(|&&l| l != 0).count();
+        assert!(drawn > 500 && drawn < 64 * 40, "{mode:?}: the band is cut by near and far: {drawn} pixels");
+        assert!(truth.label.iter().filter(|&&l| l == 2).count() > 100, "the ball's inside is seen");
+        assert_eq!(interior, 0, "{mode:?}: {wrong} pixels differ, {interior} interior");
+        if mode == ShadowMode::Label {
+            let plane = |i: usize| truth.label[i] == 1;
+            let lost = (0..truth.label.len()).filter(|&i| plane(i) && truth.witness[i] != 0).count();
+            assert!(lost > 10, "the ball shadows the plane: {lost} pixels");
+            let bits_wrong: Vec<usize> = (0..truth.label.len())
+                .filter(|&i| plane(i) && out.witness[i] != truth.witness[i])
+                .filter(|&i| {
+                    let (c, r) = (i % 64, i / 64);
+                    let near = |j: usize| truth.label[j] != 1 || truth.witness[j] != truth.witness[i];
+                    !(c == 0
+                        || r == 0
+                        || c == 63
+                        || r == 47
+                        || near(i - 1)
+                        || near(i + 1)
+                        || near(i - 64)
+                        || near(i + 64))
+                })
+                .collect();
+            assert!(bits_wrong.is_empty(), "interior plane pixels with other witness bits: {bits_wrong:?}");
+        }
+    }
+}
+
+/// Coincident faces of two objects go to the lower label in a pinhole view too: a plane, and
+/// the same plane turned about its normal (other triangles, other roundings), drawn in either
+/// order, show label 1 at every pixel, as the reference's tie rule has it.
+#[test]
+fn coincident_faces_in_a_pinhole_view_go_to_the_lower_label() {
+    let plane = facing_camera(DVec3::new(0.1, -0.2, 5.0));
+    let turned = plane * DMat4::from_rotation_z(0.3);
+    for objects in [[plane, turned], [turned, plane]] {
+        let rig = scene(
+            Sensor { reference: reference(), witnesses: vec![] },
+            ShadowMode::None,
+            &[("builtin:plane:20", objects[0]), ("builtin:plane:20", objects[1])],
+        );
+        let out = render(&rig);
+        let truth = rig_reference(&rig);
+        // (f64 rays that meet a plane on its triangles' shared diagonal can miss it.)
+        let first = truth.label.iter().filter(|&&l| l == 1).count();
+        assert!(first > truth.label.len() * 999 / 1000, "the reference sees the first plane: {first} pixels");
+        let higher = out.label_unshadowed.iter().filter(|&&l| l != 1).count();
+        assert_eq!(higher, 0, "{higher} pixels show another label than the lower");
     }
 }
 
@@ -276,13 +366,28 @@ fn bad_rigs_are_refused_with_the_key_named() {
     }
 }
 
-/// The GPU shadow modes and the effects render the paper's scanner alone so far, and say so.
+/// Mode `label` reads pinhole witnesses' label images at a pinhole reference view's points:
+/// a directional witness, an orthographic reference view other than the scanner's, and the
+/// compute rasterizer, which draws orthographic views alone, are refused by name.
 #[test]
-fn what_renders_the_scanner_alone_refuses_other_rigs_by_name() {
-    let mut rig = box_on_plane(vec![]);
+fn what_the_label_test_cannot_read_is_refused_by_name() {
+    let light =
+        Witness { name: "light".into(), geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::NEG_Z)) };
+    let mut rig = box_on_plane(vec![light.clone()]);
     rig.shadow.mode = ShadowMode::Label;
     let e = common::renderer().render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("[shadow] mode = \"label\"") && e.contains("pinhole reference view"), "{e}");
+    assert!(e.contains("[[sensor.witness]] 1 (\"light\")") && e.contains("[shadow] mode = \"label\""), "{e}");
+    let view = rangesynth::sensor::Orthographic { width: 64, height: 48, pitch: [0.05, 0.05], origin: [-1.575, 1.175] };
+    rig.sensor = Sensor { reference: View::Orthographic(view), witnesses: vec![light] };
+    let e = common::renderer().render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("[shadow] mode = \"label\"") && e.contains("orthographic reference view"), "{e}");
+    let mut rig = box_on_plane(vec![]);
+    rig.shadow.mode = ShadowMode::Label;
+    let compute = rangesynth::Renderer::with_context(common::renderer().context().clone())
+        .unwrap()
+        .with_raster(rangesynth::render::Raster::Compute);
+    let e = compute.render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("compute rasterizer") && e.contains("--raster graphics"), "{e}");
 }
 
 /// Every example rig in rigs/ renders from the command line, and its range image records the
@@ -542,7 +647,7 @@ fn an_orthographic_view_with_pinhole_and_directional_witnesses_matches_the_refer
     );
     let out = render(&rig);
     let truth = rig_reference(&rig);
-    let (wrong, interior_wrong) = differences(&out, &truth, true);
+    let (wrong, interior_wrong) = differences(&out, &truth, true, 1e-6);
     assert_eq!(interior_wrong, 0, "{wrong} pixels differ, {interior_wrong} interior");
     let lost_by = |bit: u32| truth.witness.iter().filter(|&&b| b & bit != 0).count();
     assert!(lost_by(1) > 50 && lost_by(2) > 50, "both witnesses lose pixels: {} and {}", lost_by(1), lost_by(2));
@@ -580,12 +685,12 @@ fn rig_settings(mode: ShadowMode) -> VerifySettings {
 /// pixels' width at the box's depth (2 · 4.5 / 500) scores less, and every count and score of
 /// every hypothesis equals the independent CPU scorer's on the rendered images (areas from
 /// the pixels' points along their rays, in units of a pixel at the farthest sensed depth;
-/// a hypothesis nearer than the sensed surface counts in N1−), in shadow modes exact, depth
-/// and none, shadowed and unshadowed.
+/// a hypothesis nearer than the sensed surface counts in N1−), in shadow modes exact, depth,
+/// none and label (the last two drawn on the GPU), shadowed and unshadowed.
 #[test]
 fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_scorer() {
     let bindings: Vec<(u32, u32)> = (1..=6).map(|l| (l, l)).collect();
-    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None] {
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::None, ShadowMode::Label] {
         let sensed_scene = scene(projector_rig(), mode, &[("builtin:box", turned_box_pose())]);
         let image = RangeImage::from(&render(&sensed_scene));
         let sensed = SensedImage::new(&image, &projector_rig()).expect("a pinhole sensed image");
@@ -626,7 +731,10 @@ fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_score
                     assert!((ours - cpu).abs() <= 1e-12 * scale, "{name}{which} score {k}: {ours} vs CPU {cpu}");
                 }
             }
-            assert_eq!(v.raster, None, "{name}: cast on the CPU");
+            // Modes `none` and `label` are drawn on the GPU, the others cast on the CPU; a
+            // hypothesis out of view is drawn by neither.
+            let drawn = matches!(mode, ShadowMode::None | ShadowMode::Label) && h.id != "behind";
+            assert_eq!(v.raster, drawn.then_some(rangesynth::render::Raster::Graphics), "{name}");
         }
         let score = |id: &str| results.iter().find(|v| v.id == id).map(|v| v.scores.s).unwrap();
         assert_eq!(score("true"), 1.0, "{mode:?}");
@@ -642,8 +750,8 @@ fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_score
 }
 
 /// A pinhole sensed image refuses what cannot be: a sensor of other intrinsics or another
-/// kind of view, a labelled pixel at depth Z ≤ 0, and shadow mode `label`, which the GPU
-/// renders for the paper's scanner alone so far.
+/// kind of view, a labelled pixel at depth Z ≤ 0, and shadow mode `label` with a directional
+/// witness, which has no label image to read.
 #[test]
 fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
     let sensed_scene = scene(projector_rig(), ShadowMode::None, &[("builtin:box", turned_box_pose())]);
@@ -657,8 +765,13 @@ fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
     other.sensor.reference =
         View::Pinhole(Pinhole { intrinsics: Intrinsics { fx: 510.0, ..camera() }, near: 0.0, far: f64::INFINITY });
     assert!(refused(&other).is_some_and(|e| e.contains("intrinsics")), "{:?}", refused(&other));
-    let label = rig_settings(ShadowMode::Label);
-    assert!(refused(&label).is_some_and(|e| e.contains("[shadow] mode = \"label\"")), "{:?}", refused(&label));
+    let mut label = rig_settings(ShadowMode::Label);
+    label
+        .sensor
+        .witnesses
+        .push(Witness { name: "sun".into(), geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::NEG_Z)) });
+    let e = refused(&label).unwrap_or_default();
+    assert!(e.contains("[[sensor.witness]] 2 (\"sun\")") && e.contains("mode = \"label\""), "{e}");
     let scanner =
         rangesynth::sensor::Scanner { width: 640, height: 480, pitch: [0.01; 2], origin: [0.0; 2], theta_deg: 0.0 };
     let ortho = VerifySettings { sensor: scanner.into(), ..rig_settings(ShadowMode::None) };

@@ -86,9 +86,9 @@ vec2 depth_step(DrawData d, vec3 n) {
 // slope has no bound, would otherwise tie with, and so win through, any surface in front of
 // it (a NaN slope, of a face seen exactly edge-on, counts as the cap). Coincident faces
 // steeper than that may go to the higher label where a GPU's depths come from snapped corners.
+const float TIE_SLOPE = 1.0 / 128.0;
+const float TIE_STEEPEST = 57.29;
 float tie_depth(DrawData d, vec2 step) {
-    const float TIE_SLOPE = 1.0 / 128.0;
-    const float TIE_STEEPEST = 57.29;
     float span = d.z_range.y - d.z_range.x;
     vec2 far_corner = d.grid.xy + vec2(1.0, -1.0) * (d.size - 1.0) * d.grid.zw;
     vec2 xy = max(abs(d.grid.xy), abs(far_corner));
@@ -183,4 +183,56 @@ RangePixel range_pixel_of(DrawData d, vec3 corner, vec3 normal, uint label, vec2
 // resolve reads it from the word; for several draws the resolve works it out here.
 RangePixel range_pixel(DrawData d, uint t, vec2 pixel) {
     return range_pixel_of(d, mesh_corner(d, t, 0u), mesh_normal(d, t), triangle_label(d, t), pixel);
+}
+
+// A pinhole view (src/render/pinhole/): DrawData.grid holds fx, fy, cx, cy of the image it
+// draws (cy counted from the top of its band of the attachment: pinhole/bands.rs), and
+// z_range two constants of its depth, s and s / far, so that a point at depth Z (along the
+// optical axis; x right, y down, z forward) has depth s / Z − s / far: 1 at the near plane
+// Z = s, 0 at Z = far, larger nearer (its pipelines keep the greater depth). A triangle's
+// 1 / Z is affine over its image, so the rasterizer's interpolation of depth is exact; w = Z
+// has the clipper cut what lies nearer than s or beyond far.
+vec4 pinhole_clip_position(DrawData d, vec3 v) {
+    precise vec2 xy = (d.grid.xy * v.xy + (d.grid.zw + 0.5 - d.viewport_centre) * v.z) * d.viewport_inverse_half_side;
+    precise float depth = d.z_range.x - d.z_range.y * v.z;
+    return vec4(xy, depth, v.z);
+}
+
+// The ray through the centre of pixel (c, r), given as floats, scaled so that its z is 1:
+// the point at depth Z along it is Z times the ray.
+vec3 pinhole_ray(DrawData d, vec2 pixel) {
+    precise vec2 xy = (pixel - d.grid.zw) / d.grid.xy;
+    return vec3(xy, 1.0);
+}
+
+// What a pinhole view holds at pixel (c, r), given as floats, that triangle t of draw d
+// covers: its label, the depth Z where the pixel's ray meets the triangle's plane (n · p =
+// n · a), and the gradient (∂Z/∂X, ∂Z/∂Y) of the plane in the view's frame, as exact ray
+// casting stores them (src/exact/rig.rs): ±1e30 at most, 0 where indeterminate.
+RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
+    vec3 n = triangle_normal(d, t);
+    vec3 a = triangle_corner(d, t, 0u);
+    vec3 ray = pinhole_ray(d, pixel);
+    precise float z = (n.x * a.x + n.y * a.y + n.z * a.z) / (n.x * ray.x + n.y * ray.y + n.z * ray.z);
+    vec2 gradient = clamp(plane_gradient(n), vec2(-1e30), vec2(1e30));
+    gradient = mix(gradient, vec2(0.0), isnan(gradient));
+    return RangePixel(triangle_label(d, t), z, gradient);
+}
+
+// tie_depth's allowance for a pinhole view, at a fragment of depth `depth` of triangle t
+// through pixel (c, r): the same two roundings, relative to the depth s / Z, which moves by
+// δZ / Z of itself. Poses round by TIE_RELATIVE of the view's largest coordinate, Z times the
+// ray's largest component (or Z itself); a snapped corner moves the plane's 1 / Z by its
+// change over 1/256 pixel, n_x / (f_x · n · ray) of itself a column (TIE_SLOPE, capped at a
+// face 89° from the ray: TIE_STEEPEST / f).
+float pinhole_tie_depth(DrawData d, uint t, vec2 pixel, float depth) {
+    vec3 n = triangle_normal(d, t);
+    vec3 ray = pinhole_ray(d, pixel);
+    float across = abs(n.x * ray.x + n.y * ray.y + n.z * ray.z);
+    vec2 steepest = TIE_STEEPEST / d.grid.xy;
+    vec2 slope = abs(n.xy) / (d.grid.xy * across);
+    slope = mix(steepest, slope, lessThan(slope, steepest));
+    float largest = max(1.0, max(abs(ray.x), abs(ray.y)));
+    precise float tie = depth * (TIE_RELATIVE * largest + TIE_SLOPE * (slope.x + slope.y));
+    return tie;
 }

@@ -156,7 +156,10 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     println!("device: {}", renderer.context().device_name());
     match (scene.shadow.mode, renderer.raster()) {
         (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
-        _ if s.scanner().is_none() => println!("raster: none (this rig's rays are cast on the CPU)"),
+        _ if s.scanner().is_none() && out.raster.is_none() => {
+            println!("raster: none (this rig's rays are cast on the CPU)")
+        }
+        _ if s.scanner().is_none() => println!("raster: graphics (a rig's pinhole views)"),
         (_, Raster::Auto) => println!(
             "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
             out.raster.map_or("none", Raster::as_str),

@@ -33,7 +33,7 @@ pub use crate::shader_contract::TIE_RELATIVE;
 
 /// n · d_cam (unit normal) at or below which a surface counts as turned away from the camera:
 /// one seen exactly edge-on, up to the rounding of its posed corners, is not measured.
-const FACING_TOLERANCE: f64 = 1e-9;
+pub(crate) const FACING_TOLERANCE: f64 = 1e-9;
 
 /// Bytes a caster takes per triangle: corners and label, and a hierarchy over their bounds
 /// (src/exact/ray_caster.rs) or a grid (src/exact/column_grid.rs), whichever is larger.

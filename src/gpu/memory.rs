@@ -236,6 +236,35 @@ impl Image {
     pub fn extent(&self) -> vk::Extent2D {
         self.desc.extent
     }
+
+    /// Records a copy of the image's top-left `width`×`height` pixels into `buffer` from byte
+    /// `offset`, row after row. The image must be in TRANSFER_SRC layout and the buffer hold
+    /// them.
+    pub fn record_copy_to_buffer(
+        &self,
+        cmd: vk::CommandBuffer,
+        buffer: &Buffer,
+        offset: u64,
+        (width, height): (u32, u32),
+    ) {
+        let region = [vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width, height, depth: 1 })];
+        // SAFETY: cmd is recording; the caller's barrier put the image in TRANSFER_SRC layout
+        // and the region lies inside both.
+        unsafe {
+            self.ctx.device.cmd_copy_image_to_buffer(
+                cmd,
+                self.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                &region,
+            )
+        };
+    }
 }
 
 impl Drop for Image {

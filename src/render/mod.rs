@@ -11,6 +11,7 @@ mod gpu_mesh;
 mod memory;
 mod mesh_cache;
 mod passes;
+pub(crate) mod pinhole;
 mod pipelines;
 mod plan;
 mod raster;
@@ -310,11 +311,12 @@ impl Renderer {
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
-        self.render_views(scene, Some(&scanner), &views, &draws, compute)
+        self.render_views(scene, Some(&scanner), &views, &draws, compute, None)
     }
 
-    /// Renders the planned views, with the compute rasterizer where `compute`; a rig other than
-    /// the paper's scanner (`scanner` `None`) is cast on the CPU and takes its effect passes.
+    /// Renders the planned views, with the compute rasterizer where `compute`; or, where `cast`
+    /// holds an image made otherwise (rays cast on the CPU, a rig's pinhole views), takes its
+    /// effect passes over it.
     fn render_views(
         &self,
         scene: &Scene,
@@ -322,28 +324,20 @@ impl Renderer {
         views: &Views,
         draws: &[Draw],
         compute: bool,
+        cast: Option<Cast>,
     ) -> Result<RenderOutput> {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
-        // Shadow mode `exact`, and any rig but the scanner: rays cast on the CPU, timed on the
-        // wall clock.
-        let started = Instant::now();
-        let exact_image = match (scanner, scene.shadow.mode) {
-            (None, _) => Some(render_rig_exact(scene)?),
-            (Some(_), ShadowMode::Exact) => Some(render_scene_exact(scene)?),
-            (Some(_), _) => None,
+        // Shadow mode `exact`: rays cast on the CPU, timed on the wall clock.
+        let cast = match (cast, scene.shadow.mode) {
+            (Some(cast), _) => Some(cast),
+            (None, ShadowMode::Exact) => Some(Cast::timed("exact rays", || render_scene_exact(scene))?),
+            (None, _) => None,
         };
-        let host_view = exact_image
-            .as_ref()
-            .map(|image| HostView::new(ctx, image, views.origin.z, "exact range view"))
-            .transpose()?;
-        let cast_witness = exact_image.map(|image| image.witness);
-        let cpu_time = host_view.as_ref().map(|_| PassTime {
-            name: "exact rays",
-            ms: Some(started.elapsed().as_secs_f64() * 1e3),
-            on_cpu: true,
-        });
+        let host_view =
+            cast.as_ref().map(|cast| HostView::new(ctx, &cast.image, views.origin.z, "cast range view")).transpose()?;
+        let (cast_witness, cast_time) = cast.map(|cast| (cast.image.witness, cast.time)).unzip();
         let job = Job {
             draws,
             first_draw_index: 0,
@@ -434,7 +428,7 @@ impl Renderer {
                 *label = 0;
             }
         }
-        let timings = cpu_time.into_iter().chain(clock.times()?).collect();
+        let timings = cast_time.into_iter().chain(clock.times()?).collect();
         // Where rays were cast, their witness bits; else the scanner's one witness, its camera:
         // bit 0 where it could not see the point.
         let witness = cast_witness.unwrap_or_else(|| reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect());
@@ -453,16 +447,15 @@ impl Renderer {
         })
     }
 
-    /// Renders a rig other than the paper's scanner: by exact ray casting on the CPU to the
-    /// reference view and every witness (src/exact/rig.rs) in shadow modes `exact` and `depth`,
-    /// to the reference view alone in mode `none`; its effects, where it names any, run as GPU
-    /// passes over the cast image. Mode `label`, which reads the witnesses' label images, is
-    /// the GPU's, which renders the scanner alone so far: other rigs are refused by name.
+    /// Renders a rig other than the paper's scanner: on the GPU, a pinhole reference view in
+    /// shadow modes `none` and `label` (pinhole/); on the CPU by exact ray casting
+    /// (src/exact/rig.rs), any other, to the reference view and every witness in modes `exact`
+    /// and `depth`, to the reference view alone in mode `none`. Its effects, where it names
+    /// any, run as GPU passes over the image. Mode `label` on a rig whose label images the GPU
+    /// cannot draw is refused by name (`pinhole::draws_rig`).
     fn render_rig(&self, scene: &Scene) -> Result<RenderOutput> {
         let sensor = &scene.sensor;
-        if scene.shadow.mode == ShadowMode::Label {
-            sensor.require_scanner("[shadow] mode = \"label\"")?;
-        }
+        let on_gpu = pinhole::draws_rig(sensor, scene.shadow.mode)?;
         let (width, height) = (sensor.width(), sensor.height());
         let triangles: u64 = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).sum();
         let pixels = u64::from(width) * u64::from(height);
@@ -472,33 +465,51 @@ impl Renderer {
             self.check_pixel_buffers((width, height))?;
         }
         let passes_bytes = if with_effects { slot_bytes((pixels, 0), &scene.effects, None, 1) } else { 0 };
-        self.ledger.check(
-            format_args!("rendering a {width}×{height} image"),
-            memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels) + passes_bytes,
-        )?;
+        let cast_bytes = if on_gpu { 0 } else { memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels) };
+        self.ledger.check(format_args!("rendering a {width}×{height} image"), cast_bytes + passes_bytes)?;
         for (i, object) in scene.objects.iter().enumerate() {
             check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
         }
+        let cast = match on_gpu {
+            true => self.render_pinhole_rig(scene)?,
+            false => Cast::timed("exact rays", || render_rig_exact(scene))?,
+        };
+        let raster = on_gpu.then_some(Raster::Graphics);
         if with_effects {
-            return self.render_views(scene, None, &views, &[], false);
+            let output = self.render_views(scene, None, &views, &[], false, Some(cast))?;
+            return Ok(RenderOutput { raster, ..output });
         }
-        let started = Instant::now();
-        let image = render_rig_exact(scene)?;
-        let timings =
-            vec![PassTime { name: "exact rays", ms: Some(started.elapsed().as_secs_f64() * 1e3), on_cpu: true }];
-        Ok(exact_output(scene, image, timings))
+        Ok(RenderOutput { raster, ..cast_output(scene, cast) })
     }
 }
 
-/// Whether the scene's witnesses were tested on the CPU: shadow mode `exact`, and under a rig
-/// other than the paper's scanner (`scanner` `None`) mode `depth` too.
-fn casts_shadows(scene: &Scene, scanner: Option<&Scanner>) -> bool {
-    matches!((scanner, scene.shadow.mode), (_, ShadowMode::Exact) | (None, ShadowMode::Depth))
+/// A range image made otherwise than by the render passes (rays cast on the CPU, or a rig's
+/// pinhole views drawn on the GPU), with the time it took (on the CPU's wall clock, or between
+/// the GPU's timestamps).
+pub(crate) struct Cast {
+    pub image: ExactImage,
+    pub time: PassTime,
 }
 
-/// A render by exact ray casting on the CPU alone (a rig other than the paper's scanner), without
-/// effects.
-fn exact_output(scene: &Scene, image: ExactImage, timings: Vec<PassTime>) -> RenderOutput {
+impl Cast {
+    /// An image `make` casts on the CPU, timed as `name`.
+    fn timed(name: &'static str, make: impl FnOnce() -> Result<ExactImage>) -> Result<Self> {
+        let started = Instant::now();
+        let image = make()?;
+        Ok(Self { image, time: PassTime { name, ms: Some(started.elapsed().as_secs_f64() * 1e3), on_cpu: true } })
+    }
+}
+
+/// Whether the scene's witnesses were tested outside the scanner's shadow pass: on the CPU in
+/// shadow mode `exact`, and under a rig other than the paper's scanner (`scanner` `None`) in
+/// mode `depth` too, and on the GPU in mode `label` (pinhole/).
+fn casts_shadows(scene: &Scene, scanner: Option<&Scanner>) -> bool {
+    matches!((scanner, scene.shadow.mode), (_, ShadowMode::Exact) | (None, ShadowMode::Depth | ShadowMode::Label))
+}
+
+/// A render of a rig other than the paper's scanner, made without effects.
+fn cast_output(scene: &Scene, cast: Cast) -> RenderOutput {
+    let image = cast.image;
     let reason = image
         .label
         .iter()
@@ -520,6 +531,6 @@ fn exact_output(scene: &Scene, image: ExactImage, timings: Vec<PassTime>) -> Ren
         z: image.z.iter().map(|&z| z as f32).collect(),
         reason,
         witness: image.witness,
-        timings,
+        timings: vec![cast.time],
     }
 }

@@ -382,7 +382,7 @@ impl<'p> Passes<'p> {
         let views = job.views;
         if let Some(host_view) = job.host_view {
             let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
-            let mut steps = vec![host_view.step(&slot.range, shadowed).timed("exact upload")];
+            let mut steps = vec![host_view.step(&slot.range, shadowed).timed("cast upload")];
             steps.extend(self.effects_and_sink(slot, job, Some(shadowed), sink));
             return steps;
         }
@@ -534,26 +534,9 @@ impl<'p> Passes<'p> {
                 let sources = vec![(slot.range.label(), Access::TransferRead), (slot.range.z(), Access::TransferRead)];
                 let (w, h) = (views.range.width, views.range.height);
                 let copies = [(slot.range.label(), *label), (slot.range.z(), *z)];
-                let copy = move |ctx: &GpuContext, cmd| {
-                    let region = [vk::BufferImageCopy::default()
-                        .image_subresource(
-                            vk::ImageSubresourceLayers::default()
-                                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                                .layer_count(1),
-                        )
-                        .image_extent(vk::Extent3D { width: w, height: h, depth: 1 })];
+                let copy = move |_: &GpuContext, cmd| {
                     for (image, buffer) in copies {
-                        // SAFETY: the image is in TRANSFER_SRC layout (the step's barrier); the
-                        // buffer holds w·h·4 bytes.
-                        unsafe {
-                            ctx.device.cmd_copy_image_to_buffer(
-                                cmd,
-                                image.raw,
-                                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                                buffer.raw,
-                                &region,
-                            )
-                        };
+                        image.record_copy_to_buffer(cmd, buffer, 0, (w, h));
                     }
                 };
                 steps.push(Step::new(

@@ -26,6 +26,11 @@ pub struct PixelRect {
 impl PixelRect {
     /// No pixels.
     pub const EMPTY: PixelRect = PixelRect { col: 0, row: 0, width: 0, height: 0 };
+
+    /// Whether pixel (col, row) lies in the rectangle.
+    pub fn contains(&self, col: u32, row: u32) -> bool {
+        col.wrapping_sub(self.col) < self.width && row.wrapping_sub(self.row) < self.height
+    }
 }
 
 impl ViewGrid {

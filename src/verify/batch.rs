@@ -26,6 +26,7 @@ use crate::error::Result;
 use crate::exact::{render_exact, render_rig, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestamps};
 use crate::mesh::Mesh;
+use crate::render::pinhole::{draws_rig, Models};
 use crate::render::{
     draw_table, plan_views, slot_bytes, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock, PassTime,
     Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
@@ -194,16 +195,24 @@ pub(crate) fn count_batch(
         .collect();
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
     // Shadow mode `exact`, and any rig but the scanner: each hypothesis' range view cast on the
-    // CPU, to be copied in (a rig's within the hypothesis' footprint).
+    // CPU (a rig's within the hypothesis' footprint), or a pinhole rig's drawn on the GPU in
+    // a submission of its own (render/pinhole/), to be copied in.
+    let drawn_on_gpu = settings.scanner.is_none() && draws_rig(settings.sensor, settings.shadow.mode)?;
     let cast = |(item, views): (&BatchItem, &Views), footprint: &Option<PixelRect>| {
         let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
         let image = match settings.scanner {
             Some(_) => render_exact(settings.sensor, &[object])?,
+            None if drawn_on_gpu => {
+                let (draws, spheres) = ([item.draw()], [posed_sphere(item)]);
+                let models = Models { draws: &draws, spheres: &spheres, name: &|_| "its model".to_string() };
+                let footprint = footprint.unwrap_or(PixelRect::EMPTY);
+                renderer.draw_pinhole_rig(settings.sensor, &settings.shadow, models, footprint)?.image
+            }
             None => {
                 render_rig(settings.sensor, &[object], settings.shadow.mode, footprint.unwrap_or(PixelRect::EMPTY))?
             }
         };
-        HostView::new(ctx, &image, views.origin.z, "exact range view")
+        HostView::new(ctx, &image, views.origin.z, "cast range view")
     };
     let host_views: Vec<HostView> = match (settings.scanner, settings.shadow.mode) {
         (Some(_), mode) if mode != ShadowMode::Exact => Vec::new(),
@@ -434,6 +443,7 @@ pub(crate) fn count_batch(
         .iter()
         .map(|job| match job {
             Some(job) if job.host_view.is_none() => Some(if job.compute { Raster::Compute } else { Raster::Graphics }),
+            Some(_) if drawn_on_gpu => Some(Raster::Graphics),
             _ => None,
         })
         .collect();

@@ -252,8 +252,9 @@ impl Verifier {
     fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
         settings.sensor.validate()?;
         let scanner = settings.sensor.scanner();
-        if scanner.is_none() && settings.shadow.mode == ShadowMode::Label {
-            settings.sensor.require_scanner("[shadow] mode = \"label\"")?;
+        if scanner.is_none() {
+            // Refuses mode `label` on a rig whose witnesses it cannot read.
+            crate::render::pinhole::draws_rig(&settings.sensor, settings.shadow.mode)?;
         }
         settings.effects.validate()?;
         settings.effects.for_sensor(&settings.sensor)?;

@@ -59,11 +59,48 @@ const _: () = assert!(size_of::<DrawConstants>() == 128);
 /// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
 /// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
 /// objects go to the lower label whatever the order of the draws (pipelines.rs, `Depth`).
-#[derive(Default)]
 pub struct ViewPipelines {
     pub nearest: vk::Pipeline,
     pub depth_only: vk::Pipeline,
     pub ties: vk::Pipeline,
+    pub order: DepthOrder,
+}
+
+/// Which way a view's depths run: an orthographic view's grow away from it (the nearest
+/// surface has the least), a pinhole view's shrink (shaders/raster/draw.glsl,
+/// `pinhole_clip_position`), which keeps f32 depths fine far from its centre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthOrder {
+    NearestLeast,
+    NearestGreatest,
+}
+
+impl ViewPipelines {
+    /// No pipelines yet (null handles, which Vulkan's destroy ignores).
+    pub const NULL: Self = Self {
+        nearest: vk::Pipeline::null(),
+        depth_only: vk::Pipeline::null(),
+        ties: vk::Pipeline::null(),
+        order: DepthOrder::NearestLeast,
+    };
+
+    /// Destroys the pipelines; no submission may still use them.
+    pub fn destroy(&self, ctx: &GpuContext) {
+        for pipeline in [self.nearest, self.depth_only, self.ties] {
+            // SAFETY: owned handles (null ones are ignored), no longer in use.
+            unsafe { ctx.device.destroy_pipeline(pipeline, None) };
+        }
+    }
+}
+
+impl DepthOrder {
+    /// The depth nothing is drawn at: the depth buffer's clear value.
+    pub fn empty(self) -> f32 {
+        match self {
+            DepthOrder::NearestLeast => 1.0,
+            DepthOrder::NearestGreatest => 0.0,
+        }
+    }
 }
 
 /// One posed mesh in a view.
@@ -92,14 +129,30 @@ impl DrawConstants {
         let local = view_from_range.transform_point3(origin);
         let view_from_model =
             DMat4::from_translation(-local) * view_from_range * draw.pose * DMat4::from_translation(draw.mesh.origin);
-        let row = |i| view_from_model.row(i).as_vec4().to_array();
         let [x0, y0] = grid.origin;
         let viewport = ViewportFrame::new(grid, viewport_half_side);
-        Self {
-            view_from_model: [row(0), row(1), row(2)],
+        let view = ViewConstants {
             grid: [x0 - local.x, y0 - local.y, grid.pitch[0], grid.pitch[1]].map(|v| v as f32),
             size: [grid.width as f32, grid.height as f32],
             z_range: [grid.z_range.0 - local.z, grid.z_range.1 - local.z].map(|v| v as f32),
+        };
+        Self::in_view(view_from_model, view, (draw, draw_index), viewport)
+    }
+
+    /// Rounds `view_from_model` (composed in f64) to f32 and adds the view's and the draw's
+    /// constants.
+    fn in_view(
+        view_from_model: DMat4,
+        view: ViewConstants,
+        (draw, draw_index): (&Draw, u32),
+        viewport: ViewportFrame,
+    ) -> Self {
+        let row = |i| view_from_model.row(i).as_vec4().to_array();
+        Self {
+            view_from_model: [row(0), row(1), row(2)],
+            grid: view.grid,
+            size: view.size,
+            z_range: view.z_range,
             triangles: draw.mesh.triangles.address_words(),
             viewport_half_side: viewport.half_side,
             viewport_inverse_half_side: 1.0 / viewport.half_side,
@@ -109,6 +162,50 @@ impl DrawConstants {
             draw_index,
             links: draw.mesh.links.address_words(),
         }
+    }
+}
+
+/// What a view gives a draw's constants besides its pose: `DrawData`'s grid, size and z range.
+struct ViewConstants {
+    grid: [f32; 4],
+    size: [f32; 2],
+    z_range: [f32; 2],
+}
+
+/// A pinhole view as the raster shaders draw it (shaders/raster/draw.glsl,
+/// `pinhole_clip_position`): the move from the reference frame into its own, fx, fy, cx, cy
+/// with cy counted from the top of the attachments (its band's first row added), its size,
+/// and its depth constants s and s / far.
+#[derive(Debug, Clone, Copy)]
+pub struct PinholeDrawing {
+    pub view_from_reference: DMat4,
+    pub intrinsics: [f64; 4],
+    pub size: (u32, u32),
+    pub depth: [f64; 2],
+}
+
+impl PinholeDrawing {
+    /// The depth of its near plane, which the clipper cuts at: s / (1 + s / far).
+    pub fn near_plane(&self) -> f64 {
+        let [s, s_over_far] = self.depth;
+        s / (1.0 + s_over_far)
+    }
+}
+
+impl DrawConstants {
+    /// A draw's constants in a pinhole view, `viewport` the band's (rounded once to f32 from
+    /// a transform composed in f64, as [`DrawConstants::new`] does). `None` where a value
+    /// does not hold in f32 (a pose or a depth constant beyond its range).
+    pub fn pinhole(view: &PinholeDrawing, draw: &Draw, draw_index: u32, viewport: ViewportFrame) -> Option<Self> {
+        let view_from_model = view.view_from_reference * draw.pose * DMat4::from_translation(draw.mesh.origin);
+        let constants = ViewConstants {
+            grid: view.intrinsics.map(|v| v as f32),
+            size: [view.size.0 as f32, view.size.1 as f32],
+            z_range: view.depth.map(|v| v as f32),
+        };
+        let constants = Self::in_view(view_from_model, constants, (draw, draw_index), viewport);
+        let mut floats = constants.view_from_model.iter().flatten().chain(&constants.grid).chain(&constants.z_range);
+        floats.all(|v| v.is_finite()).then_some(constants)
     }
 }
 
@@ -130,12 +227,40 @@ pub struct ViewPass<'a> {
 /// Records a view pass: clears (colour 0, depth 1) then draws every mesh, numbering the draws
 /// from `first_draw_index`. The caller has moved the attachments to their attachment layouts.
 pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw], first_draw_index: u32) {
+    let half_side = ctx.viewport_half_side();
+    let constants = |draw: &Draw, index| {
+        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
+        (constants, cull_mode(draw.mesh.solidity))
+    };
+    let band = Band { area: pass.area, viewport: ViewportFrame::new(pass.grid, half_side), constants: &constants };
+    record_bands(ctx, cmd, (pass.pipelines, pass.layout), pass.targets, pass.area, &[band], draws, first_draw_index);
+}
+
+/// One view drawn into a band of a pass's attachments (several views can share them: a
+/// rig's witnesses, src/render/pinhole/): the pixels it draws, the viewport it is drawn
+/// through, and each draw's constants and cull mode in it given the draw and its number.
+pub struct Band<'a> {
+    pub area: PixelRect,
+    pub viewport: ViewportFrame,
+    pub constants: &'a dyn Fn(&Draw, u32) -> (DrawConstants, vk::CullModeFlags),
+}
+
+/// Records one rendering into `targets` over `area`: clears it (colour 0, depth to the
+/// pipelines' empty depth) then draws every mesh into each band, numbering the draws from
+/// `first_draw_index`. The caller has moved the attachments to their attachment layouts.
+#[allow(clippy::too_many_arguments)]
+pub fn record_bands(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    (pipelines, layout): (&ViewPipelines, vk::PipelineLayout),
+    targets: &ViewTargets,
+    area: PixelRect,
+    bands: &[Band],
+    draws: &[Draw],
+    first_draw_index: u32,
+) {
     let d = &ctx.device;
-    let targets = pass.targets;
-    // The attachments may be larger than the grid (batch slots fit their largest view): the
-    // render area is within the grid.
-    let a = pass.area;
-    let area = vk::Rect2D {
+    let rect = |a: PixelRect| vk::Rect2D {
         offset: vk::Offset2D { x: a.col as i32, y: a.row as i32 },
         extent: vk::Extent2D { width: a.width, height: a.height },
     };
@@ -153,36 +278,40 @@ pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, dr
                 .clear_value(zero)
         })
         .collect();
+    let empty = vk::ClearDepthStencilValue { depth: pipelines.order.empty(), stencil: 0 };
     let depth = vk::RenderingAttachmentInfo::default()
         .image_view(targets.depth.view)
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
         .load_op(vk::AttachmentLoadOp::CLEAR)
         .store_op(vk::AttachmentStoreOp::DONT_CARE)
-        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        .clear_value(vk::ClearValue { depth_stencil: empty });
+    // The attachments may be larger than the grid (batch slots fit their largest view): the
+    // render area is within the grid.
     let info = vk::RenderingInfo::default()
-        .render_area(area)
+        .render_area(rect(area))
         .layer_count(1)
         .color_attachments(&attachments)
         .depth_attachment(&depth);
-    let viewport = ViewportFrame::new(pass.grid, ctx.viewport_half_side()).viewport();
     // SAFETY: cmd is recording; targets, pipeline and meshes outlive the submission.
     unsafe {
         ctx.cmd_begin_rendering(cmd, &info);
-        d.cmd_set_viewport(cmd, 0, &[viewport]);
-        d.cmd_set_scissor(cmd, 0, &[area]);
-        let mut numbered: Vec<(u32, &Draw)> = (first_draw_index..).zip(draws).collect();
-        let colour_pipeline = match numbered.len() {
-            1 => pass.pipelines.nearest,
-            _ => {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pass.pipelines.depth_only);
-                record_draws(ctx, cmd, pass, &numbered);
-                // Among ties the last drawn stays: draw the lowest label last.
-                numbered.sort_by_key(|(_, draw)| std::cmp::Reverse(draw.label_base));
-                pass.pipelines.ties
-            }
-        };
-        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, colour_pipeline);
-        record_draws(ctx, cmd, pass, &numbered);
+        for band in bands {
+            d.cmd_set_viewport(cmd, 0, &[band.viewport.viewport()]);
+            d.cmd_set_scissor(cmd, 0, &[rect(band.area)]);
+            let mut numbered: Vec<(u32, &Draw)> = (first_draw_index..).zip(draws).collect();
+            let colour_pipeline = match numbered.len() {
+                1 => pipelines.nearest,
+                _ => {
+                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipelines.depth_only);
+                    record_draws(ctx, cmd, layout, band, &numbered);
+                    // Among ties the last drawn stays: draw the lowest label last.
+                    numbered.sort_by_key(|(_, draw)| std::cmp::Reverse(draw.label_base));
+                    pipelines.ties
+                }
+            };
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, colour_pipeline);
+            record_draws(ctx, cmd, layout, band, &numbered);
+        }
         ctx.cmd_end_rendering(cmd);
     }
 }
@@ -214,7 +343,13 @@ impl ViewportFrame {
     /// (`GpuContext::viewport_half_side`), at least half the view's larger side
     /// (`GpuContext::max_view_side`).
     pub fn new(grid: &ViewGrid, half_side: f32) -> Self {
-        Self { centre: [(grid.width / 2) as f32, (grid.height / 2) as f32], half_side }
+        Self::around(grid.full(), half_side)
+    }
+
+    /// The frame of a viewport around `area` of the attachments, its centre rounded down to a
+    /// whole pixel, with `half_side` as in [`ViewportFrame::new`].
+    pub fn around(area: PixelRect, half_side: f32) -> Self {
+        Self { centre: [(area.col + area.width / 2) as f32, (area.row + area.height / 2) as f32], half_side }
     }
 
     fn viewport(&self) -> vk::Viewport {
@@ -231,8 +366,9 @@ impl ViewportFrame {
 
 /// Which of a mesh's triangles the graphics pipeline culls: a solid's facing away from the
 /// camera, which are never the first hit (src/mesh/solid.rs), and none of an open mesh's. The
-/// compute rasterizer skips the same ones (raster/compute/).
-fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
+/// compute rasterizer skips the same ones (raster/compute/). (A pinhole view may lie inside a
+/// solid, and then culls none: src/render/pinhole/.)
+pub(crate) fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
     match solidity {
         Solidity::Outward => vk::CullModeFlags::BACK,
         Solidity::Inward => vk::CullModeFlags::FRONT,
@@ -240,20 +376,25 @@ fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
     }
 }
 
-/// Records the draws, each with its constants, its number in the draw table and its cull
-/// mode, into the bound pipeline.
-fn record_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[(u32, &Draw)]) {
+/// Records the draws, each with its constants in `band`, its number in the draw table and
+/// its cull mode, into the bound pipeline.
+fn record_draws(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    layout: vk::PipelineLayout,
+    band: &Band,
+    draws: &[(u32, &Draw)],
+) {
     let d = &ctx.device;
-    let half_side = ctx.viewport_half_side();
     for &(index, draw) in draws {
-        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
-        // SAFETY: cmd is recording inside a rendering scope with a pipeline of pass.layout
+        let (constants, cull) = (band.constants)(draw, index);
+        // SAFETY: cmd is recording inside a rendering scope with a pipeline of `layout`
         // bound, its cull mode dynamic; the meshes outlive the submission.
         unsafe {
-            ctx.cmd_set_cull_mode(cmd, cull_mode(draw.mesh.solidity));
+            ctx.cmd_set_cull_mode(cmd, cull);
             d.cmd_push_constants(
                 cmd,
-                pass.layout,
+                layout,
                 vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
                 0,
                 bytemuck::bytes_of(&constants),
