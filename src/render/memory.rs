@@ -11,6 +11,8 @@ use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
 const SHADOWED_LABEL_BYTES: u64 = 4;
+/// Bytes a range pixel's witness bits take, where a rig's label test runs on the GPU.
+const WITNESS_BITS_BYTES: u64 = 4;
 /// Bytes a range pixel's effect outputs take: its loss and its measured z.
 const EFFECT_OUTPUT_BYTES: u64 = 8;
 /// Bytes a render reads back and returns on the host per range pixel: two readback buffers
@@ -39,6 +41,21 @@ pub(crate) fn slot_bytes(
     let shadow = ViewKind::Shadow.bytes_per_pixel() + visibility;
     let queue = compute_triangles.map_or(0, |t| large_queue_bytes(t, views));
     range * range_pixels + shadow * shadow_pixels + queue
+}
+
+/// Bytes a render of a rig's pinhole views takes at its peak (pinhole/), rendering or writing
+/// its files after: its slot, with the witnesses' label images of `witness_pixels` in place
+/// of a shadow view's and each pixel's witness bits, and what it returns on the host.
+pub(crate) fn rig_render_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
+    let returned = RETURNED_BYTES + WITNESS_BITS_BYTES + if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
+    (rig_slot_bytes((pixels, witness_pixels), effects) + returned * pixels).max(WRITING_BYTES * pixels)
+}
+
+/// GPU bytes one job's slot takes under a rig's pinhole views: [`slot_bytes`] with the
+/// witnesses' label images of `witness_pixels` in place of a shadow view's, and each range
+/// pixel's witness bits.
+pub(crate) fn rig_slot_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
+    slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels
 }
 
 /// Bytes a render on the CPU alone takes (a rig other than the paper's scanner, by exact ray

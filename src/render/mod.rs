@@ -23,7 +23,7 @@ pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
 
 pub use gpu_mesh::GpuMesh;
-pub(crate) use memory::slot_bytes;
+pub(crate) use memory::{rig_slot_bytes, slot_bytes};
 pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
 pub use plan::gpu_arithmetic::MAX_SEEN_REACH_PIXELS;
 pub(crate) use plan::{plan_views, Views};
@@ -46,6 +46,7 @@ use crate::scene::Scene;
 use crate::sensor::{Scanner, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use mesh_cache::MeshCache;
+use pinhole::{PinholeJob, WitnessSet};
 use pipelines::Pipelines;
 use std::sync::Arc;
 use std::time::Instant;
@@ -237,16 +238,19 @@ impl Renderer {
 
     /// The pass list for jobs seen by this sensor with these shadow settings and effects, some of
     /// whose views the compute rasterizer renders where `compute`.
+    /// `pinhole`: some of whose jobs draw a rig's pinhole views.
     pub(crate) fn passes<'a>(
         &'a self,
         sensor: Option<&'a Scanner>,
         shadow: ShadowSettings,
         effects: &'a Effects,
-        compute: bool,
+        (compute, pinhole): (bool, bool),
     ) -> Result<Passes<'a>> {
         let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
         let raster_pipelines = compute.then(|| self.pipelines.compute_raster()).transpose()?;
-        Ok(Passes { pipelines: &self.pipelines, raster_pipelines, effect_pipelines, sensor, shadow, effects })
+        let pinhole_pipelines = pinhole.then(|| self.pipelines.pinhole()).transpose()?;
+        let pipelines = &self.pipelines;
+        Ok(Passes { pipelines, raster_pipelines, effect_pipelines, pinhole_pipelines, sensor, shadow, effects })
     }
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.
@@ -311,29 +315,34 @@ impl Renderer {
             format_args!("rendering a {}×{} image", views.range.width, views.range.height),
             memory::render_bytes(&views, &scene.effects, compute.then_some(queued), exact_triangles),
         )?;
-        self.render_views(scene, Some(&scanner), &views, &draws, compute, None)
+        self.render_views(scene, Some(&scanner), &views, &draws, Source::Passes { compute })
     }
 
-    /// Renders the planned views, with the compute rasterizer where `compute`; or, where `cast`
-    /// holds an image made otherwise (rays cast on the CPU, a rig's pinhole views), takes its
-    /// effect passes over it.
+    /// Renders the planned views as `source` says, then their effect passes, and reads them
+    /// back.
     fn render_views(
         &self,
         scene: &Scene,
         scanner: Option<&Scanner>,
         views: &Views,
         draws: &[Draw],
-        compute: bool,
-        cast: Option<Cast>,
+        source: Source,
     ) -> Result<RenderOutput> {
         let ctx = &self.ctx;
         let (w, h) = (views.range.width, views.range.height);
         let pixels = u64::from(w) * u64::from(h);
         // Shadow mode `exact`: rays cast on the CPU, timed on the wall clock.
-        let cast = match (cast, scene.shadow.mode) {
-            (Some(cast), _) => Some(cast),
-            (None, ShadowMode::Exact) => Some(Cast::timed("exact rays", || render_scene_exact(scene))?),
-            (None, _) => None,
+        let source = match source {
+            Source::Passes { .. } if scene.shadow.mode == ShadowMode::Exact => {
+                Source::Cast(Cast::timed("exact rays", || render_scene_exact(scene))?)
+            }
+            other => other,
+        };
+        let compute = matches!(source, Source::Passes { compute: true });
+        let (cast, pinhole) = match source {
+            Source::Passes { .. } => (None, None),
+            Source::Cast(cast) => (Some(cast), None),
+            Source::Pinhole(job, witnesses) => (None, Some((job, witnesses))),
         };
         let host_view =
             cast.as_ref().map(|cast| HostView::new(ctx, &cast.image, views.origin.z, "cast range view")).transpose()?;
@@ -346,6 +355,7 @@ impl Renderer {
             shadow_area: views.shadow.map(|g| g.full()),
             reflectivity_offset: 0,
             host_view: host_view.as_ref(),
+            pinhole: pinhole.map(|(job, _)| job),
             compute,
         };
         let table = |kind, scanner| draw_table(ctx, kind, scanner, [(views, draws)]);
@@ -368,6 +378,7 @@ impl Renderer {
             compute_raster: range_table.as_ref(),
             several_draws: draws.len() > 1,
             from_host: host_view.is_some(),
+            witnesses: pinhole.and_then(|(_, witnesses)| witnesses),
         };
         let slot = self.slot(&shape, "render")?;
         let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
@@ -382,7 +393,7 @@ impl Renderer {
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
-        let passes = self.passes(scanner, scene.shadow, effects, compute)?;
+        let passes = self.passes(scanner, scene.shadow, effects, (compute, pinhole.is_some()))?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };
@@ -429,9 +440,13 @@ impl Renderer {
             }
         }
         let timings = cast_time.into_iter().chain(clock.times()?).collect();
-        // Where rays were cast, their witness bits; else the scanner's one witness, its camera:
-        // bit 0 where it could not see the point.
-        let witness = cast_witness.unwrap_or_else(|| reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect());
+        // Where rays were cast, their witness bits; where a rig's label test ran, its own; else
+        // the scanner's one witness, its camera: bit 0 where it could not see the point.
+        let witness = match (cast_witness, slot.witness_bits()) {
+            (Some(bits), _) => bits,
+            (None, Some(bits)) => bits.read()?,
+            (None, None) => reason.iter().map(|&r| u32::from(r == Reason::Shadow)).collect(),
+        };
         Ok(RenderOutput {
             sensor: scene.sensor.clone(),
             shadow: scene.shadow,
@@ -461,34 +476,42 @@ impl Renderer {
         let pixels = u64::from(width) * u64::from(height);
         let views = Views::cast(width, height);
         let with_effects = !scene.effects.is_empty();
-        if with_effects {
+        if with_effects || on_gpu {
             self.check_pixel_buffers((width, height))?;
         }
-        let passes_bytes = if with_effects { slot_bytes((pixels, 0), &scene.effects, None, 1) } else { 0 };
-        let cast_bytes = if on_gpu { 0 } else { memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels) };
-        self.ledger.check(format_args!("rendering a {width}×{height} image"), cast_bytes + passes_bytes)?;
         for (i, object) in scene.objects.iter().enumerate() {
             check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
         }
-        let cast = match on_gpu {
-            true => self.render_pinhole_rig(scene)?,
-            false => Cast::timed("exact rays", || render_rig_exact(scene))?,
-        };
-        let raster = on_gpu.then_some(Raster::Graphics);
-        if with_effects {
-            let output = self.render_views(scene, None, &views, &[], false, Some(cast))?;
-            return Ok(RenderOutput { raster, ..output });
+        if on_gpu {
+            let output = self.render_pinhole_rig(scene, &views)?;
+            return Ok(RenderOutput { raster: Some(Raster::Graphics), ..output });
         }
-        Ok(RenderOutput { raster, ..cast_output(scene, cast) })
+        let passes_bytes = if with_effects { slot_bytes((pixels, 0), &scene.effects, None, 1) } else { 0 };
+        let cast_bytes = memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels);
+        self.ledger.check(format_args!("rendering a {width}×{height} image"), cast_bytes + passes_bytes)?;
+        let cast = Cast::timed("exact rays", || render_rig_exact(scene))?;
+        if with_effects {
+            return self.render_views(scene, None, &views, &[], Source::Cast(cast));
+        }
+        Ok(cast_output(scene, cast))
     }
 }
 
-/// A range image made otherwise than by the render passes (rays cast on the CPU, or a rig's
-/// pinhole views drawn on the GPU), with the time it took (on the CPU's wall clock, or between
-/// the GPU's timestamps).
-pub(crate) struct Cast {
-    pub image: ExactImage,
-    pub time: PassTime,
+/// How a render's range view is made.
+enum Source<'a> {
+    /// By the scanner's passes, with the compute rasterizer where `compute` (in shadow mode
+    /// `exact`, by rays cast on the CPU).
+    Passes { compute: bool },
+    /// Elsewhere, and copied in: rays cast on the CPU.
+    Cast(Cast),
+    /// By a rig's pinhole views, and their witnesses' label test where the set is given.
+    Pinhole(&'a PinholeJob, Option<&'a WitnessSet>),
+}
+
+/// A range image cast on the CPU, with the time it took on the wall clock.
+struct Cast {
+    image: ExactImage,
+    time: PassTime,
 }
 
 impl Cast {
@@ -507,7 +530,7 @@ fn casts_shadows(scene: &Scene, scanner: Option<&Scanner>) -> bool {
     matches!((scanner, scene.shadow.mode), (_, ShadowMode::Exact) | (None, ShadowMode::Depth | ShadowMode::Label))
 }
 
-/// A render of a rig other than the paper's scanner, made without effects.
+/// A render of a rig cast on the CPU, without effects.
 fn cast_output(scene: &Scene, cast: Cast) -> RenderOutput {
     let image = cast.image;
     let reason = image

@@ -3,7 +3,9 @@
 //! range raster → [shadow raster → shadow mask] → [each named effect] → sink
 //!
 //! or, in shadow mode `exact`, the range view and its shadowed labels copied from the host
-//! (stages/host_view.rs) in place of the three passes before the effects.
+//! (stages/host_view.rs) in place of the three passes before the effects; or, under a rig's
+//! pinhole reference view, its views drawn and the witnesses' label test (pinhole/) in their
+//! place.
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
 //! compute passes over them (`verify`'s score passes, one job a hypothesis, in
@@ -17,12 +19,13 @@
 use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::Result;
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
+use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessMaskBindings, WitnessSet};
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{
     ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember,
 };
-use crate::render::raster::draw::{record_view, Draw, DrawTable, ViewPass};
+use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
 use crate::render::stages::host_view::HostView;
 use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
@@ -30,7 +33,7 @@ use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Scanner, ViewGrid};
-use crate::shadow::{ShadowSettings, ShadowTest};
+use crate::shadow::{Neighbourhood, ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
@@ -51,6 +54,19 @@ pub(crate) struct Slot<'a> {
     /// The compute rasterizer's state for the range view and the shadow view, where it
     /// renders.
     compute: Option<ComputeViews<'a>>,
+    /// A rig's witnesses' label images and their label test, in shadow mode `label` under a
+    /// pinhole reference view (src/render/pinhole/).
+    witnesses: Option<WitnessSlot<'a>>,
+}
+
+/// What a slot holds for a rig's witnesses: the attachments of their label images, the bits
+/// of the witnesses that lost each pixel (host-visible for a readback slot), and the label
+/// test's bindings.
+struct WitnessSlot<'a> {
+    targets: PooledTargets<'a>,
+    lost_by: Buffer,
+    bindings: WitnessMaskBindings,
+    neighbourhood: Neighbourhood,
 }
 
 /// What a slot must hold.
@@ -72,6 +88,8 @@ pub(crate) struct SlotShape<'a> {
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
     pub from_host: bool,
+    /// A rig's witnesses, which jobs under a pinhole reference view test in mode `label`.
+    pub witnesses: Option<&'a WitnessSet>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -122,7 +140,7 @@ impl<'a> Slot<'a> {
             _ => None,
         };
         let (shadow, masked, mask_bindings) = match (shape.shadow, shadow) {
-            (None, _) if shape.from_host => {
+            (None, _) if shape.from_host || shape.witnesses.is_some() => {
                 (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None)
             }
             (Some((_, draw_table)), Some(shadow)) => {
@@ -140,9 +158,25 @@ impl<'a> Slot<'a> {
             }
             _ => None,
         };
+        let witnesses = match (shape.witnesses, &masked) {
+            (Some(set), Some(masked)) => {
+                let targets = pool.take(ctx, ViewKind::Shadow, set.size, &format!("{name} witness views"))?;
+                let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
+                let mask = p.pinhole()?.mask(set.neighbourhood);
+                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, &targets), (masked, &lost_by, &set.table))?;
+                Some(WitnessSlot { targets, lost_by, bindings, neighbourhood: set.neighbourhood })
+            }
+            _ => None,
+        };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
         let shadow_table = shape.shadow.map(|(_, table)| table);
-        Ok(Self { range, shadow, masked, mask_bindings, shadow_table, effects, reflectivities, compute })
+        Ok(Self { range, shadow, masked, mask_bindings, shadow_table, effects, reflectivities, compute, witnesses })
+    }
+
+    /// The bits of the witnesses that lost each pixel, where a rig's label test ran
+    /// (host-visible for a readback slot).
+    pub fn witness_bits(&self) -> Option<&Buffer> {
+        self.witnesses.as_ref().map(|w| &w.lost_by)
     }
 
     /// The range view's label and z attachments, which a compute sink reads.
@@ -184,6 +218,8 @@ pub(crate) struct Job<'a> {
     pub reflectivity_offset: u32,
     /// The range view cast on the host, in shadow mode `exact`: copied in, not rendered.
     pub host_view: Option<&'a HostView>,
+    /// A rig's pinhole views, drawn in place of the range and shadow views.
+    pub pinhole: Option<&'a PinholeJob>,
     /// The compute rasterizer renders its views (the slot holds its state).
     pub compute: bool,
 }
@@ -272,8 +308,10 @@ pub(crate) struct Passes<'a> {
     pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
     /// Present where effects are named.
     pub effect_pipelines: Option<&'a EffectPipelines>,
+    /// Present where jobs draw a rig's pinhole views.
+    pub pinhole_pipelines: Option<&'a PinholePipelines>,
     /// The paper's scanner, which the shadow pass renders; `None` for a rig's image cast on the
-    /// CPU (src/exact/rig.rs), which takes effect passes alone.
+    /// CPU (src/exact/rig.rs), which takes effect passes alone, or its pinhole views drawn.
     pub sensor: Option<&'a Scanner>,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
@@ -386,6 +424,9 @@ impl<'p> Passes<'p> {
             steps.extend(self.effects_and_sink(slot, job, Some(shadowed), sink));
             return steps;
         }
+        if let Some(pinhole) = job.pinhole {
+            return self.pinhole_steps(slot, job, pinhole, sink);
+        }
         // Room for the rasters, the mask, an effect and the sink's steps: no growing.
         let mut steps = Vec::with_capacity(8);
         let compute = self.compute_job(slot, job);
@@ -485,6 +526,59 @@ impl<'p> Passes<'p> {
 
     /// The named effects' passes and the sink, after the range view and (where any) the
     /// shadowed labels were written.
+    /// A job's passes under a rig's pinhole reference view: the reference view and the
+    /// witnesses' label images drawn, the label test, then the effects and the sink.
+    fn pinhole_steps<'s>(
+        &'s self,
+        slot: &'s Slot<'_>,
+        job: &'s Job<'_>,
+        pinhole: &'s PinholeJob,
+        sink: &Sink<'s>,
+    ) -> Vec<Step<'s>> {
+        let p = self.pipelines;
+        let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
+        let witnesses = slot.witnesses.as_ref();
+        let mut prepare = Vec::new();
+        for targets in std::iter::once(&*slot.range).chain(witnesses.map(|w| &*w.targets)) {
+            prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
+            prepare.push((&targets.depth, Access::DepthAttachmentWrite));
+        }
+        let draw = move |ctx: &GpuContext, cmd| {
+            let half_side = ctx.viewport_half_side();
+            let reference = [pinhole.reference_band(job.area, half_side)];
+            record_bands(
+                ctx,
+                cmd,
+                (&pipelines.reference, p.raster_layout),
+                &slot.range,
+                job.area,
+                &reference,
+                job.draws,
+            );
+            if let Some(w) = witnesses {
+                let (width, height) = (w.targets.depth.extent().width, w.targets.depth.extent().height);
+                let all = PixelRect { col: 0, row: 0, width, height };
+                let bands = pinhole.witness_bands(half_side);
+                record_bands(ctx, cmd, (&pipelines.witnesses, p.raster_layout), &w.targets, all, &bands, job.draws);
+            }
+        };
+        let mut steps = vec![Step::new(prepare, Vec::new(), draw).timed("range")];
+        let shadowed = match (witnesses, &slot.masked) {
+            (Some(w), Some(masked)) => {
+                let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
+                images.extend(w.targets.colour.iter().map(|image| (image, Access::ComputeRead)));
+                let buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
+                let mask = pipelines.mask(w.neighbourhood);
+                let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &pinhole.mask);
+                steps.push(Step::new(images, buffers, test).timed("shadow mask"));
+                Some(masked)
+            }
+            _ => None,
+        };
+        steps.extend(self.effects_and_sink(slot, job, shadowed, sink));
+        steps
+    }
+
     fn effects_and_sink<'s>(
         &'s self,
         slot: &'s Slot<'_>,

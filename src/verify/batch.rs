@@ -26,12 +26,12 @@ use crate::error::Result;
 use crate::exact::{render_exact, render_rig, ExactObject};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Step, Timestamps};
 use crate::mesh::Mesh;
-use crate::render::pinhole::{draws_rig, Models};
+use crate::render::pinhole::{draws_rig, Models, PinholeJob, WitnessSet};
 use crate::render::{
     draw_table, plan_views, slot_bytes, Draw, EffectShape, GpuMesh, HostView, Job, JobImages, PassClock, PassTime,
     Raster, Renderer, Sink, SinkKind, Slot, SlotShape, ViewKind, Views, FOOTPRINT_MARGIN,
 };
-use crate::sensor::{PixelRect, Scanner, Sensor};
+use crate::sensor::{PixelRect, Scanner, Sensor, View};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use ash::vk;
 use glam::DMat4;
@@ -194,28 +194,45 @@ pub(crate) fn count_batch(
         })
         .collect();
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
-    // Shadow mode `exact`, and any rig but the scanner: each hypothesis' range view cast on the
-    // CPU (a rig's within the hypothesis' footprint), or a pinhole rig's drawn on the GPU in
-    // a submission of its own (render/pinhole/), to be copied in.
-    let drawn_on_gpu = settings.scanner.is_none() && draws_rig(settings.sensor, settings.shadow.mode)?;
+    // Under a rig the GPU draws (modes `none` and `label` under a pinhole reference view), each
+    // hypothesis' pinhole views within its footprint (render/pinhole/).
+    let pinhole = match (&settings.sensor.reference, settings.scanner) {
+        (View::Pinhole(reference), None) if draws_rig(settings.sensor, settings.shadow.mode)? => {
+            renderer.check_pinhole(reference)?;
+            Some((reference, WitnessSet::new(ctx, settings.sensor, &settings.shadow)?))
+        }
+        _ => None,
+    };
+    let half_side = ctx.viewport_half_side();
+    let pinhole_jobs: Vec<PinholeJob> = match &pinhole {
+        Some((reference, witnesses)) => items
+            .iter()
+            .zip(&draws)
+            .zip(&footprints)
+            .map(|((item, draws), footprint)| {
+                let spheres = [posed_sphere(item)];
+                let models = Models { draws, spheres: &spheres, name: &|_| "its model".to_string() };
+                let area = footprint.unwrap_or(PixelRect::EMPTY);
+                PinholeJob::new(reference, witnesses.as_ref(), models, area, half_side)
+            })
+            .collect::<Result<_>>()?,
+        None => Vec::new(),
+    };
+    // Shadow mode `exact`, and any other rig but the scanner: each hypothesis' range view cast
+    // on the CPU (a rig's within the hypothesis' footprint), to be copied in.
     let cast = |(item, views): (&BatchItem, &Views), footprint: &Option<PixelRect>| {
         let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
         let image = match settings.scanner {
             Some(_) => render_exact(settings.sensor, &[object])?,
-            None if drawn_on_gpu => {
-                let (draws, spheres) = ([item.draw()], [posed_sphere(item)]);
-                let models = Models { draws: &draws, spheres: &spheres, name: &|_| "its model".to_string() };
-                let footprint = footprint.unwrap_or(PixelRect::EMPTY);
-                renderer.draw_pinhole_rig(settings.sensor, &settings.shadow, models, footprint)?.image
-            }
             None => {
                 render_rig(settings.sensor, &[object], settings.shadow.mode, footprint.unwrap_or(PixelRect::EMPTY))?
             }
         };
-        HostView::new(ctx, &image, views.origin.z, "cast range view")
+        HostView::new(ctx, &image, views.origin.z, "exact range view")
     };
     let host_views: Vec<HostView> = match (settings.scanner, settings.shadow.mode) {
         (Some(_), mode) if mode != ShadowMode::Exact => Vec::new(),
+        (None, _) if pinhole.is_some() => Vec::new(),
         _ => items
             .iter()
             .zip(&views)
@@ -270,6 +287,7 @@ pub(crate) fn count_batch(
                 shadow_area,
                 reflectivity_offset,
                 host_view: host_views.get(index as usize),
+                pinhole: pinhole_jobs.get(index as usize),
                 compute,
             })
         })
@@ -293,6 +311,7 @@ pub(crate) fn count_batch(
         compute_raster: range_table.as_ref(),
         several_draws: false,
         from_host: !host_views.is_empty(),
+        witnesses: pinhole.as_ref().and_then(|(_, witnesses)| witnesses.as_ref()),
     };
     let slots: Vec<Slot> = (0..settings.slots.min(items.len()))
         .map(|i| renderer.slot(&shape, &format!("slot {i}")))
@@ -359,7 +378,7 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(settings.scanner, settings.shadow, settings.effects, compute)?;
+    let passes = renderer.passes(settings.scanner, settings.shadow, settings.effects, (compute, pinhole.is_some()))?;
     let score_pipelines = score_pass.pipelines(matches!(settings.blocks.rays, BlockRays::Pinhole { .. }))?;
     // Timed stages: a run's three of coverage, its jobs' passes (PassClock::QUERIES less the
     // start) and two of scores at most.
@@ -443,7 +462,6 @@ pub(crate) fn count_batch(
         .iter()
         .map(|job| match job {
             Some(job) if job.host_view.is_none() => Some(if job.compute { Raster::Compute } else { Raster::Graphics }),
-            Some(_) if drawn_on_gpu => Some(Raster::Graphics),
             _ => None,
         })
         .collect();

@@ -9,9 +9,9 @@
 //! (one, or three on a GPU), and the sensed image. A batch keeps as many slots as the verifier
 //! asks for ([`Verifier::with_slots`]) and the memory budget holds, at least one. On a GPU,
 //! three chunks are in flight at once, chunks recorded while the device runs another
-//! (lanes.rs). In shadow mode `exact`, and under any rig but the paper's scanner, a chunk holds
-//! at most [`EXACT_CHUNK`] hypotheses, whose images are cast on the CPU before it is submitted
-//! (docs/sensors-and-rigs.md, "Verifying under a rig").
+//! (lanes.rs). In shadow mode `exact`, and under any rig but the paper's scanner that the GPU
+//! does not draw, a chunk holds at most [`EXACT_CHUNK`] hypotheses, whose images are cast on
+//! the CPU before it is submitted (docs/sensors-and-rigs.md, "Verifying under a rig").
 
 use super::batch::{
     count_batch, default_slots, slot_memory, BatchCounts, BatchItem, BatchSettings, SensedBuffers, StageTimes,
@@ -26,8 +26,9 @@ use crate::error::{Error, Result};
 use crate::exact;
 use crate::mesh::{Mesh, SurfaceChoice};
 use crate::pose::check_rigid;
+use crate::render::pinhole::{draws_rig, WitnessSet};
 use crate::render::HostView;
-use crate::render::{slot_bytes, GpuMesh, Raster, Renderer, MAX_SLOTS};
+use crate::render::{rig_slot_bytes, slot_bytes, GpuMesh, Raster, Renderer, MAX_SLOTS};
 use crate::scene::{load_model_as, model_form_key, ModelFormKey};
 use crate::sensor::{Scanner, Sensor, View};
 use crate::shadow::{ShadowMode, ShadowSettings};
@@ -254,7 +255,7 @@ impl Verifier {
         let scanner = settings.sensor.scanner();
         if scanner.is_none() {
             // Refuses mode `label` on a rig whose witnesses it cannot read.
-            crate::render::pinhole::draws_rig(&settings.sensor, settings.shadow.mode)?;
+            draws_rig(&settings.sensor, settings.shadow.mode)?;
         }
         settings.effects.validate()?;
         settings.effects.for_sensor(&settings.sensor)?;
@@ -312,12 +313,16 @@ impl Verifier {
             Some(scanner) => {
                 slot_memory(&self.renderer, scanner, &settings.shadow, &settings.effects, posed, max_triangles)?
             }
+            None if draws_rig(&settings.sensor, settings.shadow.mode)? => {
+                let witness_pixels = WitnessSet::pixels_of(&settings.sensor, &settings.shadow);
+                rig_slot_bytes((pixels, witness_pixels), &settings.effects)
+            }
             None => slot_bytes((pixels, 0), &settings.effects, None, 1),
         };
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // Images cast on the CPU (shadow mode `exact`, and any rig but the scanner): one
         // chunk's, and the casters of one hypothesis.
-        let exact_bytes = match casts_on_cpu(scanner.as_ref(), settings.shadow.mode) {
+        let exact_bytes = match casts_on_cpu(scanner.as_ref(), &settings.sensor, settings.shadow.mode)? {
             true => {
                 let images = hypotheses.len().min(EXACT_CHUNK) as u64;
                 let casters = exact::casters(&settings.sensor);
@@ -393,7 +398,7 @@ impl Verifier {
             slots: plan.slots,
             stage_times: self.stage_times.as_ref(),
         };
-        let chunk_cap = match casts_on_cpu(scanner.as_ref(), settings.shadow.mode) {
+        let chunk_cap = match casts_on_cpu(scanner.as_ref(), &settings.sensor, settings.shadow.mode)? {
             true => settings.chunk_size.clamp(1, EXACT_CHUNK),
             false => settings.chunk_size.clamp(1, MAX_CHUNK),
         };
@@ -472,9 +477,13 @@ impl Verifier {
 }
 
 /// Whether a verification's images are cast on the CPU: in shadow mode `exact`, and under any
-/// rig but the paper's scanner (`scanner` `None`), whose GPU views are the scanner's alone so far.
-fn casts_on_cpu(scanner: Option<&Scanner>, mode: ShadowMode) -> bool {
-    scanner.is_none() || mode == ShadowMode::Exact
+/// rig but the paper's scanner (`scanner` `None`) that the GPU does not draw
+/// (`pinhole::draws_rig`).
+fn casts_on_cpu(scanner: Option<&Scanner>, sensor: &Sensor, mode: ShadowMode) -> Result<bool> {
+    Ok(match scanner {
+        Some(_) => mode == ShadowMode::Exact,
+        None => !draws_rig(sensor, mode)?,
+    })
 }
 
 /// Refuses a sensor whose pixels are not those the sensed image was measured in: another

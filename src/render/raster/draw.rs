@@ -228,27 +228,29 @@ pub struct ViewPass<'a> {
 /// from `first_draw_index`. The caller has moved the attachments to their attachment layouts.
 pub fn record_view(ctx: &GpuContext, cmd: vk::CommandBuffer, pass: &ViewPass, draws: &[Draw], first_draw_index: u32) {
     let half_side = ctx.viewport_half_side();
-    let constants = |draw: &Draw, index| {
-        let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
-        (constants, cull_mode(draw.mesh.solidity))
-    };
-    let band = Band { area: pass.area, viewport: ViewportFrame::new(pass.grid, half_side), constants: &constants };
-    record_bands(ctx, cmd, (pass.pipelines, pass.layout), pass.targets, pass.area, &[band], draws, first_draw_index);
+    let constants: Vec<_> = (first_draw_index..)
+        .zip(draws)
+        .map(|(index, draw)| {
+            let constants = DrawConstants::new(pass.grid, pass.view_from_range, pass.origin, draw, index, half_side);
+            (constants, cull_mode(draw.mesh.solidity))
+        })
+        .collect();
+    let band = Band { area: pass.area, viewport: ViewportFrame::new(pass.grid, half_side), draws: &constants };
+    record_bands(ctx, cmd, (pass.pipelines, pass.layout), pass.targets, pass.area, &[band], draws);
 }
 
 /// One view drawn into a band of a pass's attachments (several views can share them: a
 /// rig's witnesses, src/render/pinhole/): the pixels it draws, the viewport it is drawn
-/// through, and each draw's constants and cull mode in it given the draw and its number.
+/// through, and each draw's constants and cull mode in it, in the order of the draws.
 pub struct Band<'a> {
     pub area: PixelRect,
     pub viewport: ViewportFrame,
-    pub constants: &'a dyn Fn(&Draw, u32) -> (DrawConstants, vk::CullModeFlags),
+    pub draws: &'a [(DrawConstants, vk::CullModeFlags)],
 }
 
 /// Records one rendering into `targets` over `area`: clears it (colour 0, depth to the
-/// pipelines' empty depth) then draws every mesh into each band, numbering the draws from
-/// `first_draw_index`. The caller has moved the attachments to their attachment layouts.
-#[allow(clippy::too_many_arguments)]
+/// pipelines' empty depth) then draws every mesh into each band. The caller has moved the
+/// attachments to their attachment layouts.
 pub fn record_bands(
     ctx: &GpuContext,
     cmd: vk::CommandBuffer,
@@ -257,7 +259,6 @@ pub fn record_bands(
     area: PixelRect,
     bands: &[Band],
     draws: &[Draw],
-    first_draw_index: u32,
 ) {
     let d = &ctx.device;
     let rect = |a: PixelRect| vk::Rect2D {
@@ -298,7 +299,7 @@ pub fn record_bands(
         for band in bands {
             d.cmd_set_viewport(cmd, 0, &[band.viewport.viewport()]);
             d.cmd_set_scissor(cmd, 0, &[rect(band.area)]);
-            let mut numbered: Vec<(u32, &Draw)> = (first_draw_index..).zip(draws).collect();
+            let mut numbered: Vec<(usize, &Draw)> = draws.iter().enumerate().collect();
             let colour_pipeline = match numbered.len() {
                 1 => pipelines.nearest,
                 _ => {
@@ -376,18 +377,18 @@ pub(crate) fn cull_mode(solidity: Solidity) -> vk::CullModeFlags {
     }
 }
 
-/// Records the draws, each with its constants in `band`, its number in the draw table and
-/// its cull mode, into the bound pipeline.
+/// Records the draws, each with its constants and cull mode in `band` (by its place among
+/// the band's draws), into the bound pipeline.
 fn record_draws(
     ctx: &GpuContext,
     cmd: vk::CommandBuffer,
     layout: vk::PipelineLayout,
     band: &Band,
-    draws: &[(u32, &Draw)],
+    draws: &[(usize, &Draw)],
 ) {
     let d = &ctx.device;
-    for &(index, draw) in draws {
-        let (constants, cull) = (band.constants)(draw, index);
+    for &(place, draw) in draws {
+        let (constants, cull) = band.draws[place];
         // SAFETY: cmd is recording inside a rendering scope with a pipeline of `layout`
         // bound, its cull mode dynamic; the meshes outlive the submission.
         unsafe {

@@ -1,0 +1,129 @@
+//! One job's pinhole views: each draw's constants in the reference view and in every
+//! witness's band, with the depth range and cull mode each view draws it with.
+
+use super::witness_mask::WitnessMaskConstants;
+use super::witness_set::WitnessSet;
+use super::Models;
+use crate::error::{Error, Result};
+use crate::render::raster::draw::{cull_mode, Band, DrawConstants, PinholeDrawing, ViewportFrame};
+use crate::sensor::{Pinhole, PixelRect};
+use ash::vk;
+use glam::{DMat4, DVec3};
+
+/// Where the near plane goes when the sensor sets none (`near = 0`) and a model reaches the
+/// plane of a view's centre: this fraction of the farthest depth any model reaches. A surface
+/// nearer than that to the view's centre is not drawn.
+const NEAR_FRACTION: f64 = 1.0 / 1048576.0;
+
+/// Each draw's constants and cull mode in one view.
+type ViewDraws = Vec<(DrawConstants, vk::CullModeFlags)>;
+
+/// One job's pinhole views: its draws' constants in the reference view and in each witness's
+/// band, and the label test's constants over its area.
+pub(crate) struct PinholeJob {
+    /// Every pixel of the reference view.
+    whole: PixelRect,
+    reference: ViewDraws,
+    witnesses: Vec<(PixelRect, ViewDraws)>,
+    pub mask: WitnessMaskConstants,
+}
+
+impl PinholeJob {
+    /// The job that draws `models` under the pinhole `reference` view (and `witnesses`, in
+    /// mode `label`) over `area` of it (a hypothesis' footprint, or the whole image), with the
+    /// device's `viewport_half_side`.
+    pub fn new(
+        reference: &Pinhole,
+        witnesses: Option<&WitnessSet>,
+        models: Models,
+        area: PixelRect,
+        viewport_half_side: f32,
+    ) -> Result<Self> {
+        let k = reference.intrinsics;
+        let whole = PixelRect { col: 0, row: 0, width: k.width, height: k.height };
+        let reference_drawing = PinholeDrawing {
+            view_from_reference: DMat4::IDENTITY,
+            intrinsics: [k.fx, k.fy, k.cx, k.cy],
+            size: (k.width, k.height),
+            depth: depth_constants(models.spheres, DMat4::IDENTITY, (reference.near, reference.far)),
+        };
+        let views = witnesses.map_or(&[][..], |set| &set.views);
+        let witness_draws = views
+            .iter()
+            .map(|w| {
+                let drawing = PinholeDrawing {
+                    view_from_reference: w.from_reference,
+                    intrinsics: [w.drawn.fx, w.drawn.fy, w.drawn.cx, w.drawn.cy],
+                    size: (w.drawn.width, w.drawn.height),
+                    depth: depth_constants(models.spheres, w.from_reference, (0.0, f64::INFINITY)),
+                };
+                Ok((w.band, view_draws(&drawing, &models, ViewportFrame::around(w.band, viewport_half_side))?))
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self {
+            whole,
+            reference: view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?,
+            witnesses: witness_draws,
+            mask: WitnessMaskConstants::new(&k, area, views.len()),
+        })
+    }
+
+    /// The reference view, drawn over `area` (the job's).
+    pub fn reference_band(&self, area: PixelRect, viewport_half_side: f32) -> Band<'_> {
+        Band { area, viewport: ViewportFrame::around(self.whole, viewport_half_side), draws: &self.reference }
+    }
+
+    /// Each witness's band.
+    pub fn witness_bands(&self, viewport_half_side: f32) -> Vec<Band<'_>> {
+        self.witnesses
+            .iter()
+            .map(|(band, draws)| Band {
+                area: *band,
+                viewport: ViewportFrame::around(*band, viewport_half_side),
+                draws,
+            })
+            .collect()
+    }
+}
+
+/// Each draw's constants and cull mode in a view: a solid's back faces are culled only where
+/// its bounding sphere lies wholly beyond the near plane. Else the view may lie inside it, or
+/// the near plane cut it open, and its inside be seen.
+fn view_draws(drawing: &PinholeDrawing, models: &Models, viewport: ViewportFrame) -> Result<ViewDraws> {
+    models
+        .draws
+        .iter()
+        .zip(models.spheres)
+        .enumerate()
+        .map(|(i, (draw, &(sphere, radius)))| {
+            let constants = DrawConstants::pinhole(drawing, draw, i as u32, viewport).ok_or_else(|| {
+                Error::Scene(format!(
+                    "{}: its pose puts it beyond what the GPU's f32 arithmetic holds in a pinhole view",
+                    (models.name)(i)
+                ))
+            })?;
+            let nearest = drawing.view_from_reference.transform_point3(sphere).z - radius;
+            let whole = nearest > drawing.near_plane();
+            Ok((constants, if whole { cull_mode(draw.mesh.solidity) } else { vk::CullModeFlags::NONE }))
+        })
+        .collect()
+}
+/// The depth constants of a pinhole view (draw.glsl, `pinhole_clip_position`) for models
+/// whose bounding spheres are `spheres` (reference frame; `view_from_reference` moves them
+/// into the view's): s at the nearest depth any model reaches, but no nearer than `near`, nor
+/// than [`NEAR_FRACTION`] of the farthest.
+fn depth_constants(spheres: &[(DVec3, f64)], view_from_reference: DMat4, (near, far): (f64, f64)) -> [f64; 2] {
+    let in_view = spheres.iter().map(|&(c, r)| (view_from_reference.transform_point3(c), r));
+    let (nearest, farthest) =
+        in_view.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (c, r)| (lo.min(c.z - r), hi.max(c.z + r)));
+    // Nothing in front of the view: any s will do.
+    let s = if farthest > 0.0 { near.max(nearest).max(farthest * NEAR_FRACTION) } else { 1.0 };
+    match far.is_finite() && far > s {
+        // The near plane stays at s: s′ / (1 + s′ / far) = s.
+        true => {
+            let s = s / (1.0 - s / far);
+            [s, s / far]
+        }
+        false => [s, 0.0],
+    }
+}
