@@ -16,7 +16,7 @@ use rangesynth::bop::{BopScorer, BopSettings, Dataset, ResultRow, RowScores};
 use rangesynth::io::write_depth_png;
 use rangesynth::limits::Ledger;
 use rangesynth::sensor::{Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use std::path::{Path, PathBuf};
 
 const K: [f64; 9] = [500.0, 0.0, 319.5, 0.0, 500.0, 239.5, 0.0, 0.0, 1.0];
@@ -136,12 +136,17 @@ fn row(im_id: u32, pose: DMat4) -> ResultRow {
     ResultRow { scene_id: 1, im_id, obj_id: 1, pose, fields }
 }
 
-fn score(root: &Path, baseline: f64, rows: &[ResultRow]) -> Vec<RowScores> {
+/// The rows' scores, the rig's images made in shadow mode `mode` (`label` and `none` on the
+/// GPU, with validation on).
+fn score(root: &Path, baseline: f64, rows: &[ResultRow], mode: ShadowMode) -> Vec<RowScores> {
     let ledger = Ledger::default();
     let dataset = Dataset::open(root, "test", &ledger).unwrap();
-    let settings = BopSettings { rig: rig(baseline), delta: DELTA };
-    let mut scorer = BopScorer::new(&dataset, &settings, &ledger).unwrap();
-    rows.iter().map(|r| scorer.score(r).unwrap()).collect()
+    let settings = BopSettings { rig: rig(baseline), delta: DELTA, shadow: ShadowSettings::of(mode) };
+    let renderer = (mode != ShadowMode::Exact).then(common::renderer);
+    let mut scorer = BopScorer::new(&dataset, &settings, renderer, &ledger).unwrap();
+    let scores = scorer.score_rows(rows).unwrap();
+    common::assert_no_validation_messages();
+    scores
 }
 
 /// The box's near face at 1000 mm covers |c − 319.5| ≤ 50·500/1000 = 25, columns 295 to 344,
@@ -157,6 +162,9 @@ fn score(root: &Path, baseline: f64, rows: &[ResultRow]) -> Vec<RowScores> {
 ///   sensed surface 45 mm nearer: occluded, no inlier, no violation, depth score 0.
 /// - 30 mm nearer: the sensed surface lies 30 mm beyond it on its 2,500 pixels the image
 ///   measured, violations, of 2,704; the other 204 are missing: depth score 0.
+///
+/// In shadow mode `exact` (cast on the CPU) and `label` (drawn on the GPU), with one allowance
+/// for the label test's edge.
 /// - Image 2's depth is 500 mm everywhere, something in front of the whole box: the truth is
 ///   visible nowhere, nor the estimate; VSD 1 (recall 0); every pixel occluded.
 #[test]
@@ -167,21 +175,38 @@ fn vsd_and_the_depth_scores_take_their_hand_worked_values() {
         &[(1, square(295..=344, 215..=264, 1000), vec![truth]), (2, vec![500; 640 * 480], vec![truth])],
     );
     let rows = [row(1, truth), row(1, at(0.0, 0.0, 1045.0)), row(1, at(0.0, 0.0, 970.0)), row(2, truth)];
-    let scores = score(&root, 75.0, &rows);
-    let [same, farther, nearer, hidden] = [scores[0], scores[1], scores[2], scores[3]];
-    assert_eq!(same.vsd, Some((0.0, 1.0)));
-    assert_eq!((same.depth.inlier, same.depth.violation, same.depth.depth_score), (1.0, 0.0, 1.0));
-    assert_eq!(same.depth.explained_holes, None, "the projector lights the whole near face");
-    let (vsd, recall) = farther.vsd.unwrap();
-    assert!((vsd - 0.44704).abs() < 1e-12 && recall == 0.54, "{farther:?}");
-    assert_eq!((farther.depth.inlier, farther.depth.violation, farther.depth.depth_score), (0.0, 0.0, 0.0));
-    assert_eq!(nearer.depth.violation, 2500.0 / 2704.0);
-    assert_eq!((nearer.depth.inlier, nearer.depth.depth_score), (0.0, 0.0));
-    assert_eq!(hidden.vsd, Some((1.0, 0.0)));
-    assert_eq!(hidden.depth.depth_score, 0.0);
-    // Nothing on the box is shadowed: VSD under the rig is the same.
-    for s in &scores {
-        assert_eq!(s.vsd, s.vsd_shadowed, "{s:?}");
+    // Cast on the CPU, and drawn on the GPU (the paper's label test).
+    for mode in [ShadowMode::Exact, ShadowMode::Label] {
+        let scores = score(&root, 75.0, &rows, mode);
+        let [same, farther, nearer, hidden] = [scores[0], scores[1], scores[2], scores[3]];
+        assert_eq!(same.vsd, Some((0.0, 1.0)), "{mode:?}");
+        assert_eq!((same.depth.inlier, same.depth.violation, same.depth.depth_score), (1.0, 0.0, 1.0), "{mode:?}");
+        assert_eq!(same.depth.explained_holes, None, "{mode:?}: the projector lights the whole near face");
+        let (vsd, recall) = farther.vsd.unwrap();
+        assert!((vsd - 0.44704).abs() < 1e-12 && recall == 0.54, "{mode:?}: {farther:?}");
+        let farther_depth = (farther.depth.inlier, farther.depth.violation, farther.depth.depth_score);
+        assert_eq!(farther_depth, (0.0, 0.0, 0.0), "{mode:?}");
+        // The label test may lose a column of the 52 × 52 face to the projector's label edge
+        // (within a pixel of it), which the rig then explains: 2,500 violations of 2,652
+        // measured, and the 52 lost pixels explained holes of the depth score.
+        let (violation, depth_score) = (nearer.depth.violation, nearer.depth.depth_score);
+        match mode {
+            ShadowMode::Exact => assert_eq!((violation, depth_score), (2500.0 / 2704.0, 0.0)),
+            _ => {
+                let column_lost = (violation, depth_score) == (2500.0 / 2652.0, 52.0 / 2704.0);
+                assert!(column_lost || (violation, depth_score) == (2500.0 / 2704.0, 0.0), "{mode:?}: {nearer:?}");
+            }
+        }
+        assert_eq!(nearer.depth.inlier, 0.0, "{mode:?}");
+        assert_eq!(hidden.vsd, Some((1.0, 0.0)), "{mode:?}");
+        assert_eq!(hidden.depth.depth_score, 0.0, "{mode:?}");
+        // Nothing on the box is shadowed: VSD under the rig is the same (but for the column
+        // the label test may lose of the nearer estimate).
+        for (i, s) in scores.iter().enumerate() {
+            if !(mode == ShadowMode::Label && i == 2) {
+                assert_eq!(s.vsd, s.vsd_shadowed, "{mode:?}: {s:?}");
+            }
+        }
     }
 }
 
@@ -209,11 +234,15 @@ fn the_rigs_shadow_on_the_model_is_an_explained_hole_where_the_image_is_empty() 
         }
     }
     let root = dataset("holes", &[(1, front, vec![truth]), (2, measured, vec![truth])]);
-    let scores = score(&root, 300.0, &[row(1, truth), row(2, truth)]);
-    assert_eq!((scores[0].depth.explained_holes, scores[0].depth.depth_score), (Some(1.0), 1.0), "{:?}", scores[0]);
-    assert_eq!(scores[0].depth.inlier, 1.0);
-    assert_eq!(scores[1].depth.explained_holes, Some(0.0));
-    assert_eq!(scores[1].depth.depth_score, 2500.0 / (2500.0 + f64::from(face)), "{} face pixels", face);
+    for mode in [ShadowMode::Exact, ShadowMode::Label] {
+        let scores = score(&root, 300.0, &[row(1, truth), row(2, truth)], mode);
+        let first = (scores[0].depth.explained_holes, scores[0].depth.depth_score);
+        assert_eq!(first, (Some(1.0), 1.0), "{mode:?}: {:?}", scores[0]);
+        assert_eq!(scores[0].depth.inlier, 1.0, "{mode:?}");
+        assert_eq!(scores[1].depth.explained_holes, Some(0.0), "{mode:?}");
+        let expected = 2500.0 / (2500.0 + f64::from(face));
+        assert_eq!(scores[1].depth.depth_score, expected, "{mode:?}: {face} face pixels");
+    }
 }
 
 /// VSD as the BOP toolkit defines it (pose_error.vsd, visibility 'bop19', step cost), written
@@ -282,7 +311,7 @@ fn vsd_equals_the_toolkits_definition_on_random_estimates() {
         })
         .collect();
     let rows: Vec<ResultRow> = estimates.iter().map(|&p| row(1, p)).collect();
-    let scores = score(&root, 75.0, &rows);
+    let scores = score(&root, 75.0, &rows, ShadowMode::Exact);
     let truth_image = render(truth);
     for (pose, s) in estimates.iter().zip(&scores) {
         let estimate = render(*pose);
@@ -329,12 +358,21 @@ fn the_command_repeats_the_results_rows_and_adds_the_scores() {
         "scene_id,im_id,obj_id,score,R,t,time,inlier,violation,explained_holes,depth_score,vsd,vsd_recall,vsd_shadowed,vsd_shadowed_recall"
     );
     assert_eq!(lines.len(), 4);
-    let expected = score(&root, 75.0, &rows);
+    let expected = score(&root, 75.0, &rows, ShadowMode::Exact);
     for ((line, row), scores) in lines[1..].iter().zip(&rows).zip(&expected) {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[..7], row.fields.iter().map(String::as_str).collect::<Vec<_>>()[..], "{line}");
         assert_eq!(cells[7..], scores.cells().iter().map(String::as_str).collect::<Vec<_>>()[..], "{line}");
     }
+    // --shadow-mode label: the rows of image 1 drawn together on the GPU, as the library draws them.
+    let run = bop_command(&root, &results, &out, &["--shadow-mode", "label", "--validation"]);
+    assert!(run.status.success(), "{}{}", text(&run.stdout), text(&run.stderr));
+    let written = std::fs::read_to_string(&out).unwrap();
+    let expected = score(&root, 75.0, &rows, ShadowMode::Label);
+    for (line, scores) in written.lines().skip(1).zip(&expected) {
+        assert!(line.ends_with(&scores.cells().join(",")), "{line}: {:?}", scores.cells());
+    }
+    assert_eq!(written.lines().count(), 4);
     // Image 2 has no ground truth for the object: its VSD cells are empty.
     assert!(lines[2].ends_with(",,,,"), "{}", lines[2]);
     let targets = root.join("targets.json");
@@ -381,4 +419,29 @@ fn bad_bop_input_is_refused_by_name() {
     std::fs::write(&camera, &good).unwrap();
     std::fs::remove_file(root.join("test/000001/depth/000001.png")).unwrap();
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["000001.png"]);
+}
+
+/// The shadow mode the rig's images are made in is checked before any row: mode `label` with a
+/// directional witness (no label image to read) and mode `depth` are refused by name, and mode
+/// `label` without a device to draw on is refused.
+#[test]
+fn shadow_modes_the_scorer_cannot_make_are_refused_by_name() {
+    let root = dataset("modes", &[(1, square(295..=344, 215..=264, 1000), vec![at(0.0, 0.0, 1000.0)])]);
+    let ledger = Ledger::default();
+    let dataset = Dataset::open(&root, "test", &ledger).unwrap();
+    let mut with_light = rig(75.0);
+    with_light.witnesses.push(Witness {
+        name: "sun".into(),
+        geometry: WitnessGeometry::Directional(rangesynth::sensor::Direction::Vector(DVec3::NEG_Z)),
+    });
+    let refused = |rig: Sensor, mode: ShadowMode, renderer: Option<&rangesynth::Renderer>| {
+        let settings = BopSettings { rig, delta: DELTA, shadow: ShadowSettings::of(mode) };
+        BopScorer::new(&dataset, &settings, renderer, &ledger).err().map(|e| e.to_string()).unwrap_or_default()
+    };
+    let e = refused(with_light, ShadowMode::Label, Some(common::renderer()));
+    assert!(e.contains("[[sensor.witness]] 2 (\"sun\")") && e.contains("mode = \"label\""), "{e}");
+    let e = refused(rig(75.0), ShadowMode::Depth, Some(common::renderer()));
+    assert!(e.contains("shadow mode \"depth\""), "{e}");
+    let e = refused(rig(75.0), ShadowMode::Label, None);
+    assert!(e.contains("needs a renderer"), "{e}");
 }

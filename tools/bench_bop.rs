@@ -1,9 +1,11 @@
 //! `rangesynth bop`'s throughput: rows per second of a 100-row results file against one
 //! 640×480 image of a BOP-format dataset written to a temporary directory, for a 12-triangle
 //! box and a 3,990-triangle sphere (each 100 mm across, 1 m from the camera), scored under a
-//! camera with a projector 75 mm beside it. The baseline, measured in the same run, scores the
-//! same rows under the camera alone (no witness to test), so the ratio is what the rig's
-//! shadows cost. Every row has the image's ground truth, so each scores VSD twice as well.
+//! camera with a projector 75 mm beside it, its images cast on the CPU (`--shadow-mode exact`)
+//! and drawn on the device (`--shadow-mode label`, the image's rows together). The baseline,
+//! measured in the same run, scores the same rows under the camera alone (no witness to test),
+//! so the ratio is what the rig's shadows cost. Every row has the image's ground truth, so each
+//! scores VSD twice as well.
 //!
 //! Run: `cargo run --release --example bench_bop`.
 
@@ -12,10 +14,12 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rangesynth::bop::{BopScorer, BopSettings, Dataset, ResultRow};
 use rangesynth::exact::{render_rig, ExactObject};
+use rangesynth::gpu::ContextOptions;
 use rangesynth::io::write_depth_png;
 use rangesynth::limits::Ledger;
 use rangesynth::sensor::{Intrinsics, Pinhole, PixelRect, Sensor, View, Witness, WitnessGeometry};
-use rangesynth::shadow::ShadowMode;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::Renderer;
 use std::path::Path;
 use std::time::Instant;
 
@@ -144,23 +148,33 @@ fn write_dataset(root: &Path, sphere: bool, truth: DMat4) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// Seconds to score the rows under the rig.
-fn time_rows(root: &Path, projector: bool, rows: &[ResultRow]) -> anyhow::Result<f64> {
+/// Seconds to score the rows under the rig, its images made in shadow mode `mode` (`label`
+/// on `renderer`'s device).
+fn time_rows(
+    root: &Path,
+    projector: bool,
+    rows: &[ResultRow],
+    mode: ShadowMode,
+    renderer: &Renderer,
+) -> anyhow::Result<f64> {
     let ledger = Ledger::default();
     let dataset = Dataset::open(root, "test", &ledger)?;
-    let settings = BopSettings { rig: rig(projector), delta: 15.0 };
-    let mut scorer = BopScorer::new(&dataset, &settings, &ledger)?;
+    let settings = BopSettings { rig: rig(projector), delta: 15.0, shadow: ShadowSettings::of(mode) };
+    let mut scorer = BopScorer::new(&dataset, &settings, Some(renderer), &ledger)?;
     let start = Instant::now();
-    for row in rows {
-        scorer.score(row)?;
-    }
+    scorer.score_rows(rows)?;
     Ok(start.elapsed().as_secs_f64())
 }
 
 fn main() -> anyhow::Result<()> {
-    println!("rows/s scoring {ROWS} rows against one 640×480 image (CPU, {} threads)", rayon::current_num_threads());
-    println!("| model | triangles | camera alone (rows/s) | camera + projector (rows/s) | ratio |");
-    println!("|---|---|---|---|---|");
+    let renderer = Renderer::new(&ContextOptions::from_env())?;
+    let device = renderer.context().device_name().to_string();
+    println!(
+        "rows/s scoring {ROWS} rows against one 640×480 image ({} CPU threads; {device})",
+        rayon::current_num_threads()
+    );
+    println!("| model | triangles | mode | camera alone (rows/s) | camera + projector (rows/s) | ratio |");
+    println!("|---|---|---|---|---|---|");
     let truth = DMat4::from_translation(DVec3::new(10.0, -5.0, 1000.0)) * DMat4::from_rotation_x(0.4);
     for (name, sphere, triangles) in [("box", false, 12), ("sphere", true, 3990)] {
         let dir = tempfile::tempdir()?;
@@ -176,15 +190,17 @@ fn main() -> anyhow::Result<()> {
                 ResultRow { scene_id: 1, im_id: 1, obj_id: 1, pose, fields }
             })
             .collect();
-        let alone = time_rows(dir.path(), false, &rows)?;
-        let with_projector = time_rows(dir.path(), true, &rows)?;
-        let rate = |seconds: f64| ROWS as f64 / seconds;
-        println!(
-            "| {name} | {triangles} | {:.1} | {:.1} | {:.2} |",
-            rate(alone),
-            rate(with_projector),
-            rate(with_projector) / rate(alone)
-        );
+        for (mode, side) in [(ShadowMode::Exact, "exact (CPU)"), (ShadowMode::Label, "label (GPU)")] {
+            let alone = time_rows(dir.path(), false, &rows, mode, &renderer)?;
+            let with_projector = time_rows(dir.path(), true, &rows, mode, &renderer)?;
+            let rate = |seconds: f64| ROWS as f64 / seconds;
+            println!(
+                "| {name} | {triangles} | {side} | {:.1} | {:.1} | {:.2} |",
+                rate(alone),
+                rate(with_projector),
+                rate(with_projector) / rate(alone)
+            );
+        }
     }
     Ok(())
 }

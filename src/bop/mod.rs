@@ -9,10 +9,11 @@
 //!   projector's shadows on the model, what its other cameras do not see) is not rendered as
 //!   visible surface.
 //!
-//! The images are cast on the CPU in f64 (src/exact/rig.rs), each within the model's footprint,
-//! as `verify` casts a rig's hypotheses. Rows are scored in order, one image's data kept while
-//! its rows follow one another, and each image's memory given back to the run's budget when the
-//! next begins.
+//! The images are cast on the CPU in f64 (src/exact/rig.rs; shadow mode `exact`), or drawn on
+//! the GPU (src/render/pinhole/; modes `label` and `none`), each within the model's footprint,
+//! as `verify` makes a rig's hypotheses. Rows are scored in order, one image's data kept while
+//! its rows follow one another, their images made together (on the GPU, in one submission), and
+//! each image's memory given back to the run's budget when the next begins.
 
 mod dataset;
 mod depth_scores;
@@ -29,9 +30,11 @@ use crate::exact::{self, render_rig, ExactImage, ExactObject};
 use crate::io::read_depth_png;
 use crate::limits::Ledger;
 use crate::mesh::{Mesh, SurfaceChoice, SurfaceRule};
+use crate::render::pinhole::draws_rig;
+use crate::render::{DrawnAlone, Renderer};
 use crate::scene::load_model_as;
 use crate::sensor::{Intrinsics, Pinhole, PixelRect, Sensor, View};
-use crate::shadow::ShadowMode;
+use crate::shadow::{ShadowMode, ShadowSettings};
 use glam::DMat4;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -81,11 +84,17 @@ impl RowScores {
 }
 
 /// How rows are scored: the rig (its reference view's intrinsics and size are each image's),
-/// and the tolerance δ (mm) of the depth-only scores and of VSD's visibility test.
+/// the tolerance δ (mm) of the depth-only scores and of VSD's visibility test, and the
+/// shadow settings the rig's images are made with: mode `exact` cast on the CPU, modes
+/// `label` and `none` drawn on the GPU (which the scorer is then given).
 pub struct BopSettings {
     pub rig: Sensor,
     pub delta: f64,
+    pub shadow: ShadowSettings,
 }
+
+/// Most rows of one image whose images are made together.
+const ROWS_TOGETHER: usize = 16;
 
 /// A model's image: depth (mm) where the reference view meets it, 0 elsewhere; the same where
 /// every witness sees the point, 0 where one does not.
@@ -95,10 +104,18 @@ struct Rendering {
 }
 
 impl Rendering {
-    fn of(image: ExactImage) -> Self {
-        let depth = image.label.iter().zip(&image.z).map(|(&l, &z)| if l != 0 { z } else { 0.0 }).collect();
-        let measured_depth = image.shadowed.iter().zip(&image.z).map(|(&l, &z)| if l != 0 { z } else { 0.0 }).collect();
-        Self { depth, measured_depth }
+    /// From labels before and after shadowing and depths, a word a pixel each.
+    fn of(label: &[u32], shadowed: &[u32], z: impl Iterator<Item = f64> + Clone) -> Self {
+        let kept = |labels: &[u32]| labels.iter().zip(z.clone()).map(|(&l, z)| if l != 0 { z } else { 0.0 }).collect();
+        Self { depth: kept(label), measured_depth: kept(shadowed) }
+    }
+
+    fn cast(image: ExactImage) -> Self {
+        Self::of(&image.label, &image.shadowed, image.z.iter().copied())
+    }
+
+    fn drawn(image: DrawnAlone) -> Self {
+        Self::of(&image.label, &image.shadowed, image.z.iter().map(|&z| f64::from(z)))
     }
 }
 
@@ -120,6 +137,8 @@ struct ImageData {
 pub struct BopScorer<'a> {
     dataset: &'a Dataset,
     settings: &'a BopSettings,
+    /// Where the rig's images are drawn on the GPU (shadow modes `label` and `none`).
+    renderer: Option<&'a Renderer>,
     /// The rig's reference view, whose intrinsics and size each image replaces.
     reference: Pinhole,
     ledger: &'a Ledger,
@@ -129,7 +148,31 @@ pub struct BopScorer<'a> {
 }
 
 impl<'a> BopScorer<'a> {
-    pub fn new(dataset: &'a Dataset, settings: &'a BopSettings, ledger: &'a Ledger) -> Result<Self> {
+    /// A scorer of `dataset`'s rows; `renderer` draws the rig's images where the shadow mode
+    /// is the GPU's (`label`, `none`), and must be given then.
+    pub fn new(
+        dataset: &'a Dataset,
+        settings: &'a BopSettings,
+        renderer: Option<&'a Renderer>,
+        ledger: &'a Ledger,
+    ) -> Result<Self> {
+        settings.shadow.validate()?;
+        let on_gpu = match settings.shadow.mode {
+            ShadowMode::Exact => false,
+            ShadowMode::Depth => {
+                return Err(Error::Unsupported(
+                    "shadow mode \"depth\" under a rig is answered exactly: use mode \"exact\"".into(),
+                ))
+            }
+            // Refuses a rig whose witnesses the label test cannot read.
+            mode => draws_rig(&settings.rig, mode)?,
+        };
+        if on_gpu && renderer.is_none() {
+            return Err(Error::Unsupported(format!(
+                "shadow mode \"{}\" draws the rig's images on the GPU: the scorer needs a renderer",
+                settings.shadow.mode.as_str()
+            )));
+        }
         let View::Pinhole(reference) = settings.rig.reference else {
             return Err(Error::Scene(format!(
                 "the rig's reference view is {}; BOP depth images are a pinhole camera's (kind = \"pinhole\")",
@@ -139,7 +182,17 @@ impl<'a> BopScorer<'a> {
         if !(settings.delta.is_finite() && settings.delta >= 0.0) {
             return Err(Error::Scene(format!("δ = {} must be a finite number ≥ 0", settings.delta)));
         }
-        Ok(Self { dataset, settings, reference, ledger, scenes: HashMap::new(), models: HashMap::new(), image: None })
+        let renderer = renderer.filter(|_| on_gpu);
+        Ok(Self {
+            dataset,
+            settings,
+            renderer,
+            reference,
+            ledger,
+            scenes: HashMap::new(),
+            models: HashMap::new(),
+            image: None,
+        })
     }
 
     fn scene(&mut self, scene_id: u32) -> Result<Arc<SceneFiles>> {
@@ -209,70 +262,122 @@ impl<'a> BopScorer<'a> {
         }))
     }
 
-    /// Casts `mesh` in `pose` under the image's rig, within its footprint.
-    fn render(&self, sensor: &Sensor, mesh: &Mesh, pose: DMat4) -> Result<Rendering> {
+    /// The images of `models` (a mesh and its pose each) under the image's rig, each within
+    /// its footprint: drawn on the GPU together, or cast on the CPU one by one.
+    /// `subject(i)` names model i in errors.
+    fn renderings(
+        &self,
+        sensor: &Sensor,
+        models: &[(Arc<Mesh>, DMat4)],
+        subject: &dyn Fn(usize) -> String,
+    ) -> Result<Vec<Rendering>> {
+        if let Some(renderer) = self.renderer {
+            let drawn = renderer.draw_alone(sensor, &self.settings.shadow, models, subject)?;
+            return Ok(drawn.into_iter().map(Rendering::drawn).collect());
+        }
         let (width, height) = (sensor.width(), sensor.height());
         let pixels = u64::from(width) * u64::from(height);
         let casters = exact::casters(sensor);
-        let triangles = mesh.triangles.len() as u64;
-        self.ledger.check(
-            format_args!("casting a {width}×{height} image"),
-            exact::BYTES_PER_PIXEL * pixels + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
-        )?;
-        let (centre, radius) = mesh.bounding_sphere();
-        let footprint = sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN);
-        let footprint = footprint.unwrap_or(PixelRect::EMPTY);
-        let object = ExactObject { mesh, pose, label_base: 0 };
-        Ok(Rendering::of(render_rig(sensor, &[object], ShadowMode::Exact, footprint)?))
+        (0..)
+            .zip(models)
+            .map(|(i, (mesh, pose))| {
+                let about = |e: Error| e.concerning(&subject(i));
+                let triangles = mesh.triangles.len() as u64;
+                self.ledger
+                    .check(
+                        format_args!("casting a {width}×{height} image"),
+                        exact::BYTES_PER_PIXEL * pixels + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
+                    )
+                    .map_err(about)?;
+                let (centre, radius) = mesh.bounding_sphere();
+                let footprint = sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN);
+                let footprint = footprint.unwrap_or(PixelRect::EMPTY);
+                let object = ExactObject { mesh, pose: *pose, label_base: 0 };
+                let image = render_rig(sensor, &[object], self.settings.shadow.mode, footprint).map_err(about)?;
+                Ok(Rendering::cast(image))
+            })
+            .collect()
     }
 
-    /// Scores one row.
-    pub fn score(&mut self, row: &ResultRow) -> Result<RowScores> {
-        let subject = format!("scene {}, image {}, object {}", row.scene_id, row.im_id, row.obj_id);
-        let about = |e: Error| e.concerning(&subject);
-        let diameter = self.dataset.diameter(row.obj_id)?;
-        let mesh = self.model(row.obj_id)?;
-        self.image(row.scene_id, row.im_id)?;
+    /// Scores rows in order; the rows of one image that follow one another have their images
+    /// made together (on the GPU, in one batch), up to 16 at a time.
+    pub fn score_rows(&mut self, rows: &[ResultRow]) -> Result<Vec<RowScores>> {
+        let mut scores = Vec::with_capacity(rows.len());
+        let mut start = 0;
+        while start < rows.len() {
+            let key = (rows[start].scene_id, rows[start].im_id);
+            let same = rows[start..].iter().take(ROWS_TOGETHER).take_while(|r| (r.scene_id, r.im_id) == key).count();
+            scores.extend(self.score_together(&rows[start..start + same])?);
+            start += same;
+        }
+        Ok(scores)
+    }
+
+    /// Scores rows of one image, their images (and those of the ground truth they need that
+    /// the image has not made yet) made together.
+    fn score_together(&mut self, rows: &[ResultRow]) -> Result<Vec<RowScores>> {
+        let Some(first) = rows.first() else {
+            return Ok(Vec::new());
+        };
+        let subject = |row: &ResultRow| format!("scene {}, image {}, object {}", row.scene_id, row.im_id, row.obj_id);
+        let meshes: Vec<Arc<Mesh>> = rows.iter().map(|row| self.model(row.obj_id)).collect::<Result<_>>()?;
+        self.image(first.scene_id, first.im_id)?;
         let image = self.image.as_ref().expect("made above");
-        let estimate = self.render(&image.sensor, &mesh, row.pose).map_err(about)?;
+        // Each ground-truth instance of the rows' objects not yet made, made once for the
+        // image's rows.
+        let needed: Vec<(usize, u32, DMat4)> = (0..image.ground_truth.len())
+            .filter(|k| !image.truth_renderings.contains_key(k))
+            .filter(|&k| rows.iter().any(|row| row.obj_id == image.ground_truth[k].obj_id))
+            .map(|k| (k, image.ground_truth[k].obj_id, image.ground_truth[k].pose))
+            .collect();
+        let mut models: Vec<(Arc<Mesh>, DMat4)> = meshes.iter().cloned().zip(rows.iter().map(|r| r.pose)).collect();
+        for &(_, obj_id, pose) in &needed {
+            models.push((self.model(obj_id)?, pose));
+        }
+        let image = self.image.as_ref().expect("made above");
+        let named = |i: usize| match rows.get(i) {
+            Some(row) => subject(row),
+            None => format!("{}: its ground truth", subject(first)),
+        };
+        let mut made = self.renderings(&image.sensor, &models, &named)?;
+        let truths = made.split_off(rows.len());
+        for ((k, ..), truth) in needed.into_iter().zip(truths) {
+            // Kept while the image's rows last: its two depth images.
+            let bytes = 16 * truth.depth.len() as u64;
+            self.ledger.charge(format_args!("{}: a ground-truth rendering", subject(first)), bytes)?;
+            let image = self.image.as_mut().expect("made above");
+            image.bytes += bytes;
+            image.truth_renderings.insert(k, Arc::new(truth));
+        }
+        rows.iter().zip(made).map(|(row, estimate)| self.score_with(row, &estimate)).collect()
+    }
+
+    /// Scores one row of the current image, whose estimate's image is `estimate`, against
+    /// the ground truth the image has made.
+    fn score_with(&self, row: &ResultRow, estimate: &Rendering) -> Result<RowScores> {
+        let diameter = self.dataset.diameter(row.obj_id)?;
+        let image = self.image.as_ref().expect("the row's image is made");
         let measured: Vec<bool> = estimate.measured_depth.iter().map(|&d| d > 0.0).collect();
         let prediction = Prediction { depth: &estimate.depth, measured: &measured };
         let depth = depth_scores(&prediction, &image.sensed, self.settings.delta);
-        // Each ground-truth instance of the object, rendered once for the image's rows.
-        let instances: Vec<usize> =
-            (0..image.ground_truth.len()).filter(|&k| image.ground_truth[k].obj_id == row.obj_id).collect();
-        let mut truths = Vec::with_capacity(instances.len());
-        for &k in &instances {
-            let image = self.image.as_ref().expect("made above");
-            let truth = match image.truth_renderings.get(&k) {
-                Some(truth) => truth.clone(),
-                None => {
-                    let truth = Arc::new(self.render(&image.sensor, &mesh, image.ground_truth[k].pose).map_err(about)?);
-                    // Kept while the image's rows last: its two depth images.
-                    let bytes = 16 * truth.depth.len() as u64;
-                    self.ledger.charge(format_args!("{subject}: a ground-truth rendering"), bytes)?;
-                    let image = self.image.as_mut().expect("made above");
-                    image.bytes += bytes;
-                    image.truth_renderings.insert(k, truth.clone());
-                    truth
-                }
-            };
-            truths.push(truth);
-        }
-        let image = self.image.as_ref().expect("made above");
+        // Each ground-truth instance of the object.
+        let truths: Vec<&Rendering> = (0..image.ground_truth.len())
+            .filter(|&k| image.ground_truth[k].obj_id == row.obj_id)
+            .map(|k| image.truth_renderings.get(&k).map(Arc::as_ref).expect("made with the row's image"))
+            .collect();
         let p = image.intrinsics;
         let view =
             VsdView { width: p.width as usize, height: p.height as usize, fx: p.fx, fy: p.fy, cx: p.cx, cy: p.cy };
         let delta = self.settings.delta;
         let vsd_of = |truth: &Rendering, of: fn(&Rendering) -> &[f64]| -> Result<(f64, f64)> {
-            Ok(vsd_summary(&vsd_errors(&view, &image.sensed, of(&estimate), of(truth), diameter, delta)?))
+            Ok(vsd_summary(&vsd_errors(&view, &image.sensed, of(estimate), of(truth), diameter, delta)?))
         };
         let alone: fn(&Rendering) -> &[f64] = |r| r.depth.as_slice();
         let under_rig: fn(&Rendering) -> &[f64] = |r| r.measured_depth.as_slice();
         // The instance the estimate matches best, by the lowest mean error rendered alone; both
         // columns are of that one instance.
         let mut best: Option<((f64, f64), &Rendering)> = None;
-        for truth in &truths {
+        for &truth in &truths {
             let scores = vsd_of(truth, alone)?;
             if best.is_none_or(|(b, _)| scores.0 < b.0) {
                 best = Some((scores, truth));

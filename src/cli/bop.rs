@@ -7,9 +7,13 @@ use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::bop::{parse_results, BopScorer, BopSettings, Dataset, RESULTS_HEADER, SCORE_COLUMNS};
+use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{parse_json, parse_toml, read_input_text, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::Ledger;
+use rangesynth::render::Raster;
 use rangesynth::sensor::Sensor;
+use rangesynth::shadow::{ShadowMode, ShadowSettings};
+use rangesynth::Renderer;
 use serde::Deserialize;
 use std::collections::HashSet;
 use std::io::IsTerminal;
@@ -45,6 +49,10 @@ pub struct BopArgs {
     /// as those in rigs/ are; 1 for a rig written in millimetres.
     #[arg(long, default_value_t = 1000.0)]
     rig_scale: f64,
+    /// How the rig's images are made: exact (f64 rays on the CPU), label (the paper's label
+    /// test, the rows of an image drawn together on the GPU), or none (no shadows, on the GPU).
+    #[arg(long, default_value = "exact", value_parser = ["exact", "label", "none"])]
+    shadow_mode: String,
 }
 
 /// What `rangesynth bop` reads of the rig's file: its `[sensor]` (the rest of a scene file,
@@ -62,14 +70,20 @@ struct Target {
     obj_id: u32,
 }
 
-pub fn run(ledger: Arc<Ledger>, args: &BopArgs) -> Result<()> {
+pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: &BopArgs) -> Result<()> {
     if !(args.rig_scale.is_finite() && args.rig_scale > 0.0) {
         anyhow::bail!("--rig-scale {} must be positive and finite", args.rig_scale);
     }
     let dataset = Dataset::open(&args.dataset, &args.split, &ledger)?;
     let rig_text = read_input_text(&args.rig, "rig", &ledger)?;
     let rig: RigFile = parse_toml(&rig_text).with_context(|| format!("rig {}", args.rig.display()))?;
-    let settings = BopSettings { rig: rig.sensor.scaled(args.rig_scale), delta: args.delta };
+    let mode = match args.shadow_mode.as_str() {
+        "label" => ShadowMode::Label,
+        "none" => ShadowMode::None,
+        _ => ShadowMode::Exact,
+    };
+    let settings =
+        BopSettings { rig: rig.sensor.scaled(args.rig_scale), delta: args.delta, shadow: ShadowSettings::of(mode) };
     let text = read_input_text(&args.results, "results file", &ledger)?;
     let mut rows = parse_results(&args.results, &text)?;
     // Each row's fields, as read, and its pose.
@@ -81,7 +95,12 @@ pub fn run(ledger: Arc<Ledger>, args: &BopArgs) -> Result<()> {
         let listed: HashSet<(u32, u32, u32)> = targets.iter().map(|t| (t.scene_id, t.im_id, t.obj_id)).collect();
         rows.retain(|r| listed.contains(&(r.scene_id, r.im_id, r.obj_id)));
     }
-    let mut scorer = BopScorer::new(&dataset, &settings, &ledger)?;
+    // The GPU, where it draws the rig's images.
+    let renderer = match mode {
+        ShadowMode::Exact => None,
+        _ => Some(Renderer::new(options).context("starting Vulkan")?.with_ledger(ledger.clone()).with_raster(raster)),
+    };
+    let mut scorer = BopScorer::new(&dataset, &settings, renderer.as_ref(), &ledger)?;
     refuse_overwriting_inputs([args.out.as_path()], &ledger)?;
 
     let bar = match std::io::stderr().is_terminal() && rows.len() > 1 {
@@ -98,10 +117,17 @@ pub fn run(ledger: Arc<Ledger>, args: &BopArgs) -> Result<()> {
     let mut out = csv::Writer::from_writer(pending.file());
     let written = |e: csv::Error| anyhow::anyhow!("writing {}: {e}", args.out.display());
     out.write_record(RESULTS_HEADER.iter().chain(&SCORE_COLUMNS)).map_err(written)?;
-    for row in &rows {
-        let scores = scorer.score(row)?;
-        out.write_record(row.fields.iter().cloned().chain(scores.cells())).map_err(written)?;
-        bar.inc(1);
+    // An image's rows together, as the scorer makes their images (streamed a group at a time).
+    let mut first = 0;
+    while first < rows.len() {
+        let key = (rows[first].scene_id, rows[first].im_id);
+        let group = rows[first..].iter().take_while(|r| (r.scene_id, r.im_id) == key).count();
+        let group = &rows[first..first + group];
+        for (row, scores) in group.iter().zip(scorer.score_rows(group)?) {
+            out.write_record(row.fields.iter().cloned().chain(scores.cells())).map_err(written)?;
+            bar.inc(1);
+        }
+        first += group.len();
     }
     out.flush().with_context(|| format!("writing {}", args.out.display()))?;
     drop(out);
@@ -110,5 +136,8 @@ pub fn run(ledger: Arc<Ledger>, args: &BopArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     println!("scored {} rows in {seconds:.2} s ({:.1} rows/s)", rows.len(), rows.len() as f64 / seconds.max(1e-9));
     println!("wrote {}", args.out.display());
-    Ok(())
+    match &renderer {
+        Some(renderer) => super::check_validation(renderer),
+        None => Ok(()),
+    }
 }

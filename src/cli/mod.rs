@@ -102,7 +102,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render { scene: path, out, depth_png } => (Scene::from_file(&path, &ledger)?, out, depth_png),
         Command::Demo { out } => (Scene::from_toml(DEMO_SCENE, Path::new("."), &ledger)?, out, None),
         Command::Verify(args) => return verify::run(&options, ledger, cli.raster, &args),
-        Command::Bop(args) => return bop::run(ledger, &args),
+        Command::Bop(args) => return bop::run(&options, ledger, cli.raster, &args),
         Command::Accuracy(args) => return accuracy::run(&options, ledger, &args),
         Command::Experiment(args) => return experiment::run(&options, ledger, cli.raster, &args),
     };

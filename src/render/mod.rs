@@ -6,6 +6,7 @@
 //! A [`Renderer`] owns the device and the compiled pipelines and is meant to be created once
 //! and reused: it is `Send + Sync`, and each call records its own command buffer.
 
+mod alone;
 mod built_once;
 mod gpu_mesh;
 mod memory;
@@ -22,6 +23,7 @@ mod targets;
 pub use crate::raster_choice::{Crossover, Raster};
 pub use crate::render_output::{PassTime, RenderOutput};
 
+pub use alone::DrawnAlone;
 pub use gpu_mesh::GpuMesh;
 pub(crate) use memory::{rig_slot_bytes, slot_bytes};
 pub(crate) use passes::{Job, JobImages, PassClock, Passes, Sink, SinkKind, Slot, SlotShape};
