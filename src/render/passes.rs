@@ -555,11 +555,10 @@ impl<'p> Passes<'p> {
                 &reference,
                 job.draws,
             );
-            if let Some(w) = witnesses {
-                let (width, height) = (w.targets.depth.extent().width, w.targets.depth.extent().height);
-                let all = PixelRect { col: 0, row: 0, width, height };
+            let drawn = pinhole.witness_area();
+            if let Some(w) = witnesses.filter(|_| drawn.width > 0 && drawn.height > 0) {
                 let bands = pinhole.witness_bands(half_side);
-                record_bands(ctx, cmd, (&pipelines.witnesses, p.raster_layout), &w.targets, all, &bands, job.draws);
+                record_bands(ctx, cmd, (&pipelines.witnesses, p.raster_layout), &w.targets, drawn, &bands, job.draws);
             }
         };
         let mut steps = vec![Step::new(prepare, Vec::new(), draw).timed("range")];

@@ -31,6 +31,22 @@ impl PixelRect {
     pub fn contains(&self, col: u32, row: u32) -> bool {
         col.wrapping_sub(self.col) < self.width && row.wrapping_sub(self.row) < self.height
     }
+
+    /// The least rectangle holding both (an empty one holds no pixel).
+    pub fn union(self, other: PixelRect) -> PixelRect {
+        let empty = |r: &PixelRect| r.width == 0 || r.height == 0;
+        match (empty(&self), empty(&other)) {
+            (true, _) => other,
+            (_, true) => self,
+            _ => {
+                let (col, row) = (self.col.min(other.col), self.row.min(other.row));
+                let end = |a: u32, n: u32, b: u32, m: u32| (a + n).max(b + m);
+                let width = end(self.col, self.width, other.col, other.width) - col;
+                let height = end(self.row, self.height, other.row, other.height) - row;
+                PixelRect { col, row, width, height }
+            }
+        }
+    }
 }
 
 impl ViewGrid {
@@ -98,6 +114,24 @@ pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A union holds both rectangles' pixels and no more than their bounding box; an empty one
+    /// adds nothing; `contains` says which pixels a rectangle holds, edges included.
+    #[test]
+    fn a_union_is_the_bounding_box_of_its_rectangles() {
+        let a = PixelRect { col: 2, row: 3, width: 4, height: 2 };
+        let b = PixelRect { col: 5, row: 0, width: 3, height: 2 };
+        assert_eq!(a.union(b), PixelRect { col: 2, row: 0, width: 6, height: 5 });
+        assert_eq!(a.union(PixelRect::EMPTY), a);
+        assert_eq!(PixelRect::EMPTY.union(b), b);
+        let u = a.union(b);
+        for (col, row) in [(2, 3), (5, 4), (5, 0), (7, 1)] {
+            assert!(a.contains(col, row) || b.contains(col, row), "({col}, {row})");
+            assert!(u.contains(col, row), "({col}, {row})");
+        }
+        assert!(!a.contains(6, 3) && !a.contains(1, 3) && !a.contains(2, 5) && !u.contains(8, 0));
+        assert!(!PixelRect::EMPTY.contains(0, 0));
+    }
 
     fn grid() -> ViewGrid {
         ViewGrid { origin: [0.0, 0.0], pitch: [0.1, 0.1], width: 100, height: 50, z_range: (-1.0, 1.0) }

@@ -6,7 +6,8 @@ use super::witness_set::WitnessSet;
 use super::Models;
 use crate::error::{Error, Result};
 use crate::render::raster::draw::{cull_mode, Band, DrawConstants, PinholeDrawing, ViewportFrame};
-use crate::sensor::{Pinhole, PixelRect};
+use crate::render::FOOTPRINT_MARGIN;
+use crate::sensor::{Intrinsics, Pinhole, PixelRect, View};
 use ash::vk;
 use glam::{DMat4, DVec3};
 
@@ -24,8 +25,16 @@ pub(crate) struct PinholeJob {
     /// Every pixel of the reference view.
     whole: PixelRect,
     reference: ViewDraws,
-    witnesses: Vec<(PixelRect, ViewDraws)>,
+    witnesses: Vec<WitnessDraws>,
     pub mask: WitnessMaskConstants,
+}
+
+/// A witness's band of the witnesses' attachment, the pixels of it the job's models can
+/// cover, and each draw's constants and cull mode in it.
+struct WitnessDraws {
+    band: PixelRect,
+    area: PixelRect,
+    draws: ViewDraws,
 }
 
 impl PinholeJob {
@@ -57,7 +66,18 @@ impl PinholeJob {
                     size: (w.drawn.width, w.drawn.height),
                     depth: depth_constants(models.spheres, w.from_reference, (0.0, f64::INFINITY)),
                 };
-                Ok((w.band, view_draws(&drawing, &models, ViewportFrame::around(w.band, viewport_half_side))?))
+                // The pixels of its image the models can cover: the label test reads no other,
+                // as every point it tests lies on a model.
+                let image = Intrinsics { cy: w.drawn.cy - f64::from(w.band.row), ..w.drawn };
+                let image = View::Pinhole(Pinhole { intrinsics: image, near: 0.0, far: f64::INFINITY });
+                let seen = models
+                    .spheres
+                    .iter()
+                    .filter_map(|&(c, r)| image.footprint(w.from_reference.transform_point3(c), r, FOOTPRINT_MARGIN))
+                    .fold(PixelRect::EMPTY, PixelRect::union);
+                let area = PixelRect { row: seen.row + w.band.row, ..seen };
+                let draws = view_draws(&drawing, &models, ViewportFrame::around(w.band, viewport_half_side))?;
+                Ok(WitnessDraws { band: w.band, area, draws })
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -73,16 +93,22 @@ impl PinholeJob {
         Band { area, viewport: ViewportFrame::around(self.whole, viewport_half_side), draws: &self.reference }
     }
 
-    /// Each witness's band.
+    /// Each witness's band, drawn where the models can cover it.
     pub fn witness_bands(&self, viewport_half_side: f32) -> Vec<Band<'_>> {
         self.witnesses
             .iter()
-            .map(|(band, draws)| Band {
-                area: *band,
-                viewport: ViewportFrame::around(*band, viewport_half_side),
-                draws,
+            .map(|w| Band {
+                area: w.area,
+                viewport: ViewportFrame::around(w.band, viewport_half_side),
+                draws: &w.draws,
             })
             .collect()
+    }
+
+    /// The pixels of the witnesses' attachment the job draws (and clears): every band's where
+    /// the models can cover it. The label test reads no other.
+    pub fn witness_area(&self) -> PixelRect {
+        self.witnesses.iter().map(|w| w.area).fold(PixelRect::EMPTY, PixelRect::union)
     }
 }
 
