@@ -40,8 +40,9 @@ pub struct RenderOutput {
 
 /// One recorded pass and its time in milliseconds: on the GPU (`None` on a device without
 /// timestamps), or for exact mode's rays on the CPU's wall clock. Names: `range`, `shadow`,
-/// `shadow mask`, `exact rays` (CPU), `pinhole views` (a rig's, pinhole reference view and
-/// witnesses' label test), `cast upload` (either's image, for the effects), and each effect's
+/// `shadow mask` (a rig's pinhole views: `range`, its witnesses drawn too, and `shadow mask`,
+/// their label test), `exact rays` (CPU), `cast upload` (a cast image, for the effects), and
+/// each effect's
 /// [`Effect::pass_name`](crate::effects::Effect::pass_name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PassTime {

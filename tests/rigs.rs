@@ -847,3 +847,44 @@ fn pinhole_areas_are_the_hosts_bits_where_the_devices_square_root_errs() {
         assert!(messages.is_empty(), "validation reported:\n{}", messages.join("\n"));
     }
 }
+
+/// What lies wholly beyond `far` is not drawn: the plane at depth 5 under a camera whose far is
+/// 4 leaves the image empty, on the GPU (modes `none` and `label`) as in the reference.
+#[test]
+fn a_pinhole_view_draws_nothing_beyond_its_far() {
+    let witnesses = vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())];
+    let sensor = Sensor { reference: View::Pinhole(Pinhole { intrinsics: camera(), near: 0.0, far: 4.0 }), witnesses };
+    for mode in [ShadowMode::None, ShadowMode::Label] {
+        let rig = scene(sensor.clone(), mode, &[("builtin:plane:20", facing_camera(DVec3::new(0.0, 0.0, 5.0)))]);
+        let out = render(&rig);
+        assert!(rig_reference(&rig).label.iter().all(|&l| l == 0), "the reference sees nothing");
+        let seen = out.label_unshadowed.iter().filter(|&&l| l != 0).count();
+        assert_eq!(seen, 0, "{mode:?}: {seen} pixels beyond far drawn");
+    }
+}
+
+/// A floor exactly level with the camera's axis (its normal the camera's −y, so the plane's
+/// gradient in the camera's frame is indeterminate in x and infinite in y) faces the camera and
+/// a projector beside it: in mode `label` on the GPU no interior floor pixel is lost, as in the
+/// reference.
+#[test]
+fn a_floor_level_with_the_axis_faces_its_witnesses() {
+    // Model +z (the plane's normal) to camera −y, exactly; the floor 1 below the axis.
+    let level = DMat4::from_cols(
+        glam::DVec4::new(1.0, 0.0, 0.0, 0.0),
+        glam::DVec4::new(0.0, 0.0, 1.0, 0.0),
+        glam::DVec4::new(0.0, -1.0, 0.0, 0.0),
+        glam::DVec4::new(0.0, 1.0, 5.0, 1.0),
+    );
+    let rig = scene(
+        Sensor { reference: reference(), witnesses: vec![projector("projector", DVec3::new(0.3, 0.0, 0.0), camera())] },
+        ShadowMode::Label,
+        &[("builtin:plane:20", level)],
+    );
+    let out = render(&rig);
+    let truth = rig_reference(&rig);
+    let floor = truth.label.iter().filter(|&&l| l != 0).count();
+    assert!(floor > 10_000, "the floor is seen: {floor} pixels");
+    let (wrong, interior) = differences(&out, &truth, true, 1e-6);
+    assert_eq!(interior, 0, "{wrong} pixels differ, {interior} interior");
+}

@@ -186,7 +186,8 @@ RangePixel range_pixel(DrawData d, uint t, vec2 pixel) {
 }
 
 // A pinhole view (src/render/pinhole/): DrawData.grid holds fx, fy, cx, cy of the image it
-// draws (cy counted from the top of its band of the attachment: pinhole/bands.rs), and
+// draws (cy counted from the top of the attachment, its band's first row added:
+// pinhole/witness_set.rs), and
 // z_range two constants of its depth, s and s / far, so that a point at depth Z (along the
 // optical axis; x right, y down, z forward) has depth s / Z − s / far: 1 at the near plane
 // Z = s, 0 at Z = far, larger nearer (its pipelines keep the greater depth). A triangle's
@@ -214,8 +215,9 @@ RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
     vec3 a = triangle_corner(d, t, 0u);
     vec3 ray = pinhole_ray(d, pixel);
     precise float z = (n.x * a.x + n.y * a.y + n.z * a.z) / (n.x * ray.x + n.y * ray.y + n.z * ray.z);
-    vec2 gradient = clamp(plane_gradient(n), vec2(-1e30), vec2(1e30));
-    gradient = mix(gradient, vec2(0.0), isnan(gradient));
+    // NaN first: clamp's result for NaN is undefined (a GPU's min and max may return either).
+    vec2 gradient = plane_gradient(n);
+    gradient = clamp(mix(gradient, vec2(0.0), isnan(gradient)), vec2(-1e30), vec2(1e30));
     return RangePixel(triangle_label(d, t), z, gradient);
 }
 
@@ -233,6 +235,7 @@ float pinhole_tie_depth(DrawData d, uint t, vec2 pixel, float depth) {
     vec2 slope = abs(n.xy) / (d.grid.xy * across);
     slope = mix(steepest, slope, lessThan(slope, steepest));
     float largest = max(1.0, max(abs(ray.x), abs(ray.y)));
-    precise float tie = depth * (TIE_RELATIVE * largest + TIE_SLOPE * (slope.x + slope.y));
+    // s / Z itself: the depth less its constant term s / far.
+    precise float tie = (depth + d.z_range.y) * (TIE_RELATIVE * largest + TIE_SLOPE * (slope.x + slope.y));
     return tie;
 }

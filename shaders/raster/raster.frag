@@ -36,7 +36,8 @@ void main() {
 #ifdef SHADOW_VIEW
     visibility = uvec4(triangle_label(draw, t), draw.draw_index, t, 0u);
 #else
-    // A fragment exists only where the triangle covers area in xy, so n.z ≠ 0; its
+    // A fragment exists only where the triangle covers area in the image: in an orthographic
+    // view n.z ≠ 0 then (a pinhole view's gradient is kept finite: pinhole_range_pixel); its
     // coordinates are the pixel's centre, (col + ½, row + ½).
 #ifdef PINHOLE
     RangePixel range = pinhole_range_pixel(draw, t, gl_FragCoord.xy - 0.5);

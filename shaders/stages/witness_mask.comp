@@ -57,6 +57,11 @@ bool sees(WitnessData w, vec3 p, vec3 lit, uint label) {
         return false;
     }
     precise vec2 uv = w.intrinsics.xy * q.xy / q.z + w.intrinsics.zw;
+    // Off the image by more than a pixel (checked in floats: a far projection does not fit an
+    // int, whose conversion is then undefined).
+    if (!(all(greaterThanEqual(uv, vec2(-1.0))) && all(lessThanEqual(uv, vec2(w.band.xy))))) {
+        return false;
+    }
     if (TEST == TEST_LABEL_SQUARE) {
         ivec2 corner = ivec2(floor(uv));
         return carries(w, corner, label) || carries(w, corner + ivec2(1, 0), label)

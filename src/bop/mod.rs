@@ -272,6 +272,10 @@ impl<'a> BopScorer<'a> {
         subject: &dyn Fn(usize) -> String,
     ) -> Result<Vec<Rendering>> {
         if let Some(renderer) = self.renderer {
+            // Their two depth images each, made from the drawn images (which draw_alone checks).
+            let pixels = u64::from(sensor.width()) * u64::from(sensor.height());
+            let renderings = 16 * pixels * models.len() as u64;
+            self.ledger.check(format_args!("{} renderings of a rig's images", models.len()), renderings)?;
             let drawn = renderer.draw_alone(sensor, &self.settings.shadow, models, subject)?;
             return Ok(drawn.into_iter().map(Rendering::drawn).collect());
         }

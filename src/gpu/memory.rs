@@ -237,18 +237,11 @@ impl Image {
         self.desc.extent
     }
 
-    /// Records a copy of the image's top-left `width`×`height` pixels into `buffer` from byte
-    /// `offset`, row after row. The image must be in TRANSFER_SRC layout and the buffer hold
+    /// Records a copy of the image's top-left `width`×`height` pixels into the start of
+    /// `buffer`, row after row. The image must be in TRANSFER_SRC layout and the buffer hold
     /// them.
-    pub fn record_copy_to_buffer(
-        &self,
-        cmd: vk::CommandBuffer,
-        buffer: &Buffer,
-        offset: u64,
-        (width, height): (u32, u32),
-    ) {
+    pub fn record_copy_to_buffer(&self, cmd: vk::CommandBuffer, buffer: &Buffer, (width, height): (u32, u32)) {
         let region = [vk::BufferImageCopy::default()
-            .buffer_offset(offset)
             .image_subresource(
                 vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
             )

@@ -45,6 +45,9 @@ impl Renderer {
                 shadow.mode.as_str()
             )));
         }
+        if models.is_empty() {
+            return Ok(Vec::new());
+        }
         sensor.validate()?;
         shadow.validate()?;
         self.check_pinhole(&reference)?;

@@ -524,8 +524,6 @@ impl<'p> Passes<'p> {
         steps
     }
 
-    /// The named effects' passes and the sink, after the range view and (where any) the
-    /// shadowed labels were written.
     /// A job's passes under a rig's pinhole reference view: the reference view and the
     /// witnesses' label images drawn, the label test, then the effects and the sink.
     fn pinhole_steps<'s>(
@@ -578,6 +576,8 @@ impl<'p> Passes<'p> {
         steps
     }
 
+    /// The named effects' passes and the sink, after the range view and (where any) the
+    /// shadowed labels were written.
     fn effects_and_sink<'s>(
         &'s self,
         slot: &'s Slot<'_>,
@@ -629,7 +629,7 @@ impl<'p> Passes<'p> {
                 let copies = [(slot.range.label(), *label), (slot.range.z(), *z)];
                 let copy = move |_: &GpuContext, cmd| {
                     for (image, buffer) in copies {
-                        image.record_copy_to_buffer(cmd, buffer, 0, (w, h));
+                        image.record_copy_to_buffer(cmd, buffer, (w, h));
                     }
                 };
                 steps.push(Step::new(

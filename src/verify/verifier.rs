@@ -253,13 +253,17 @@ impl Verifier {
     fn plan(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<BatchPlan> {
         settings.sensor.validate()?;
         let scanner = settings.sensor.scanner();
-        if scanner.is_none() {
-            // Refuses mode `label` on a rig whose witnesses it cannot read.
-            draws_rig(&settings.sensor, settings.shadow.mode)?;
-        }
         settings.effects.validate()?;
         settings.effects.for_sensor(&settings.sensor)?;
         settings.shadow.validate()?;
+        // Refuses mode `label` on a rig whose witnesses it cannot read, and what the GPU cannot
+        // draw of a pinhole rig (the compute rasterizer, views or witness bands too large).
+        if scanner.is_none() && draws_rig(&settings.sensor, settings.shadow.mode)? {
+            if let View::Pinhole(reference) = &settings.sensor.reference {
+                self.renderer.check_pinhole(reference)?;
+                WitnessSet::new(self.renderer.context(), &settings.sensor, &settings.shadow)?;
+            }
+        }
         let (width, height) = (settings.sensor.width(), settings.sensor.height());
         if (sensed.width, sensed.height) != (width, height) {
             return Err(Error::Scene(format!(

@@ -11,10 +11,14 @@ use crate::sensor::{Intrinsics, Pinhole, PixelRect, View};
 use ash::vk;
 use glam::{DMat4, DVec3};
 
-/// Where the near plane goes when the sensor sets none (`near = 0`) and a model reaches the
-/// plane of a view's centre: this fraction of the farthest depth any model reaches. A surface
-/// nearer than that to the view's centre is not drawn.
+/// The near plane lies no nearer than this fraction of the farthest depth any model reaches
+/// (f32 depths s / Z stay normal): a surface nearer than that to the view's centre is not
+/// drawn, whatever the sensor's `near`.
 const NEAR_FRACTION: f64 = 1.0 / 1048576.0;
+
+/// What the nearest depth a model's bounding sphere reaches is multiplied by to place the near
+/// plane (a margin of 2⁻¹⁰ of it).
+const NEAR_MARGIN: f64 = 1.0 - 1.0 / 1024.0;
 
 /// Each draw's constants and cull mode in one view.
 type ViewDraws = Vec<(DrawConstants, vk::CullModeFlags)>;
@@ -142,14 +146,17 @@ fn depth_constants(spheres: &[(DVec3, f64)], view_from_reference: DMat4, (near, 
     let in_view = spheres.iter().map(|&(c, r)| (view_from_reference.transform_point3(c), r));
     let (nearest, farthest) =
         in_view.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (c, r)| (lo.min(c.z - r), hi.max(c.z + r)));
-    // Nothing in front of the view: any s will do.
-    let s = if farthest > 0.0 { near.max(nearest).max(farthest * NEAR_FRACTION) } else { 1.0 };
-    match far.is_finite() && far > s {
+    // Nothing in front of the view: any s will do. The nearest point is moved nearer by a hair,
+    // so that f32 rounding of the constants cannot clip a vertex that touches its sphere.
+    let s = if farthest > 0.0 { near.max(nearest * NEAR_MARGIN).max(farthest * NEAR_FRACTION) } else { 1.0 };
+    match (far.is_finite(), far > s) {
+        (false, _) => [s, 0.0],
         // The near plane stays at s: s′ / (1 + s′ / far) = s.
-        true => {
+        (true, true) => {
             let s = s / (1.0 - s / far);
             [s, s / far]
         }
-        false => [s, 0.0],
+        // Every model lies beyond `far`: the far plane cuts them all.
+        (true, false) => [s, s / far],
     }
 }

@@ -58,7 +58,7 @@ const _: () = assert!(size_of::<DrawConstants>() == 128);
 
 /// The raster pipelines of one view. A view of one draw is drawn once with `nearest`. A view
 /// of several draws is drawn twice, `depth_only` then `ties`, so that coincident faces of two
-/// objects go to the lower label whatever the order of the draws (pipelines.rs, `Depth`).
+/// objects go to the lower label whatever the order of the draws (graphics.rs, `Depth`).
 pub struct ViewPipelines {
     pub nearest: vk::Pipeline,
     pub depth_only: vk::Pipeline,

@@ -76,8 +76,8 @@ pub fn view_pipelines(
 /// How a raster pipeline uses the depth buffer.
 #[derive(Clone, Copy)]
 enum Depth {
-    /// The nearest fragment wins: depth test LESS, depth written. Without a fragment shader,
-    /// a depth-only pass (colour writes masked).
+    /// The nearest fragment wins: depth test LESS (GREATER in a pinhole view), depth written.
+    /// Without a fragment shader, a depth-only pass (colour writes masked).
     Nearest,
     /// After a depth-only pass of the same draws: every fragment whose depth, moved nearer by
     /// the tie tolerance (the fragment shader writes it), reaches the nearest passes
