@@ -51,6 +51,12 @@ pub const SCORE_COLUMNS: [&str; 8] = [
     "vsd_shadowed_recall",
 ];
 
+/// Whether two rows are of the same image: a run of such rows shares the image's data
+/// (`rows.chunk_by(same_image)`).
+pub fn same_image(a: &ResultRow, b: &ResultRow) -> bool {
+    (a.scene_id, a.im_id) == (b.scene_id, b.im_id)
+}
+
 /// Pixels added around a model's footprint where its image is cast.
 const FOOTPRINT_MARGIN: u32 = 2;
 
@@ -307,12 +313,8 @@ impl<'a> BopScorer<'a> {
     /// made together (on the GPU, in one batch), up to 16 at a time.
     pub fn score_rows(&mut self, rows: &[ResultRow]) -> Result<Vec<RowScores>> {
         let mut scores = Vec::with_capacity(rows.len());
-        let mut start = 0;
-        while start < rows.len() {
-            let key = (rows[start].scene_id, rows[start].im_id);
-            let same = rows[start..].iter().take(ROWS_TOGETHER).take_while(|r| (r.scene_id, r.im_id) == key).count();
-            scores.extend(self.score_together(&rows[start..start + same])?);
-            start += same;
+        for together in rows.chunk_by(same_image).flat_map(|run| run.chunks(ROWS_TOGETHER)) {
+            scores.extend(self.score_together(together)?);
         }
         Ok(scores)
     }

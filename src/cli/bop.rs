@@ -6,7 +6,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use rangesynth::bop::{parse_results, BopScorer, BopSettings, Dataset, RESULTS_HEADER, SCORE_COLUMNS};
+use rangesynth::bop::{parse_results, same_image, BopScorer, BopSettings, Dataset, RESULTS_HEADER, SCORE_COLUMNS};
 use rangesynth::gpu::ContextOptions;
 use rangesynth::io::{parse_json, parse_toml, read_input_text, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::Ledger;
@@ -117,17 +117,12 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     let mut out = csv::Writer::from_writer(pending.file());
     let written = |e: csv::Error| anyhow::anyhow!("writing {}: {e}", args.out.display());
     out.write_record(RESULTS_HEADER.iter().chain(&SCORE_COLUMNS)).map_err(written)?;
-    // An image's rows together, as the scorer makes their images (streamed a group at a time).
-    let mut first = 0;
-    while first < rows.len() {
-        let key = (rows[first].scene_id, rows[first].im_id);
-        let group = rows[first..].iter().take_while(|r| (r.scene_id, r.im_id) == key).count();
-        let group = &rows[first..first + group];
-        for (row, scores) in group.iter().zip(scorer.score_rows(group)?) {
+    // An image's rows together, as the scorer makes their images (streamed a run at a time).
+    for run in rows.chunk_by(same_image) {
+        for (row, scores) in run.iter().zip(scorer.score_rows(run)?) {
             out.write_record(row.fields.iter().cloned().chain(scores.cells())).map_err(written)?;
             bar.inc(1);
         }
-        first += group.len();
     }
     out.flush().with_context(|| format!("writing {}", args.out.display()))?;
     drop(out);

@@ -453,11 +453,7 @@ impl<'p> Passes<'p> {
                 }
             },
             None => {
-                let mut prepare = Vec::new();
-                for targets in std::iter::once(&slot.range).chain(&slot.shadow) {
-                    prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
-                    prepare.push((&targets.depth, Access::DepthAttachmentWrite));
-                }
+                let prepare = attachment_writes(std::iter::once(&*slot.range).chain(slot.shadow.as_deref()));
                 let range_pass = ViewPass {
                     pipelines: &p.range,
                     layout: p.raster_layout,
@@ -536,11 +532,7 @@ impl<'p> Passes<'p> {
         let p = self.pipelines;
         let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
         let witnesses = slot.witnesses.as_ref();
-        let mut prepare = Vec::new();
-        for targets in std::iter::once(&*slot.range).chain(witnesses.map(|w| &*w.targets)) {
-            prepare.extend(targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite)));
-            prepare.push((&targets.depth, Access::DepthAttachmentWrite));
-        }
+        let prepare = attachment_writes(std::iter::once(&*slot.range).chain(witnesses.map(|w| &*w.targets)));
         let draw = move |ctx: &GpuContext, cmd| {
             let half_side = ctx.viewport_half_side();
             let reference = [pinhole.reference_band(job.area, half_side)];
@@ -649,4 +641,15 @@ impl<'p> Passes<'p> {
         }
         steps
     }
+}
+
+/// The uses a rendering into these views' attachments makes of them: written as colour and
+/// depth attachments.
+fn attachment_writes<'s>(views: impl Iterator<Item = &'s ViewTargets>) -> Vec<(&'s Image, Access)> {
+    views
+        .flat_map(|targets| {
+            let colour = targets.colour.iter().map(|image| (image, Access::ColorAttachmentWrite));
+            colour.chain([(&targets.depth, Access::DepthAttachmentWrite)])
+        })
+        .collect()
 }

@@ -26,7 +26,7 @@ use crate::error::{Error, Result};
 use crate::exact;
 use crate::mesh::{Mesh, SurfaceChoice};
 use crate::pose::check_rigid;
-use crate::render::pinhole::{draws_rig, WitnessSet};
+use crate::render::pinhole::{draws_rig, WitnessLayout};
 use crate::render::HostView;
 use crate::render::{rig_slot_bytes, slot_bytes, GpuMesh, Raster, Renderer, MAX_SLOTS};
 use crate::scene::{load_model_as, model_form_key, ModelFormKey};
@@ -258,10 +258,14 @@ impl Verifier {
         settings.shadow.validate()?;
         // Refuses mode `label` on a rig whose witnesses it cannot read, and what the GPU cannot
         // draw of a pinhole rig (the compute rasterizer, views or witness bands too large).
+        // Where the GPU draws the rig: its witnesses' label images' pixels (0 without any).
+        let mut rig_witness_pixels = None;
         if scanner.is_none() && draws_rig(&settings.sensor, settings.shadow.mode)? {
             if let View::Pinhole(reference) = &settings.sensor.reference {
                 self.renderer.check_pinhole(reference)?;
-                WitnessSet::new(self.renderer.context(), &settings.sensor, &settings.shadow)?;
+                let max_side = self.renderer.context().max_view_side();
+                let layout = WitnessLayout::new(max_side, &settings.sensor, &settings.shadow)?;
+                rig_witness_pixels = Some(layout.as_ref().map_or(0, WitnessLayout::pixels));
             }
         }
         let (width, height) = (settings.sensor.width(), settings.sensor.height());
@@ -317,11 +321,10 @@ impl Verifier {
             Some(scanner) => {
                 slot_memory(&self.renderer, scanner, &settings.shadow, &settings.effects, posed, max_triangles)?
             }
-            None if draws_rig(&settings.sensor, settings.shadow.mode)? => {
-                let witness_pixels = WitnessSet::pixels_of(&settings.sensor, &settings.shadow);
-                rig_slot_bytes((pixels, witness_pixels), &settings.effects)
-            }
-            None => slot_bytes((pixels, 0), &settings.effects, None, 1),
+            None => match rig_witness_pixels {
+                Some(witness_pixels) => rig_slot_bytes((pixels, witness_pixels), &settings.effects),
+                None => slot_bytes((pixels, 0), &settings.effects, None, 1),
+            },
         };
         let counts = hypotheses.iter().map(per_hypothesis).sum::<u64>().min(counts_budget);
         // Images cast on the CPU (shadow mode `exact`, and any rig but the scanner): one

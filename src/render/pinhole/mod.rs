@@ -17,7 +17,7 @@ mod witness_set;
 pub(crate) use job::PinholeJob;
 pub use pipelines::PinholePipelines;
 pub(crate) use witness_mask::WitnessMaskBindings;
-pub(crate) use witness_set::WitnessSet;
+pub(crate) use witness_set::{WitnessLayout, WitnessSet};
 
 use super::memory::rig_render_bytes;
 use super::raster::draw::Draw;

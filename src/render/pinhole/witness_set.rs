@@ -18,26 +18,24 @@ pub(super) struct WitnessView {
     pub band: PixelRect,
 }
 
-/// A rig's pinhole witnesses as every job of a submission draws and tests them: their bands of
-/// one attachment, the mask's table of them, and the label test's neighbourhood.
-pub(crate) struct WitnessSet {
-    pub(super) views: Vec<WitnessView>,
+/// Where a rig's pinhole witnesses' label images go, and what the label test reads of each:
+/// worked out on the host alone, so that a plan can be refused before anything is allocated.
+pub(crate) struct WitnessLayout {
+    views: Vec<WitnessView>,
+    table: Vec<WitnessConstants>,
     /// Width and height of the attachment that holds every band.
     pub size: (u32, u32),
-    pub table: Buffer,
-    pub neighbourhood: Neighbourhood,
 }
 
-impl WitnessSet {
+impl WitnessLayout {
     /// The witnesses of `sensor` under `shadow`, their label images stacked in bands of rows
     /// in file order at their own intrinsics times `[shadow] columns`; `None` where no label
-    /// test runs (mode `none`, or no witnesses). Refused where they do not fit the device's
-    /// largest view.
-    pub fn new(ctx: &Arc<GpuContext>, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
+    /// test runs (mode `none`, or no witnesses). Refused where they do not fit a view of
+    /// `max_side` pixels a side (the device's largest).
+    pub fn new(max_side: u32, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
         if shadow.mode != ShadowMode::Label || sensor.witnesses.is_empty() {
             return Ok(None);
         }
-        let max_side = ctx.max_view_side();
         let mut row = 0u32;
         let mut views = Vec::with_capacity(sensor.witnesses.len());
         let mut table = Vec::with_capacity(sensor.witnesses.len());
@@ -66,27 +64,39 @@ impl WitnessSet {
             row += drawn.height;
         }
         let width = views.iter().map(|w| w.band.width).max().unwrap_or(0);
-        let table = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "witness table")?;
-        Ok(Some(Self { views, size: (width, row), table, neighbourhood: shadow.neighbourhood }))
+        Ok(Some(Self { views, table, size: (width, row) }))
     }
 
     /// Pixels of the attachment that holds every band.
     pub fn pixels(&self) -> u64 {
         u64::from(self.size.0) * u64::from(self.size.1)
     }
+}
 
-    /// Pixels of the attachment a set of `sensor`'s witnesses would take under `shadow`
-    /// ([`WitnessSet::new`]; 0 where there would be none).
-    pub fn pixels_of(sensor: &Sensor, shadow: &ShadowSettings) -> u64 {
-        if shadow.mode != ShadowMode::Label {
-            return 0;
-        }
-        let drawn = sensor.witnesses.iter().filter_map(|w| match w.geometry {
-            WitnessGeometry::Pinhole { intrinsics, .. } => Some(multiplied(&intrinsics, shadow.columns)),
-            _ => None,
-        });
-        let (width, height) = drawn.fold((0, 0), |(w, h), k| (k.width.max(w), h + u64::from(k.height)));
-        u64::from(width) * height
+/// A rig's pinhole witnesses as every job of a submission draws and tests them: their layout,
+/// the mask's table of them on the device, and the label test's neighbourhood.
+pub(crate) struct WitnessSet {
+    pub(super) views: Vec<WitnessView>,
+    /// Width and height of the attachment that holds every band.
+    pub size: (u32, u32),
+    pub table: Buffer,
+    pub neighbourhood: Neighbourhood,
+}
+
+impl WitnessSet {
+    /// The witnesses of `sensor` under `shadow` laid out for `ctx`'s device ([`WitnessLayout`]),
+    /// their table uploaded; `None` where no label test runs.
+    pub fn new(ctx: &Arc<GpuContext>, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
+        let Some(layout) = WitnessLayout::new(ctx.max_view_side(), sensor, shadow)? else {
+            return Ok(None);
+        };
+        let table = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &layout.table, "witness table")?;
+        Ok(Some(Self { views: layout.views, size: layout.size, table, neighbourhood: shadow.neighbourhood }))
+    }
+
+    /// Pixels of the attachment that holds every band.
+    pub fn pixels(&self) -> u64 {
+        u64::from(self.size.0) * u64::from(self.size.1)
     }
 }
 
