@@ -157,7 +157,9 @@ pub struct Effects {
 }
 
 /// `[effects.grazing]`: a point is lost when the angle between its surface normal and the
-/// direction to the projector (+z) or to the camera exceeds `max_incidence_deg`.
+/// direction toward the reference view or toward any witness exceeds `max_incidence_deg`: for
+/// the paper's scanner, the projector (+z) and the camera; under a rig, back along the pixel's
+/// ray, toward each pinhole witness's centre and along each directional witness's direction.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Grazing {
@@ -221,7 +223,9 @@ pub struct Dropout {
 ///
 /// σ = sigma + depth_coefficient·(z − depth_reference)² + incidence_coefficient·α²/(π/2 − α)²
 ///
-/// where α is the angle between the surface normal and the projector (+z): the axial model of
+/// where α is the angle between the surface normal and the direction toward the reference view
+/// (the paper's projector, +z; back along the pixel's ray under a pinhole view), and z the
+/// range frame's z (the depth along the optical axis under a pinhole view): the axial model of
 /// Nguyen, Izadi and Lovell (2012) for the Kinect, σ = 0.0012 + 0.0019·(z − 0.4)² +
 /// 0.0001/√z·α²/(π/2 − α)² in metres, with the distance to the sensor as z. α is capped
 /// at [`MAX_NOISE_INCIDENCE_DEG`] so that σ stays finite.
@@ -295,9 +299,7 @@ impl Effects {
     /// The effects as `sensor` has them, its disparity's focal length and baseline filled in
     /// where they were left out (the reference view's fx; the distance from its centre to the
     /// first witness's, a pinhole one); refuses what it cannot have: disparity without a
-    /// pinhole reference view, or without the first witness it would take its baseline from;
-    /// under any rig but the paper's scanner, grazing and the noise's incidence term, which are
-    /// measured against the scanner's camera so far.
+    /// pinhole reference view, or without the first witness it would take its baseline from.
     pub fn for_sensor(&self, sensor: &Sensor) -> Result<Effects> {
         let refuse = |m: String| Err(Error::Scene(m));
         let mut effects = *self;
@@ -323,22 +325,6 @@ impl Effects {
                 }
             }
             effects.validate()?;
-        }
-        if sensor.scanner().is_none() {
-            if self.grazing.is_some() {
-                return refuse(
-                    "effects.grazing is measured against the paper's scanner's camera; other rigs do not \
-                               have it yet"
-                        .into(),
-                );
-            }
-            if self.noise.is_some_and(|n| n.incidence_coefficient != 0.0) {
-                return refuse(
-                    "effects.noise.incidence_coefficient is measured against the paper's scanner's \
-                               projector; other rigs do not have it yet"
-                        .into(),
-                );
-            }
         }
         Ok(effects)
     }

@@ -38,3 +38,10 @@ pub const QUEUE_VIEW_BIT: u32 = 31;
 /// Invocations a workgroup of the compute rasterizer's coverage passes (`local_size_x` in
 /// shaders/raster/raster.comp): each covers a triangle, or in the large triangles' pass a row.
 pub const COVERAGE_GROUP: u32 = 64;
+
+/// A view's kind as the shaders' view functions take it (shaders/common/view.glsl;
+/// [`View`](crate::sensor::View)): an orthographic grid.
+pub const VIEW_ORTHOGRAPHIC: u32 = 0;
+
+/// A view's kind as the shaders' view functions take it: a pinhole camera's intrinsics.
+pub const VIEW_PINHOLE: u32 = 1;

@@ -513,17 +513,14 @@ fn a_face_along_the_rays_keeps_a_finite_depth_through_the_effects() {
 }
 
 /// Effects under a rig: the working volume is in depth along the optical axis; disparity is
-/// refused on an orthographic sensor, and grazing (measured against the scanner's camera) on
-/// other rigs, by name.
+/// refused on an orthographic sensor, by name.
 #[test]
-fn effects_under_a_rig_measure_depth_and_refuse_what_needs_the_scanner() {
+fn effects_under_a_rig_measure_depth_and_refuse_disparity_without_a_pinhole_view() {
     let near = render(&plane_at(1.9, "[range]\nmax_z = 1.8\n"));
     assert!(near.reason.iter().all(|&r| r == Reason::OutOfRange));
     let kept = render(&plane_at(1.9, "[range]\nmax_z = 2.0\n"));
     assert!(kept.reason.iter().all(|&r| r == Reason::Valid));
     let refused = |rig: &Scene| common::renderer().render(rig).err().map(|e| e.to_string()).unwrap_or_default();
-    let e = refused(&plane_at(1.9, "[grazing]\nmax_incidence_deg = 80\n"));
-    assert!(e.contains("effects.grazing"), "{e}");
     let mut scanner =
         scene(common::sensor(8, 8, 0.1, [0.0, 0.0], 30.0), ShadowMode::Label, &[("builtin:box", DMat4::IDENTITY)]);
     scanner.effects = toml::from_str("[disparity]\nbaseline = 0.075\nfocal_px = 580\nsubpixel = 8\n").unwrap();
@@ -887,4 +884,125 @@ fn a_floor_level_with_the_axis_faces_its_witnesses() {
     assert!(floor > 10_000, "the floor is seen: {floor} pixels");
     let (wrong, interior) = differences(&out, &truth, true, 1e-6);
     assert_eq!(interior, 0, "{wrong} pixels differ, {interior} interior");
+}
+
+/// A 64×48 camera of fx = fy = 50 (about ±32° across) and a plane through (0, 0, 2) turned
+/// 45° about y, its unit normal (−√½, 0, −√½) facing the camera: pixel (c, r)'s ray
+/// d = ((c − 31.5)/50, (r − 23.5)/50, 1) meets it at p = 2·d/(1 + d.x), from depth 1.23 on the
+/// right to 5.4 on the left, seen from 77° to 13° off its normal.
+fn tilted_plane(witnesses: Vec<Witness>, mode: ShadowMode, effects: &str) -> Scene {
+    let k = Intrinsics { width: 64, height: 48, fx: 50.0, fy: 50.0, cx: 31.5, cy: 23.5 };
+    let sensor =
+        Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }), witnesses };
+    let pose = DMat4::from_translation(DVec3::new(0.0, 0.0, 2.0))
+        * DMat4::from_rotation_y(std::f64::consts::FRAC_PI_4)
+        * DMat4::from_rotation_x(std::f64::consts::PI);
+    let mut rig = scene(sensor, mode, &[("builtin:plane:20", pose)]);
+    rig.effects = toml::from_str(effects).unwrap();
+    rig
+}
+
+/// The tilted plane's point and facing unit normal at pixel `i` (f64, worked out by hand).
+fn tilted_plane_point(i: usize) -> (DVec3, DVec3) {
+    let (c, r) = ((i % 64) as f64, (i / 64) as f64);
+    let ray = DVec3::new((c - 31.5) / 50.0, (r - 23.5) / 50.0, 1.0);
+    (2.0 * ray / (1.0 + ray.x), DVec3::new(-1.0, 0.0, -1.0).normalize())
+}
+
+/// Grazing under a rig is measured toward the camera (back along each pixel's ray) and toward
+/// each witness: a projector 0.5 to the camera's right. With a limit of 70°, the camera loses
+/// the plane's far left, the projector a band of columns the camera still sees well, the
+/// expectation worked out per pixel in f64; in shadow modes none and label (drawn on the GPU)
+/// and exact (cast on the CPU), whose effects are the same passes. Pixels within 1e-3 of the
+/// limit's cosine are not compared (f32 normals).
+#[test]
+fn grazing_under_a_rig_is_measured_toward_the_camera_and_each_witness() {
+    let limit = 70f64.to_radians().cos();
+    let projector_at = DVec3::new(0.5, 0.0, 0.0);
+    let wide = Intrinsics { width: 400, height: 300, fx: 50.0, fy: 50.0, cx: 199.5, cy: 149.5 };
+    let (mut by_camera, mut by_projector_alone, mut kept) = (0, 0, 0);
+    let expected: Vec<Option<bool>> = (0..64 * 48)
+        .map(|i| {
+            let (p, n) = tilted_plane_point(i);
+            let camera = n.dot(-p) / p.length();
+            let projector = n.dot(projector_at - p) / (projector_at - p).length();
+            assert!(camera > 0.05 && projector > 0.05, "every point faces both");
+            let lost = camera.min(projector) < limit;
+            by_camera += usize::from(camera < limit);
+            by_projector_alone += usize::from(camera >= limit && projector < limit);
+            kept += usize::from(!lost);
+            ((camera - limit).abs() > 1e-3 && (projector - limit).abs() > 1e-3).then_some(lost)
+        })
+        .collect();
+    assert!(by_camera > 200 && by_projector_alone > 200 && kept > 200, "{by_camera} {by_projector_alone} {kept}");
+    for mode in [ShadowMode::None, ShadowMode::Label, ShadowMode::Exact] {
+        let rig =
+            tilted_plane(vec![projector("projector", projector_at, wide)], mode, "[grazing]\nmax_incidence_deg = 70\n");
+        let out = render(&rig);
+        for (i, lost) in expected.iter().enumerate() {
+            let Some(lost) = *lost else { continue };
+            let want = if lost { Reason::Grazing } else { Reason::Valid };
+            assert_eq!(out.reason[i], want, "{mode:?}: pixel ({}, {})", i % 64, i / 64);
+        }
+    }
+}
+
+/// A directional witness's grazing: a light 75° off the normal of a plane facing the view
+/// loses every pixel at a 70° limit, a light 65° off it none; under a pinhole view (light from
+/// the camera's side, the plane facing back along z) and an orthographic one (the plane's
+/// normal +z), cast in mode exact and drawn in mode none.
+#[test]
+fn grazing_toward_a_directional_witness_under_either_view() {
+    let light = |degrees: f64, toward: DVec3| Witness {
+        name: "light".into(),
+        geometry: WitnessGeometry::Directional(Direction::Vector(
+            DVec3::new(degrees.to_radians().sin(), 0.0, 0.0) + degrees.to_radians().cos() * toward,
+        )),
+    };
+    let grazing = "[grazing]\nmax_incidence_deg = 70\n";
+    for (degrees, want) in [(75.0, Reason::Grazing), (65.0, Reason::Valid)] {
+        let mut pinhole = plane_at(1.9, grazing);
+        pinhole.sensor.witnesses = vec![light(degrees, DVec3::NEG_Z)];
+        let view = rangesynth::sensor::Orthographic { width: 32, height: 24, pitch: [0.1, 0.1], origin: [-1.55, 1.15] };
+        let ortho_sensor = Sensor { reference: View::Orthographic(view), witnesses: vec![light(degrees, DVec3::Z)] };
+        for mode in [ShadowMode::None, ShadowMode::Exact] {
+            let mut orthographic = scene(ortho_sensor.clone(), mode, &[("builtin:plane:20", DMat4::IDENTITY)]);
+            orthographic.effects = toml::from_str(grazing).unwrap();
+            pinhole.shadow.mode = mode;
+            for (what, rig) in [("pinhole", &pinhole), ("orthographic", &orthographic)] {
+                let out = render(rig);
+                let wrong = out.reason.iter().filter(|&&r| r != want).count();
+                assert_eq!(wrong, 0, "{what}, {mode:?}, light {degrees}° off: {wrong} pixels not {want:?}");
+            }
+        }
+    }
+}
+
+/// The noise's incidence term under a pinhole view measures α back along each pixel's ray:
+/// on the tilted plane α runs from 13° to 77°, so σ = 0.001·α²/(π/2 − α)² grows from 1e-4 to
+/// 0.027 across the image. The noise divided by each pixel's σ (worked out in f64) has a
+/// standard deviation of 1 within 10% on the plane's nearer-facing half and on its more
+/// oblique half alike, and a mean near 0.
+#[test]
+fn noise_incidence_under_a_rig_is_measured_back_along_each_ray() {
+    let clean = render(&tilted_plane(vec![], ShadowMode::None, ""));
+    let noisy = render(&tilted_plane(
+        vec![],
+        ShadowMode::None,
+        "[noise]\nsigma = 0\nincidence_coefficient = 0.001\nseed = 3\n",
+    ));
+    let mut halves = [Vec::new(), Vec::new()];
+    for i in 0..64 * 48 {
+        let (p, n) = tilted_plane_point(i);
+        let alpha = (n.dot(-p) / p.length()).acos();
+        let sigma = 0.001 * (alpha / (std::f64::consts::FRAC_PI_2 - alpha)).powi(2);
+        let noise = f64::from(noisy.z[i]) - f64::from(clean.z[i]);
+        halves[usize::from(alpha > std::f64::consts::FRAC_PI_4)].push(noise / sigma);
+    }
+    for (half, standardised) in halves.iter().enumerate() {
+        let n = standardised.len() as f64;
+        let mean = standardised.iter().sum::<f64>() / n;
+        let sd = (standardised.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        assert!(n > 500.0 && (sd - 1.0).abs() < 0.1 && mean.abs() < 0.15, "half {half}: n {n}, mean {mean}, sd {sd}");
+    }
 }

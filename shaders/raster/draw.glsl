@@ -6,6 +6,7 @@
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 #include "contract.glsl"
+#include "../common/view.glsl"
 
 struct DrawData {
     vec4 view_from_model[3]; // rows of view rotation ∘ pose, composed in f64 on the host
@@ -51,7 +52,7 @@ vec3 to_view(DrawData d, vec3 model) {
 // in Vulkan, a quotient need not be): the window coordinates are the same bits whether a
 // device fuses the transform's multiply-add or not.
 vec3 clip_position(DrawData d, vec3 v) {
-    precise vec2 pixel = vec2((v.x - d.grid.x) / d.grid.z, (d.grid.y - v.y) / d.grid.w) + 0.5;
+    precise vec2 pixel = orthographic_pixel(d.grid, v.xy) + 0.5;
     precise vec2 xy = (pixel - d.viewport_centre) * d.viewport_inverse_half_side;
     precise float depth = (d.z_range.y - v.z) / (d.z_range.y - d.z_range.x);
     return vec3(xy, depth);
@@ -137,7 +138,7 @@ vec3 triangle_normal(DrawData d, uint triangle) {
 // corner a with unit normal n, in a view whose pixels lie on `grid` (DrawData.grid): for the
 // range view (range_pixel), and the compute rasterizer's depths and z keys (raster.comp).
 float plane_z(vec4 grid, vec3 a, vec3 n, vec2 pixel) {
-    precise vec2 centre = vec2(grid.x + pixel.x * grid.z, grid.y - pixel.y * grid.w);
+    precise vec2 centre = orthographic_centre(grid, pixel);
     precise float z = a.z - (n.x * (centre.x - a.x) + n.y * (centre.y - a.y)) / n.z;
     return z;
 }
@@ -199,13 +200,6 @@ vec4 pinhole_clip_position(DrawData d, vec3 v) {
     return vec4(xy, depth, v.z);
 }
 
-// The ray through the centre of pixel (c, r), given as floats, scaled so that its z is 1:
-// the point at depth Z along it is Z times the ray.
-vec3 pinhole_ray(DrawData d, vec2 pixel) {
-    precise vec2 xy = (pixel - d.grid.zw) / d.grid.xy;
-    return vec3(xy, 1.0);
-}
-
 // What a pinhole view holds at pixel (c, r), given as floats, that triangle t of draw d
 // covers: its label, the depth Z where the pixel's ray meets the triangle's plane (n · p =
 // n · a), and the gradient (∂Z/∂X, ∂Z/∂Y) of the plane in the view's frame, as exact ray
@@ -213,7 +207,7 @@ vec3 pinhole_ray(DrawData d, vec2 pixel) {
 RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
     vec3 n = triangle_normal(d, t);
     vec3 a = triangle_corner(d, t, 0u);
-    vec3 ray = pinhole_ray(d, pixel);
+    vec3 ray = pinhole_ray(d.grid, pixel);
     precise float z = (n.x * a.x + n.y * a.y + n.z * a.z) / (n.x * ray.x + n.y * ray.y + n.z * ray.z);
     // NaN first: clamp's result for NaN is undefined (a GPU's min and max may return either).
     vec2 gradient = plane_gradient(n);
@@ -229,7 +223,7 @@ RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
 // face 89° from the ray: TIE_STEEPEST / f).
 float pinhole_tie_depth(DrawData d, uint t, vec2 pixel, float depth) {
     vec3 n = triangle_normal(d, t);
-    vec3 ray = pinhole_ray(d, pixel);
+    vec3 ray = pinhole_ray(d.grid, pixel);
     float across = abs(n.x * ray.x + n.y * ray.y + n.z * ray.z);
     vec2 steepest = TIE_STEEPEST / d.grid.xy;
     vec2 slope = abs(n.xy) / (d.grid.xy * across);

@@ -4,6 +4,10 @@
 // that lost it, 0 while none has) and its measured z (absolute, range frame) where an effect
 // changes z. Effects are evaluated at every pixel that holds a surface before shadowing, so a
 // count of the unshadowed image sees the same losses.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+#include "../common/view.glsl"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
@@ -23,13 +27,21 @@ layout(push_constant, std430) uniform Effect {
     uint use_shadowed;     // 1: labels after shadowing are in shadowed_label; 0: range_label
     uint z_in_buffer;      // 1: an earlier pass changed z: it is in measured_z
     float z_origin;        // the range view's z is stored as an offset from this
-    float cos_theta;
-    float sin_theta;
-    uint seed_or_width;            // the effect's seed, or edges' width in pixels
+    uint reference_kind;   // the reference view (view.glsl): VIEW_ORTHOGRAPHIC or VIEW_PINHOLE
+    uint witness_count;
+    uint seed_or_width;    // the effect's seed, or edges' width in pixels
     vec4 params;           // the effect's parameters (src/render/stages/effects.rs)
     uint reflectivity_offset;
     float param4;          // a fifth parameter: disparity's noise_px
+    uvec2 witnesses;       // device address of the witnesses (EffectWitnesses)
+    vec4 reference_grid;   // the reference view's grid (view.glsl)
 } e;
+
+// The sensor's witnesses in file order (src/render/stages/effects.rs, EffectSensor): a unit
+// direction toward the witness (w = 0) or its centre (w = 1), in the reference frame.
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer EffectWitnesses {
+    vec4 witness[];
+};
 
 // This pass's Reason code (src/effects.rs), given by the host.
 layout(constant_id = 0) const uint REASON = 0xffffffffu;
@@ -84,4 +96,44 @@ ivec2 this_pixel() {
 
 uint index_of(ivec2 p) {
     return uint(p.y) * e.width + uint(p.x);
+}
+
+// The surface at p as the reference view sees it: its point (reference frame), its normal on
+// the side facing the view (not unit) and the inverse of the normal's length.
+struct Surface {
+    vec3 point;
+    vec3 normal;
+    float inverse_length;
+};
+
+Surface surface_seen(ivec2 p) {
+    vec3 n = surface_normal(p);
+    vec3 point = view_point(e.reference_kind, e.reference_grid, vec2(p), rendered_z(p));
+    if (e.reference_kind == VIEW_PINHOLE) {
+        // Scaled to components of at most 1: a face along the view's ray has a gradient of up
+        // to 1e30, whose square would overflow. Its upward side faces away from the view.
+        n /= max(1.0, max(abs(n.x), abs(n.y)));
+        n = dot(n, point) > 0.0 ? -n : n;
+    }
+    return Surface(point, n, 1.0 / length(n));
+}
+
+// The cosine of the angle between the surface's normal and the direction from it toward the
+// reference view: back along its ray to a pinhole view's centre; +z, the normal's z (1) over its
+// length, under an orthographic view (which looks down −z: the paper's projector).
+float cos_toward_reference(Surface s) {
+    if (e.reference_kind == VIEW_PINHOLE) {
+        return dot(s.normal, -s.point) * s.inverse_length / length(s.point);
+    }
+    return s.normal.z * s.inverse_length;
+}
+
+// The cosine of the angle between the surface's normal and the direction toward witness k.
+float cos_toward_witness(Surface s, uint k) {
+    vec4 w = EffectWitnesses(e.witnesses).witness[k];
+    if (w.w == 0.0) {
+        return dot(s.normal, w.xyz) * s.inverse_length;
+    }
+    vec3 toward = w.xyz - s.point;
+    return dot(s.normal, toward) * s.inverse_length / length(toward);
 }

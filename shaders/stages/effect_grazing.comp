@@ -1,6 +1,8 @@
 #version 460
 // [effects.grazing]: a point is lost where its surface normal makes more than the allowed
-// angle with the direction to the projector (+z) or to the camera (sin θ, 0, cos θ).
+// angle with the direction toward the reference view or toward any witness (the paper's
+// scanner: the projector, +z, and the camera, (sin θ, 0, cos θ)); an angle that cannot be
+// measured (a face seen edge-on) loses it too.
 // params.x: the cosine of max_incidence_deg.
 #include "effect.glsl"
 
@@ -9,10 +11,12 @@ void main() {
     if (p.x < 0 || surface_label(p) == 0u) {
         return;
     }
-    vec3 n = surface_normal(p);
-    float to_projector = 1.0 / length(n);
-    float to_camera = dot(n, vec3(e.sin_theta, 0.0, e.cos_theta)) * to_projector;
-    if (min(to_projector, to_camera) < e.params.x) {
+    Surface s = surface_seen(p);
+    bool seen = cos_toward_reference(s) >= e.params.x;
+    for (uint k = 0u; seen && k < e.witness_count; k++) {
+        seen = cos_toward_witness(s, k) >= e.params.x;
+    }
+    if (!seen) {
         lose(index_of(p));
     }
 }

@@ -1,7 +1,8 @@
 #version 460
 // [effects.noise]: Gaussian noise along z, drawn from (seed, pixel), with
 // σ = sigma + depth_coefficient·(z − depth_reference)² + incidence_coefficient·α²/(π/2 − α)²,
-// α the angle between the normal and the projector, capped (src/effects.rs).
+// α the angle between the normal and the ray toward the reference view (the paper's
+// projector), capped (src/effects.rs).
 // seed_or_width: seed; params: sigma, depth_coefficient, depth_reference, incidence_coefficient.
 #include "effect.glsl"
 #include "random.glsl"
@@ -21,7 +22,7 @@ void main() {
     float sigma = e.params.x + e.params.y * from_reference * from_reference;
     // The incidence term only where its coefficient is given: the normal is not read otherwise.
     if (e.params.w != 0.0) {
-        float alpha = min(acos(clamp(1.0 / length(surface_normal(p)), 0.0, 1.0)), MAX_INCIDENCE);
+        float alpha = min(acos(clamp(cos_toward_reference(surface_seen(p)), 0.0, 1.0)), MAX_INCIDENCE);
         float oblique = alpha / (1.5707963267948966 - alpha);
         sigma += e.params.w * oblique * oblique;
     }

@@ -241,14 +241,12 @@ bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias
 
 bool shadowed(ivec2 pixel, RangePixel range) {
     uint label = range.label;
-    precise float x = m.range_grid.x + float(pixel.x) * m.range_grid.z;
-    precise float y = m.range_grid.y - float(pixel.y) * m.range_grid.w;
+    precise vec2 xy = orthographic_centre(m.range_grid, vec2(pixel));
     float z = range.z;
     // p' = R_y(-theta) p
-    precise vec3 ps = vec3(m.cos_theta * x - m.sin_theta * z, y, m.sin_theta * x + m.cos_theta * z);
-    precise float column = (ps.x - m.shadow_grid.x) / m.shadow_grid.z;
-    precise float row = (m.shadow_grid.y - y) / m.shadow_grid.w;
-    ivec2 s = ivec2(floor(column + 0.5), floor(row + 0.5));
+    precise vec3 ps = vec3(m.cos_theta * xy.x - m.sin_theta * z, xy.y, m.sin_theta * xy.x + m.cos_theta * z);
+    precise vec2 projected = orthographic_pixel(m.shadow_grid, ps.xy);
+    ivec2 s = ivec2(floor(projected + 0.5));
     // The shadow grid covers every point the range view can see (sensor.rs); a point
     // outside it can only come from rounding at its border and is treated as lit.
     bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
@@ -257,7 +255,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     }
     if (TEST == TEST_LABEL_SQUARE) {
         // The four shadow pixels whose centres surround p'; outside the grid it is lit, as above.
-        ivec2 corner = ivec2(floor(vec2(column, row)));
+        ivec2 corner = ivec2(floor(projected));
         bool outside = any(lessThan(corner, ivec2(-1))) || any(greaterThanEqual(corner, m.sizes.zw));
         return !outside && !shadow_label_is(corner, label) && !shadow_label_is(corner + ivec2(1, 0), label)
             && !shadow_label_is(corner + ivec2(0, 1), label) && !shadow_label_is(corner + ivec2(1, 1), label);

@@ -5,6 +5,8 @@
 // witness's label image carries p's label at p's projection (the paper's test, Fig. 4): the
 // nearest pixel, or any of the four around it (TEST_LABEL_SQUARE). A point any witness does not
 // see is shadowed; bit k of its `lost_by` word says witness k did not see it.
+#include "../common/view.glsl"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
@@ -56,7 +58,7 @@ bool sees(WitnessData w, vec3 p, vec3 lit, uint label) {
     if (!(q.z > 0.0)) {
         return false;
     }
-    precise vec2 uv = w.intrinsics.xy * q.xy / q.z + w.intrinsics.zw;
+    precise vec2 uv = pinhole_pixel(w.intrinsics, q);
     // Off the image by more than a pixel (checked in floats: a far projection does not fit an
     // int, whose conversion is then undefined).
     if (!(all(greaterThanEqual(uv, vec2(-1.0))) && all(lessThanEqual(uv, vec2(w.band.xy))))) {
@@ -81,8 +83,7 @@ void main() {
     uint lost = 0u;
     if (label != 0u) {
         float z = imageLoad(range_z, pixel).r;
-        vec3 ray = vec3((vec2(pixel) - m.intrinsics.zw) / m.intrinsics.xy, 1.0);
-        precise vec3 p = z * ray;
+        precise vec3 p = view_point(VIEW_PINHOLE, m.intrinsics, vec2(pixel), z);
         vec3 n = vec3(-imageLoad(range_dz_dx, pixel).r, -imageLoad(range_dz_dy, pixel).r, 1.0);
         // Scaled to components of at most 1: a face along the view's axis has a gradient of
         // up to 1e30, whose square would overflow.

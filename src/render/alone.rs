@@ -115,7 +115,7 @@ impl Renderer {
             })
             .collect::<Result<_>>()?;
         let effects = Effects::default();
-        let passes = self.passes(None, *shadow, &effects, (false, true))?;
+        let passes = self.passes((sensor, None), *shadow, &effects, (false, true))?;
         let mut drawn = Vec::with_capacity(models.len());
         for first in (0..models.len()).step_by(slots.len()) {
             let run: Vec<usize> = (first..models.len().min(first + slots.len())).collect();

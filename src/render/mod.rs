@@ -44,8 +44,9 @@ use crate::exact::{render_rig_exact, render_scene_exact, ExactImage};
 use crate::gpu::{Buffer, BufferDesc, ContextOptions, Encoder, GpuContext, Timestamps};
 use crate::limits::{Ledger, MemoryBudget};
 use crate::pose::check_rigid;
+use crate::render::stages::effects::EffectSensor;
 use crate::scene::Scene;
-use crate::sensor::{Scanner, ViewGrid};
+use crate::sensor::{Scanner, Sensor, ViewGrid};
 use crate::shadow::{ShadowMode, ShadowSettings};
 use mesh_cache::MeshCache;
 use pinhole::{PinholeJob, WitnessSet};
@@ -238,20 +239,24 @@ impl Renderer {
         CoverageGroup::new(&self.ctx, self.pipelines.compute_raster()?, slots, members, max_triangles)
     }
 
-    /// The pass list for jobs seen by this sensor with these shadow settings and effects, some of
-    /// whose views the compute rasterizer renders where `compute`.
-    /// `pinhole`: some of whose jobs draw a rig's pinhole views.
+    /// The pass list for jobs seen by this sensor (`scanner` where it is the paper's scanner)
+    /// with these shadow settings and effects, some of whose views the compute rasterizer
+    /// renders where `compute`. `pinhole`: some of whose jobs draw a rig's pinhole views.
     pub(crate) fn passes<'a>(
         &'a self,
-        sensor: Option<&'a Scanner>,
+        (sensor, scanner): (&Sensor, Option<&'a Scanner>),
         shadow: ShadowSettings,
         effects: &'a Effects,
         (compute, pinhole): (bool, bool),
     ) -> Result<Passes<'a>> {
-        let effect_pipelines = (!effects.is_empty()).then(|| self.pipelines.effects()).transpose()?;
+        let effect_pipelines = match effects.is_empty() {
+            true => None,
+            false => Some((self.pipelines.effects()?, EffectSensor::new(&self.ctx, sensor)?)),
+        };
         let raster_pipelines = compute.then(|| self.pipelines.compute_raster()).transpose()?;
         let pinhole_pipelines = pinhole.then(|| self.pipelines.pinhole()).transpose()?;
         let pipelines = &self.pipelines;
+        let sensor = scanner;
         Ok(Passes { pipelines, raster_pipelines, effect_pipelines, pinhole_pipelines, sensor, shadow, effects })
     }
 
@@ -395,7 +400,7 @@ impl Renderer {
         let z_readback = Buffer::new(ctx, BufferDesc::readback(pixels * 4), "z readback")?;
         let timestamps = Timestamps::new(ctx, PassClock::QUERIES, "pass timestamps")?;
         let mut clock = PassClock::new(&timestamps);
-        let passes = self.passes(scanner, scene.shadow, effects, (compute, pinhole.is_some()))?;
+        let passes = self.passes((&scene.sensor, scanner), scene.shadow, effects, (compute, pinhole.is_some()))?;
         ctx.submit_and_wait("render", |cmd| {
             let mut enc = Encoder::new(ctx, cmd);
             let sink = Sink::Readback { label: &label_readback, z: &z_readback };

@@ -26,7 +26,7 @@ use crate::render::raster::compute::{
     ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember,
 };
 use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
-use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectShape};
+use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
 use crate::render::stages::host_view::HostView;
 use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
 use crate::render::target_pool::{PooledTargets, TargetPool};
@@ -306,8 +306,8 @@ pub(crate) struct Passes<'a> {
     pub pipelines: &'a Pipelines,
     /// Present where the compute rasterizer renders views.
     pub raster_pipelines: Option<&'a ComputeRasterPipelines>,
-    /// Present where effects are named.
-    pub effect_pipelines: Option<&'a EffectPipelines>,
+    /// Present where effects are named, with the sensor as they measure against it.
+    pub effect_pipelines: Option<(&'a EffectPipelines, EffectSensor)>,
     /// Present where jobs draw a rig's pinhole views.
     pub pinhole_pipelines: Option<&'a PinholePipelines>,
     /// The paper's scanner, which the shadow pass renders; `None` for a rig's image cast on the
@@ -577,9 +577,9 @@ impl<'p> Passes<'p> {
         shadowed_labels: Option<&'s Buffer>,
         sink: &Sink<'s>,
     ) -> Vec<Step<'s>> {
-        let (sensor, views) = (self.sensor, job.views);
+        let views = job.views;
         let mut steps = Vec::new();
-        if let (Some(buffers), Some(pipelines)) = (&slot.effects, self.effect_pipelines) {
+        if let (Some(buffers), Some((pipelines, sensor))) = (&slot.effects, &self.effect_pipelines) {
             // No losses yet, and z 0.0 where no surface is (as the range view is cleared).
             let cleared: Vec<&Buffer> = std::iter::once(&buffers.losses).chain(&buffers.measured_z).collect();
             let uses = cleared.iter().map(|&b| (b, Access::TransferWrite)).collect();

@@ -67,6 +67,20 @@ impl View {
         }
     }
 
+    /// The view as the shaders' view functions take it (shaders/common/view.glsl): its kind's
+    /// code and its grid, (x0, y0, dx, dy) of an orthographic view, (fx, fy, cx, cy) of a
+    /// pinhole one.
+    pub(crate) fn shader_view(&self) -> (u32, [f64; 4]) {
+        use crate::shader_contract::{VIEW_ORTHOGRAPHIC, VIEW_PINHOLE};
+        match self {
+            View::Orthographic(o) => (VIEW_ORTHOGRAPHIC, [o.origin[0], o.origin[1], o.pitch[0], o.pitch[1]]),
+            View::Pinhole(p) => {
+                let k = &p.intrinsics;
+                (VIEW_PINHOLE, [k.fx, k.fy, k.cx, k.cy])
+            }
+        }
+    }
+
     /// The point (reference frame) on the ray of pixel (col, row) at depth `z`: the range
     /// frame's z of an orthographic view, the depth along the optical axis of a pinhole one.
     pub fn point(&self, col: u32, row: u32, z: f64) -> DVec3 {

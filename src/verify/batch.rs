@@ -378,7 +378,12 @@ pub(crate) fn count_batch(
         })
         .collect::<Result<_>>()?;
 
-    let passes = renderer.passes(settings.scanner, settings.shadow, settings.effects, (compute, pinhole.is_some()))?;
+    let passes = renderer.passes(
+        (settings.sensor, settings.scanner),
+        settings.shadow,
+        settings.effects,
+        (compute, pinhole.is_some()),
+    )?;
     let score_pipelines = score_pass.pipelines(matches!(settings.blocks.rays, BlockRays::Pinhole { .. }))?;
     // Timed stages: a run's three of coverage, its jobs' passes (PassClock::QUERIES less the
     // start) and two of scores at most.

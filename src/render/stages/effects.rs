@@ -10,7 +10,7 @@ use crate::gpu::shaders::layout::spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::render::targets::ViewKind;
-use crate::sensor::{PixelRect, Scanner};
+use crate::sensor::{PixelRect, Sensor, WitnessGeometry};
 use ash::vk;
 use std::sync::Arc;
 
@@ -24,15 +24,16 @@ pub struct EffectConstants {
     use_shadowed: u32,
     z_in_buffer: u32,
     z_origin: f32,
-    cos_theta: f32,
-    sin_theta: f32,
+    reference_kind: u32,
+    witness_count: u32,
     /// The seed (noise, dropout) or the width in pixels (edges).
     seed_or_width: u32,
     params: [f32; 4],
     reflectivity_offset: u32,
     /// A fifth parameter (disparity's noise in pixels).
     param4: f32,
-    _pad: [u32; 2],
+    witnesses: [u32; 2],
+    reference_grid: [f32; 4],
 }
 
 matches_shader_struct!(
@@ -44,12 +45,14 @@ matches_shader_struct!(
         use_shadowed,
         z_in_buffer,
         z_origin,
-        cos_theta,
-        sin_theta,
+        reference_kind,
+        witness_count,
         seed_or_width,
         params,
         reflectivity_offset,
         param4,
+        witnesses,
+        reference_grid,
     }
 );
 
@@ -67,10 +70,7 @@ pub(crate) struct EffectJob {
 impl EffectConstants {
     /// The constants of `effect`'s pass, which `effects` names; `z_in_buffer` says whether an
     /// earlier pass of the job changed z.
-    fn new(effect: Effect, effects: &Effects, sensor: Option<&Scanner>, job: &EffectJob, z_in_buffer: bool) -> Self {
-        // The direction grazing and the noise's incidence term measure against: the scanner's
-        // camera (other rigs refuse both: `Effects::validate_for`).
-        let theta = sensor.map_or(0.0, Scanner::theta);
+    fn new(effect: Effect, effects: &Effects, sensor: &EffectSensor, job: &EffectJob, z_in_buffer: bool) -> Self {
         let f = |v: f64| v as f32;
         let (seed_or_width, params) = match effect {
             Effect::Grazing => {
@@ -111,14 +111,54 @@ impl EffectConstants {
             use_shadowed: u32::from(job.use_shadowed),
             z_in_buffer: u32::from(z_in_buffer),
             z_origin: job.z_origin,
-            cos_theta: f(theta.cos()),
-            sin_theta: f(theta.sin()),
+            reference_kind: sensor.reference_kind,
+            witness_count: sensor.witness_count,
             seed_or_width,
             params,
             reflectivity_offset: job.reflectivity_offset,
             param4,
-            _pad: [0; 2],
+            witnesses: sensor.witnesses.address_words(),
+            reference_grid: sensor.reference_grid,
         }
+    }
+}
+
+/// The sensor as the effect passes measure against it (grazing and the noise's incidence
+/// term): the reference view as shaders/common/view.glsl takes it, and a table on the device
+/// of its witnesses in file order, each a unit direction toward it (w = 0) or its centre (w =
+/// 1), in the reference frame. A scan's geometry, the same for every job of a submission.
+pub(crate) struct EffectSensor {
+    reference_kind: u32,
+    reference_grid: [f32; 4],
+    witnesses: Buffer,
+    witness_count: u32,
+}
+
+impl EffectSensor {
+    pub fn new(ctx: &Arc<GpuContext>, sensor: &Sensor) -> Result<Self> {
+        let (reference_kind, grid) = sensor.reference.shader_view();
+        let f = |v: f64| v as f32;
+        let mut table: Vec<[f32; 4]> = sensor
+            .witnesses
+            .iter()
+            .map(|witness| match witness.geometry {
+                WitnessGeometry::Directional(direction) => {
+                    let d = direction.vector();
+                    [f(d.x), f(d.y), f(d.z), 0.0]
+                }
+                WitnessGeometry::Pinhole { pose, .. } => {
+                    let centre = pose.w_axis;
+                    [f(centre.x), f(centre.y), f(centre.z), 1.0]
+                }
+            })
+            .collect();
+        let witness_count = table.len() as u32;
+        // A buffer is never empty; a sensor without witnesses reads none of it.
+        if table.is_empty() {
+            table.push([0.0; 4]);
+        }
+        let witnesses = Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "effects' witnesses")?;
+        Ok(Self { reference_kind, reference_grid: grid.map(f), witnesses, witness_count })
     }
 }
 
@@ -246,7 +286,7 @@ impl EffectBuffers {
         cmd: vk::CommandBuffer,
         pipelines: &EffectPipelines,
         effect: Effect,
-        (effects, sensor): (&Effects, Option<&Scanner>),
+        (effects, sensor): (&Effects, &EffectSensor),
         job: &EffectJob,
         z_in_buffer: bool,
     ) {
