@@ -209,15 +209,22 @@ impl Mesh {
         Ok(mesh)
     }
 
-    /// Centre and radius of a sphere holding every vertex. A rigid pose moves the sphere
-    /// with the mesh, which is how depth ranges and the shadow view's extent are bounded
-    /// without transforming every vertex on the host.
-    pub fn bounding_sphere(&self) -> (DVec3, f64) {
+    /// The least and greatest corners of the box (model frame, axis-aligned) holding every
+    /// vertex; infinite and empty without vertices.
+    pub fn bounding_box(&self) -> [DVec3; 2] {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for i in 0..self.positions.len() as u32 {
             lo = lo.min(self.vertex(i));
             hi = hi.max(self.vertex(i));
         }
+        [lo, hi]
+    }
+
+    /// Centre and radius of a sphere holding every vertex. A rigid pose moves the sphere
+    /// with the mesh, which is how depth ranges and the shadow view's extent are bounded
+    /// without transforming every vertex on the host.
+    pub fn bounding_sphere(&self) -> (DVec3, f64) {
+        let [lo, hi] = self.bounding_box();
         let centre = (lo + hi) * 0.5;
         let radius = (0..self.positions.len() as u32).map(|i| self.vertex(i).distance(centre)).fold(0.0, f64::max);
         (centre, radius)

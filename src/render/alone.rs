@@ -86,6 +86,7 @@ impl Renderer {
                 let named = |_| name(i);
                 let models = Models { draws: &draws[i], spheres: &spheres[i..=i], name: &named };
                 PinholeJob::new(
+                    ctx,
                     &reference,
                     witnesses.as_ref(),
                     models,

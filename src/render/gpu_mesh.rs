@@ -42,6 +42,9 @@ pub struct GpuMesh {
     /// The model-frame point the stored positions are offsets from (`Mesh::origin`): each
     /// draw folds it into its pose, in f64.
     pub(crate) origin: DVec3,
+    /// The box holding every vertex, model frame (`Mesh::bounding_box`): what a rig's
+    /// directional witnesses' images are planned over (src/render/pinhole/job.rs).
+    pub(crate) bounding_box: [DVec3; 2],
 }
 
 impl GpuMesh {
@@ -99,6 +102,7 @@ impl GpuMesh {
             solidity: mesh.solidity_with(&links),
             longest_edge: longest_edge(mesh),
             origin: mesh.origin,
+            bounding_box: mesh.bounding_box(),
         })
     }
 }

@@ -17,7 +17,7 @@
 //! stage's steps side by side behind one barrier ([`Passes::record_run`]).
 
 use crate::effects::{Effects, EFFECT_ORDER};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
 use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessMaskBindings, WitnessSet};
 use crate::render::pipelines::Pipelines;
@@ -59,11 +59,12 @@ pub(crate) struct Slot<'a> {
     witnesses: Option<WitnessSlot<'a>>,
 }
 
-/// What a slot holds for a rig's witnesses: the attachments of their label images, the bits
-/// of the witnesses that lost each pixel (host-visible for a readback slot), and the label
-/// test's bindings.
+/// What a slot holds for a rig's witnesses: the attachments of their label images (the
+/// pinhole witnesses', the directional witnesses', where the rig has any), the bits of the
+/// witnesses that lost each pixel (host-visible for a readback slot), and the label test's
+/// bindings.
 struct WitnessSlot<'a> {
-    targets: PooledTargets<'a>,
+    targets: [Option<PooledTargets<'a>>; 2],
     lost_by: Buffer,
     bindings: WitnessMaskBindings,
     neighbourhood: Neighbourhood,
@@ -160,10 +161,22 @@ impl<'a> Slot<'a> {
         };
         let witnesses = match (shape.witnesses, &masked) {
             (Some(set), Some(masked)) => {
-                let targets = pool.take(ctx, ViewKind::Shadow, set.size, &format!("{name} witness views"))?;
+                let [pinhole, directional] = [(0, "pinhole"), (1, "directional")].map(|(i, kind)| {
+                    let (w, h) = set.sizes[i];
+                    (w > 0 && h > 0)
+                        .then(|| pool.take(ctx, ViewKind::Shadow, (w, h), &format!("{name} {kind} witness views")))
+                        .transpose()
+                });
+                let targets = [pinhole?, directional?];
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
                 let mask = p.pinhole()?.mask(set.neighbourhood);
-                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, &targets), (masked, &lost_by, &set.table))?;
+                // A rig without a kind of witness binds the other's images in its place.
+                let [first, second] = [&targets[0], &targets[1]].map(|t| t.as_deref());
+                let images = match (first.or(second), second.or(first)) {
+                    (Some(pinhole), Some(directional)) => [pinhole, directional],
+                    _ => return Err(Error::Scene("a witness set holds no witness".into())),
+                };
+                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by))?;
                 Some(WitnessSlot { targets, lost_by, bindings, neighbourhood: set.neighbourhood })
             }
             _ => None,
@@ -532,7 +545,8 @@ impl<'p> Passes<'p> {
         let p = self.pipelines;
         let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
         let witnesses = slot.witnesses.as_ref();
-        let prepare = attachment_writes(std::iter::once(&*slot.range).chain(witnesses.map(|w| &*w.targets)));
+        let witness_targets = || witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
+        let prepare = attachment_writes(std::iter::once(&*slot.range).chain(witness_targets()));
         let draw = move |ctx: &GpuContext, cmd| {
             let half_side = ctx.viewport_half_side();
             let reference = [pinhole.reference_band(job.area, half_side)];
@@ -545,17 +559,24 @@ impl<'p> Passes<'p> {
                 &reference,
                 job.draws,
             );
-            let drawn = pinhole.witness_area();
-            if let Some(w) = witnesses.filter(|_| drawn.width > 0 && drawn.height > 0) {
-                let bands = pinhole.witness_bands(half_side);
-                record_bands(ctx, cmd, (&pipelines.witnesses, p.raster_layout), &w.targets, drawn, &bands, job.draws);
+            // The pinhole witnesses' images in projection, the directional witnesses' as the
+            // scanner's shadow view is drawn.
+            let kinds = [(&pipelines.witnesses, false), (&p.shadow, true)];
+            for ((view_pipelines, directional), targets) in
+                kinds.into_iter().zip(witnesses.map(|w| &w.targets).into_iter().flatten())
+            {
+                let drawn = pinhole.witness_area(directional);
+                if let Some(targets) = targets.as_deref().filter(|_| drawn.width > 0 && drawn.height > 0) {
+                    let bands = pinhole.witness_bands(directional);
+                    record_bands(ctx, cmd, (view_pipelines, p.raster_layout), targets, drawn, &bands, job.draws);
+                }
             }
         };
         let mut steps = vec![Step::new(prepare, Vec::new(), draw).timed("range")];
         let shadowed = match (witnesses, &slot.masked) {
             (Some(w), Some(masked)) => {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
-                images.extend(w.targets.colour.iter().map(|image| (image, Access::ComputeRead)));
+                images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
                 let buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
                 let mask = pipelines.mask(w.neighbourhood);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &pinhole.mask);

@@ -213,7 +213,7 @@ pub(crate) fn count_batch(
                 let spheres = [posed_sphere(item)];
                 let models = Models { draws, spheres: &spheres, name: &|_| "its model".to_string() };
                 let area = footprint.unwrap_or(PixelRect::EMPTY);
-                PinholeJob::new(reference, witnesses.as_ref(), models, area, half_side)
+                PinholeJob::new(ctx, reference, witnesses.as_ref(), models, area, half_side)
             })
             .collect::<Result<_>>()?,
         None => Vec::new(),

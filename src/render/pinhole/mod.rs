@@ -6,8 +6,10 @@
 //! scanner's range and shadow passes, so that `render` reads them back and `verify` scores
 //! them in its batches as it does the scanner's.
 //!
-//! The witnesses share one set of attachments, one band of rows each, drawn in one rendering:
-//! the mask binds one image whatever their number.
+//! The witnesses share two sets of attachments, one band of rows each: the pinhole witnesses'
+//! images, drawn in projection, and the directional witnesses', drawn orthographically by the
+//! scanner's shadow-view pipelines over each job's models; the mask binds two images whatever
+//! their number.
 
 mod job;
 mod pipelines;
@@ -28,11 +30,10 @@ use crate::sensor::{Pinhole, Sensor, View};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
 use std::sync::Arc;
-use witness_set::label_image;
 
-/// Whether the GPU draws a rig: a pinhole reference view in shadow mode `none`, or in mode
-/// `label` with pinhole witnesses alone. Mode `label` on any other rig is refused, naming what
-/// the label test cannot read.
+/// Whether the GPU draws a rig: a pinhole reference view in shadow modes `none` and `label`.
+/// Mode `label` under an orthographic reference view other than the paper's scanner is
+/// refused: the label test reads a pinhole reference view's points.
 pub(crate) fn draws_rig(sensor: &Sensor, mode: ShadowMode) -> Result<bool> {
     let pinhole = matches!(sensor.reference, View::Pinhole(_));
     match mode {
@@ -42,12 +43,7 @@ pub(crate) fn draws_rig(sensor: &Sensor, mode: ShadowMode) -> Result<bool> {
              under an orthographic reference view other than the paper's scanner, use mode \"depth\" or \"exact\""
                 .into(),
         )),
-        ShadowMode::Label => {
-            for (index, witness) in sensor.witnesses.iter().enumerate() {
-                label_image(witness, index)?;
-            }
-            Ok(true)
-        }
+        ShadowMode::Label => Ok(true),
         _ => Ok(false),
     }
 }
@@ -100,7 +96,7 @@ impl Renderer {
         };
         let models = Models { draws: &draws, spheres: &spheres, name: &name };
         let half_side = self.ctx.viewport_half_side();
-        let job = PinholeJob::new(&reference, witnesses.as_ref(), models, views.range.full(), half_side)?;
+        let job = PinholeJob::new(&self.ctx, &reference, witnesses.as_ref(), models, views.range.full(), half_side)?;
         self.render_views(scene, None, views, &draws, Source::Pinhole(&job, witnesses.as_ref()))
     }
 

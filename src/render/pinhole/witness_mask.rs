@@ -1,6 +1,6 @@
-//! The compute pass that tests a pinhole reference view's points against every pinhole
-//! witness's label image (shaders/stages/witness_mask.comp): what it reads of each witness,
-//! its push constants, and its bindings.
+//! The compute pass that tests a pinhole reference view's points against every witness's
+//! label image (shaders/stages/witness_mask.comp): what it reads of each witness, its push
+//! constants, and its bindings.
 
 use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
@@ -9,7 +9,7 @@ use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{Intrinsics, PixelRect};
 use ash::vk;
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 use std::sync::Arc;
 
 /// One witness as the mask reads it (`WitnessData`, std430).
@@ -18,29 +18,54 @@ use std::sync::Arc;
 pub struct WitnessConstants {
     from_reference: [[f32; 4]; 3],
     centre: [f32; 4],
-    intrinsics: [f32; 4],
+    grid: [f32; 4],
     band: [u32; 4],
 }
 
-matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, intrinsics, band });
+matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band });
+
+/// Which attachment a witness's band lies in (`WitnessData.band.w`).
+const PINHOLE_ATTACHMENT: u32 = 0;
+const DIRECTIONAL_ATTACHMENT: u32 = 1;
 
 impl WitnessConstants {
-    /// A witness whose pose is reference-from-witness, whose label image has the `drawn`
-    /// intrinsics (its `columns` applied) and lies in `band` of the witnesses' attachments.
-    /// `None` where a value does not hold in f32.
-    pub fn new(pose: DMat4, drawn: &Intrinsics, band: PixelRect) -> Option<Self> {
-        let from_reference = pose.inverse();
-        let row = |i| from_reference.row(i).as_vec4().to_array();
+    /// A pinhole witness whose pose is reference-from-witness, whose label image has the
+    /// `drawn` intrinsics (its `columns` applied) and lies in `band` of the pinhole witnesses'
+    /// attachment. `None` where a value does not hold in f32.
+    pub fn pinhole(pose: DMat4, drawn: &Intrinsics, band: PixelRect) -> Option<Self> {
         let constants = Self {
-            from_reference: [row(0), row(1), row(2)],
+            from_reference: rows(pose.inverse()),
             centre: pose.w_axis.as_vec4().to_array(),
-            intrinsics: [drawn.fx, drawn.fy, drawn.cx, drawn.cy].map(|v| v as f32),
-            band: [band.width, band.height, band.row, 0],
+            grid: [drawn.fx, drawn.fy, drawn.cx, drawn.cy].map(|v| v as f32),
+            band: [band.width, band.height, band.row, PINHOLE_ATTACHMENT],
         };
-        let mut floats =
-            constants.from_reference.iter().flatten().chain(&constants.centre).chain(&constants.intrinsics);
+        let mut floats = constants.from_reference.iter().flatten().chain(&constants.centre).chain(&constants.grid);
         floats.all(|v| v.is_finite()).then_some(constants)
     }
+
+    /// A directional witness seen `toward` (unit, reference frame), turned to +z by the
+    /// rotation `from_reference`, whose label image lies in `band` of the directional
+    /// witnesses' attachment; its grid is each job's ([`WitnessConstants::with_grid`]).
+    pub fn directional(from_reference: DMat4, toward: DVec3, band: PixelRect) -> Self {
+        Self {
+            from_reference: rows(from_reference),
+            centre: toward.extend(0.0).as_vec4().to_array(),
+            grid: [0.0; 4],
+            band: [band.width, band.height, band.row, DIRECTIONAL_ATTACHMENT],
+        }
+    }
+
+    /// The witness with its orthographic label image's grid (x0, y0, dx, dy: its band's first
+    /// pixel's centre and the pitch) set: a directional witness's, planned for one job.
+    pub fn with_grid(self, grid: [f64; 4]) -> Self {
+        Self { grid: grid.map(|v| v as f32), ..self }
+    }
+}
+
+/// The first three rows of a transform, rounded once to f32.
+fn rows(transform: DMat4) -> [[f32; 4]; 3] {
+    let row = |i| transform.row(i).as_vec4().to_array();
+    [row(0), row(1), row(2)]
 }
 
 /// The mask's push constants (`WitnessMask`, std430).
@@ -51,43 +76,53 @@ pub struct WitnessMaskConstants {
     region: [u32; 4],
     width: u32,
     witness_count: u32,
+    witnesses: [u32; 2],
     facing_tolerance: f32,
+    _pad: [u32; 3],
 }
 
 matches_shader_struct!(
     WitnessMaskConstants,
-    WitnessMask { intrinsics, region, width, witness_count, facing_tolerance }
+    WitnessMask { intrinsics, region, width, witness_count, witnesses, facing_tolerance }
 );
 
 impl WitnessMaskConstants {
-    /// Tests the pixels of `region` of a reference view of intrinsics `reference`.
-    pub fn new(reference: &Intrinsics, region: PixelRect, witness_count: usize) -> Self {
+    /// Tests the pixels of `region` of a reference view of intrinsics `reference` against the
+    /// witnesses of `table` (a job's, on the device, where the label test runs), `witness_count`
+    /// of them.
+    pub fn new(reference: &Intrinsics, region: PixelRect, (table, witness_count): (Option<&Buffer>, usize)) -> Self {
         Self {
             intrinsics: [reference.fx, reference.fy, reference.cx, reference.cy].map(|v| v as f32),
             region: [region.col, region.row, region.width, region.height],
             width: reference.width,
             witness_count: witness_count as u32,
+            witnesses: table.map_or([0; 2], Buffer::address_words),
             facing_tolerance: FACING_TOLERANCE as f32,
+            _pad: [0; 3],
         }
     }
 }
 
-/// The mask's descriptor set: the reference view's attachments, the witnesses' label images,
-/// then the masked labels, each pixel's witness bits and the witnesses' table.
+/// The mask's descriptor set: the reference view's attachments, the pinhole witnesses' label
+/// images and the directional witnesses', then the masked labels and each pixel's witness
+/// bits.
 pub struct WitnessMaskBindings {
     set: StorageSet,
 }
 
 impl WitnessMaskBindings {
-    pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
-    pub const BUFFERS: usize = 3;
+    pub const IMAGES: usize =
+        ViewKind::Range.colour_attachments().len() + 2 * ViewKind::Shadow.colour_attachments().len();
+    pub const BUFFERS: usize = 2;
 
     /// `pipeline`: any of the mask's pipelines (their set layouts are defined alike).
+    /// `witnesses`: the pinhole witnesses' attachments and the directional witnesses' (where a
+    /// rig has no witness of a kind, the other's, never read there).
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipeline: &ComputePipeline,
-        (reference, witnesses): (&ViewTargets, &ViewTargets),
-        (masked, lost_by, table): (&Buffer, &Buffer, &Buffer),
+        (reference, [pinhole, directional]): (&ViewTargets, [&ViewTargets; 2]),
+        (masked, lost_by): (&Buffer, &Buffer),
     ) -> Result<Self> {
         matches_shader_bindings!(WITNESS_MASK_COMP {
             range_label,
@@ -95,18 +130,13 @@ impl WitnessMaskBindings {
             range_dz_dx,
             range_dz_dy,
             witness_visibility,
+            directional_visibility,
             Masked,
             LostBy,
-            Witnesses,
         });
-        let images: Vec<&Image> = reference.colour.iter().chain(&witnesses.colour).collect();
-        let set = StorageSet::new(
-            ctx,
-            pipeline.set_layout,
-            &images,
-            (&[], &[masked, lost_by, table]),
-            "witness mask bindings",
-        )?;
+        let images: Vec<&Image> = reference.colour.iter().chain(&pinhole.colour).chain(&directional.colour).collect();
+        let set =
+            StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &[masked, lost_by]), "witness mask bindings")?;
         Ok(Self { set })
     }
 

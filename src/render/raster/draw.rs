@@ -203,9 +203,14 @@ impl DrawConstants {
             size: [view.size.0 as f32, view.size.1 as f32],
             z_range: view.depth.map(|v| v as f32),
         };
-        let constants = Self::in_view(view_from_model, constants, (draw, draw_index), viewport);
-        let mut floats = constants.view_from_model.iter().flatten().chain(&constants.grid).chain(&constants.z_range);
-        floats.all(|v| v.is_finite()).then_some(constants)
+        Self::in_view(view_from_model, constants, (draw, draw_index), viewport).held_in_f32()
+    }
+
+    /// The constants, where every value held in f32 (a pose, a grid or a depth constant did
+    /// not overflow).
+    pub fn held_in_f32(self) -> Option<Self> {
+        let mut floats = self.view_from_model.iter().flatten().chain(&self.grid).chain(&self.z_range);
+        floats.all(|v| v.is_finite()).then_some(self)
     }
 }
 
