@@ -1010,10 +1010,13 @@ fn noise_incidence_under_a_rig_is_measured_back_along_each_ray() {
 
 /// Directional witnesses in mode `label`: two lamps, high to the left and low to the right,
 /// over a box, a step and a plank on a table (flat faces, none grazed by a lamp), under a
-/// camera and a projector beside it. The lamps' label images are drawn orthographically along
-/// their directions over what the camera can see (at `[shadow] columns = 2`); labels, depths
-/// and witness bits against the brute-force reference, with no interior pixel wrong, as in
-/// mode `exact`; each lamp loses pixels the other witnesses see.
+/// camera with a projector beside it, and under the camera and the lamps alone (photometric
+/// stereo: no pinhole witness). The lamps' label images are drawn orthographically along their
+/// directions over what the camera can see (at `[shadow] columns = 2`); labels, depths and
+/// witness bits against the brute-force reference, with no interior pixel wrong, as in mode
+/// `exact`, each lamp losing pixels alone. Under the lamps alone, once more with the step alone,
+/// stored 40 units from its model frame's origin (the mesh keeps an origin of its own) and
+/// posed back: the same.
 #[test]
 fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
     let k = Intrinsics { width: 160, height: 120, fx: 150.0, fy: 150.0, cx: 79.5, cy: 59.5 };
@@ -1021,13 +1024,12 @@ fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
         name: name.into(),
         geometry: WitnessGeometry::Directional(Direction::Vector(toward.normalize())),
     };
-    let witnesses = vec![
-        projector("projector", DVec3::new(0.075, 0.0, 0.0), Intrinsics { width: 200, height: 160, ..k }),
-        lamp("high left", DVec3::new(-0.5, -0.6, -0.62)),
-        lamp("low right", DVec3::new(0.7, 0.2, -0.68)),
-    ];
-    let sensor =
-        Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.1, far: f64::INFINITY }), witnesses };
+    let lamps = vec![lamp("high left", DVec3::new(-0.5, -0.6, -0.62)), lamp("low right", DVec3::new(0.7, 0.2, -0.68))];
+    let with_projector = [
+        vec![projector("projector", DVec3::new(0.075, 0.0, 0.0), Intrinsics { width: 200, height: 160, ..k })],
+        lamps.clone(),
+    ]
+    .concat();
     let tilt = |at: DVec3, angle: f64| facing_camera(at) * DMat4::from_rotation_z(angle);
     let objects = [
         ("builtin:plane:4", facing_camera(DVec3::new(0.0, 0.0, 1.5)), 1.0),
@@ -1036,21 +1038,55 @@ fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
         ("builtin:box", tilt(DVec3::new(-0.3, -0.25, 1.5), 1.1), 0.15),
     ];
     let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
-    for mode in [ShadowMode::Exact, ShadowMode::Label] {
-        let mut rig = scene(sensor.clone(), mode, &posed);
+    let runs =
+        [(&with_projector, ShadowMode::Exact, false), (&with_projector, ShadowMode::Label, false)].into_iter().chain([
+            (&lamps, ShadowMode::Exact, false),
+            (&lamps, ShadowMode::Label, false),
+            (&lamps, ShadowMode::Label, true),
+        ]);
+    for (witnesses, mode, stored_away) in runs {
+        let reference = View::Pinhole(Pinhole { intrinsics: k, near: 0.1, far: f64::INFINITY });
+        let sensor = Sensor { reference, witnesses: witnesses.clone() };
+        let mut rig = scene(sensor, mode, &posed);
         // Each lamp's image at twice the pixels: at one, a pixel two from an object's edge
         // went to the label test's rim.
         rig.shadow.columns = 2;
         for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
             object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
         }
+        if stored_away {
+            let step = &mut rig.objects[2];
+            let away = DVec3::new(40.0, 0.0, 0.0);
+            let m = &*step.mesh;
+            let positions = (0..m.positions.len() as u32).map(|i| (m.vertex(i) + away).to_array()).collect();
+            let moved = rangesynth::mesh::Mesh::new(
+                "the step stored away",
+                positions,
+                m.triangles.clone(),
+                m.triangle_surfaces.clone(),
+                m.surface_names.clone(),
+            )
+            .unwrap();
+            assert_ne!(moved.origin, DVec3::ZERO, "the mesh keeps an origin of its own");
+            step.mesh = std::sync::Arc::new(moved);
+            step.pose *= DMat4::from_translation(-away);
+            // Alone, so that its lamps' images are planned over it alone.
+            rig.objects = vec![rig.objects[2].clone()];
+        }
+        let what =
+            format!("{mode:?}, {} witnesses{}", witnesses.len(), if stored_away { ", step stored away" } else { "" });
         let out = render(&rig);
         let truth = rig_reference(&rig);
         let (wrong, wrong_interior) = differences(&out, &truth, true, 1e-6);
-        eprintln!("{mode:?}: {wrong} pixels differ from the reference, {wrong_interior} interior");
-        for (bit, lamp) in [(2, "high left"), (4, "low right")] {
-            let alone = truth.witness.iter().filter(|&&bits| bits == bit).count();
-            assert!(alone > 100, "the {lamp} lamp alone loses pixels: {alone}");
+        eprintln!("{what}: {wrong} pixels differ from the reference, {wrong_interior} interior");
+        assert_eq!(wrong_interior, 0, "{what}: {wrong} pixels differ, {wrong_interior} interior");
+        let first_lamp = 1 << (witnesses.len() - 2);
+        let lamps_alone =
+            if stored_away { vec![] } else { vec![(first_lamp, "high left"), (first_lamp << 1, "low right")] };
+        for (bit, lamp) in lamps_alone {
+            let alone = |bits: &[u32]| bits.iter().filter(|&&b| b == bit).count();
+            let (ours, reference) = (alone(&out.witness), alone(&truth.witness));
+            assert!(ours > 100 && reference > 100, "{what}: the {lamp} lamp alone loses {ours} pixels ({reference})");
         }
     }
 }

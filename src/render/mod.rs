@@ -256,8 +256,7 @@ impl Renderer {
         let raster_pipelines = compute.then(|| self.pipelines.compute_raster()).transpose()?;
         let pinhole_pipelines = pinhole.then(|| self.pipelines.pinhole()).transpose()?;
         let pipelines = &self.pipelines;
-        let sensor = scanner;
-        Ok(Passes { pipelines, raster_pipelines, effect_pipelines, pinhole_pipelines, sensor, shadow, effects })
+        Ok(Passes { pipelines, raster_pipelines, effect_pipelines, pinhole_pipelines, scanner, shadow, effects })
     }
 
     /// Renders the scene's range image, labels before and after shadowing, and pass times.

@@ -19,7 +19,7 @@
 use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::{Error, Result};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
-use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessMaskBindings, WitnessSet};
+use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet};
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{
@@ -161,21 +161,20 @@ impl<'a> Slot<'a> {
         };
         let witnesses = match (shape.witnesses, &masked) {
             (Some(set), Some(masked)) => {
-                let [pinhole, directional] = [(0, "pinhole"), (1, "directional")].map(|(i, kind)| {
-                    let (w, h) = set.sizes[i];
-                    (w > 0 && h > 0)
-                        .then(|| pool.take(ctx, ViewKind::Shadow, (w, h), &format!("{name} {kind} witness views")))
-                        .transpose()
+                let targets = WitnessAttachment::ALL.map(|attachment| {
+                    let (w, h) = set.sizes[attachment as usize];
+                    let kind = format!("{name} {attachment:?} witness views").to_lowercase();
+                    (w > 0 && h > 0).then(|| pool.take(ctx, ViewKind::Shadow, (w, h), &kind)).transpose()
                 });
+                let [pinhole, directional] = targets;
                 let targets = [pinhole?, directional?];
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
                 let mask = p.pinhole()?.mask(set.neighbourhood);
-                // A rig without a kind of witness binds the other's images in its place.
-                let [first, second] = [&targets[0], &targets[1]].map(|t| t.as_deref());
-                let images = match (first.or(second), second.or(first)) {
-                    (Some(pinhole), Some(directional)) => [pinhole, directional],
-                    _ => return Err(Error::Scene("a witness set holds no witness".into())),
-                };
+                // A rig without a kind of witness binds the other's images in its place (a
+                // witness set holds one witness at least: the error cannot arise).
+                let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
+                let images = pinhole.or(directional).zip(directional.or(pinhole)).map(|(p, d)| [p, d]);
+                let images = images.ok_or_else(|| Error::Scene("a rig's witness set holds no witness".into()))?;
                 let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by))?;
                 Some(WitnessSlot { targets, lost_by, bindings, neighbourhood: set.neighbourhood })
             }
@@ -325,7 +324,7 @@ pub(crate) struct Passes<'a> {
     pub pinhole_pipelines: Option<&'a PinholePipelines>,
     /// The paper's scanner, which the shadow pass renders; `None` for a rig's image cast on the
     /// CPU (src/exact/rig.rs), which takes effect passes alone, or its pinhole views drawn.
-    pub sensor: Option<&'a Scanner>,
+    pub scanner: Option<&'a Scanner>,
     pub shadow: ShadowSettings,
     pub effects: &'a Effects,
 }
@@ -429,7 +428,7 @@ impl<'p> Passes<'p> {
 
     /// One job's passes in order, each with the uses it makes of its slot's resources.
     fn steps<'s>(&'s self, slot: &'s Slot<'_>, job: &'s Job<'_>, sink: &Sink<'s>) -> Vec<Step<'s>> {
-        let (p, sensor) = (self.pipelines, self.sensor);
+        let (p, sensor) = (self.pipelines, self.scanner);
         let views = job.views;
         if let Some(host_view) = job.host_view {
             let shadowed = slot.masked.as_ref().expect("a slot for host views holds shadowed labels");
@@ -561,13 +560,15 @@ impl<'p> Passes<'p> {
             );
             // The pinhole witnesses' images in projection, the directional witnesses' as the
             // scanner's shadow view is drawn.
-            let kinds = [(&pipelines.witnesses, false), (&p.shadow, true)];
-            for ((view_pipelines, directional), targets) in
-                kinds.into_iter().zip(witnesses.map(|w| &w.targets).into_iter().flatten())
-            {
-                let drawn = pinhole.witness_area(directional);
+            let targets = witnesses.map(|w| &w.targets).into_iter().flatten();
+            for (attachment, targets) in WitnessAttachment::ALL.into_iter().zip(targets) {
+                let view_pipelines = match attachment {
+                    WitnessAttachment::Pinhole => &pipelines.witnesses,
+                    WitnessAttachment::Directional => &p.shadow,
+                };
+                let drawn = pinhole.witness_area(attachment);
                 if let Some(targets) = targets.as_deref().filter(|_| drawn.width > 0 && drawn.height > 0) {
-                    let bands = pinhole.witness_bands(directional);
+                    let bands = pinhole.witness_bands(attachment);
                     record_bands(ctx, cmd, (view_pipelines, p.raster_layout), targets, drawn, &bands, job.draws);
                 }
             }

@@ -2,14 +2,15 @@
 //! witness's band, with the depth range and cull mode each view draws it with; and the table
 //! of witnesses the job's label test reads, with its directional witnesses' grids.
 
-use super::witness_mask::WitnessMaskConstants;
+use super::directional::{self, DirectionalPlan};
+use super::witness_mask::{WitnessAttachment, WitnessMaskConstants};
 use super::witness_set::{WitnessImage, WitnessSet};
 use super::Models;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
 use crate::render::raster::draw::{cull_mode, Band, DrawConstants, PinholeDrawing, ViewportFrame};
 use crate::render::FOOTPRINT_MARGIN;
-use crate::sensor::{Intrinsics, Pinhole, PixelRect, View, ViewGrid};
+use crate::sensor::{Intrinsics, Pinhole, PixelRect, View};
 use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
@@ -33,16 +34,16 @@ pub(crate) struct PinholeJob {
     whole: PixelRect,
     reference: ViewDraws,
     witnesses: Vec<WitnessDraws>,
-    /// What the label test reads of each witness, where it runs; `mask` holds its address.
-    _table: Option<Buffer>,
+    /// What the label test reads of each witness, where the job's directional witnesses make
+    /// it the job's own; `mask` holds its address (or the witness set's), which it keeps alive.
+    _job_table: Option<Buffer>,
     pub mask: WitnessMaskConstants,
 }
 
-/// A witness's band of its attachment (the pinhole witnesses', or the directional
-/// witnesses'), the pixels of it the job's models can cover, the viewport it is drawn
+/// A witness's band of its attachment, the pixels of it the job's models can cover, the viewport it is drawn
 /// through, and each draw's constants and cull mode in it.
 struct WitnessDraws {
-    directional: bool,
+    attachment: WitnessAttachment,
     area: PixelRect,
     viewport: ViewportFrame,
     draws: ViewDraws,
@@ -70,36 +71,35 @@ impl PinholeJob {
         };
         let (views, mut table) = witnesses.map_or((&[][..], Vec::new()), |set| (&set.views[..], set.table.clone()));
         let mut witness_draws = Vec::with_capacity(views.len());
+        let mut directional = false;
         for (w, constants) in views.iter().zip(&mut table) {
             let drawn = match w.image {
                 WitnessImage::Pinhole(intrinsics) => {
                     pinhole_witness(w.from_reference, intrinsics, w.band, &models, viewport_half_side)?
                 }
-                WitnessImage::Directional { side } => {
+                WitnessImage::Directional(image) => {
                     // Planned over the whole image, not the job's area: a hypothesis' label
                     // test is the same in a batch as drawn alone.
-                    let (grid, drawn) = directional_witness(
-                        w.from_reference,
-                        (side, w.band),
-                        (reference, whole),
-                        &models,
-                        viewport_half_side,
-                    )?;
-                    *constants = constants.with_grid(grid);
-                    drawn
+                    let plan = directional::plan(w.from_reference, (image, w.band), (reference, whole), &models);
+                    *constants = constants.with_grid(plan.band_grid);
+                    directional = true;
+                    directional_witness(&plan, &models, viewport_half_side)?
                 }
             };
             witness_draws.push(drawn);
         }
-        let table = (!table.is_empty())
+        // A table of its own where its directional witnesses' grids are the job's; else the
+        // set's, the same for every job.
+        let job_table = directional
             .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "a job's witnesses"))
             .transpose()?;
+        let table_buffer = job_table.as_ref().or(witnesses.and_then(|set| set.shared_table.as_ref()));
         Ok(Self {
             whole,
             reference: view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?,
             witnesses: witness_draws,
-            mask: WitnessMaskConstants::new(&k, area, (table.as_ref(), views.len())),
-            _table: table,
+            mask: WitnessMaskConstants::new(&k, area, (table_buffer, views.len())),
+            _job_table: job_table,
         })
     }
 
@@ -108,21 +108,20 @@ impl PinholeJob {
         Band { area, viewport: ViewportFrame::around(self.whole, viewport_half_side), draws: &self.reference }
     }
 
-    /// The bands of the pinhole witnesses' attachment (`directional` false) or of the
-    /// directional witnesses', each drawn where the models can cover it.
-    pub fn witness_bands(&self, directional: bool) -> Vec<Band<'_>> {
+    /// The bands of one of the witnesses' attachments, each drawn where the models can cover
+    /// it.
+    pub fn witness_bands(&self, attachment: WitnessAttachment) -> Vec<Band<'_>> {
         self.witnesses
             .iter()
-            .filter(|w| w.directional == directional)
+            .filter(|w| w.attachment == attachment)
             .map(|w| Band { area: w.area, viewport: w.viewport, draws: &w.draws })
             .collect()
     }
 
-    /// The pixels of the pinhole witnesses' attachment (`directional` false) or of the
-    /// directional witnesses' that the job draws (and clears): every band's where the models
-    /// can cover it. The label test reads no other.
-    pub fn witness_area(&self, directional: bool) -> PixelRect {
-        let bands = self.witnesses.iter().filter(|w| w.directional == directional);
+    /// The pixels of one of the witnesses' attachments that the job draws (and clears): every
+    /// band's where the models can cover it. The label test reads no other.
+    pub fn witness_area(&self, attachment: WitnessAttachment) -> PixelRect {
+        let bands = self.witnesses.iter().filter(|w| w.attachment == attachment);
         bands.map(|w| w.area).fold(PixelRect::EMPTY, PixelRect::union)
     }
 }
@@ -154,85 +153,26 @@ fn pinhole_witness(
     let area = PixelRect { row: seen.row + band.row, ..seen };
     let viewport = ViewportFrame::around(band, viewport_half_side);
     let draws = view_draws(&drawing, models, viewport)?;
-    Ok(WitnessDraws { directional: false, area, viewport, draws })
+    Ok(WitnessDraws { attachment: WitnessAttachment::Pinhole, area, viewport, draws })
 }
 
-/// A directional witness's band for `models`: an orthographic image `side` pixels square in
-/// the witness's frame (`from_reference` turns its direction to +z) over the square that holds,
-/// with a pixel to spare each way, every point of the models the reference view can see over
-/// `area` (`seen_box`). Returns its grid as the label test reads it (x0, y0 of the band's first
-/// pixel, dx, dy) and the band's draws.
-fn directional_witness(
-    from_reference: DMat4,
-    (side, band): (u32, PixelRect),
-    (reference, area): (&Pinhole, PixelRect),
-    models: &Models,
-    viewport_half_side: f32,
-) -> Result<([f64; 4], WitnessDraws)> {
-    let corners = |[low, high]: [DVec3; 2], to: DMat4| {
-        (0..8).map(move |i| {
-            let pick = |bit: usize, l: f64, h: f64| if i & bit == 0 { l } else { h };
-            to.transform_point3(DVec3::new(pick(1, low.x, high.x), pick(2, low.y, high.y), pick(4, low.z, high.z)))
-        })
-    };
-    let bound = |points: &mut dyn Iterator<Item = DVec3>| {
-        points.fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[low, high], p| [low.min(p), high.max(p)])
-    };
-    // Every model's depths in the witness's frame (all it draws), and the part of its box
-    // the reference view can see over `area`.
-    let (mut depths, mut seen) = ((f64::INFINITY, f64::NEG_INFINITY), [DVec3::INFINITY, DVec3::NEG_INFINITY]);
-    for draw in models.draws {
-        let posed = draw.pose * DMat4::from_translation(draw.mesh.origin);
-        let [low, high] = bound(&mut corners(draw.mesh.bounding_box, from_reference * posed));
-        depths = (depths.0.min(low.z), depths.1.max(high.z));
-        let [near, far] = bound(&mut corners(draw.mesh.bounding_box, posed)).map(|p| p.z);
-        let (near, far) = (near.max(reference.near).max(0.0), far.min(reference.far));
-        if near.is_nan() || far.is_nan() || near > far {
-            continue;
-        }
-        // The frustum over `area` between those depths, in the witness's frame: the point at
-        // depth Z on the ray through the image point (u, v) of each corner of the area.
-        let k = &reference.intrinsics;
-        let (left, right) = (f64::from(area.col) - 0.5, f64::from(area.col + area.width) - 0.5);
-        let (top, bottom) = (f64::from(area.row) - 0.5, f64::from(area.row + area.height) - 0.5);
-        let frustum = corners([DVec3::new(left, top, near), DVec3::new(right, bottom, far)], DMat4::IDENTITY)
-            .map(|p| from_reference.transform_point3(p.z * DVec3::new((p.x - k.cx) / k.fx, (p.y - k.cy) / k.fy, 1.0)));
-        let [f_low, f_high] = bound(&mut frustum.into_iter());
-        let (low, high) = (low.max(f_low), high.min(f_high));
-        if low.x <= high.x && low.y <= high.y {
-            seen = [seen[0].min(low), seen[1].max(high)];
-        }
-    }
-    let [low, high] = seen;
-    let found = low.x <= high.x && low.y <= high.y && depths.0 <= depths.1;
-    let extent = if found { (high.x - low.x).max(high.y - low.y).max(f64::MIN_POSITIVE) } else { 1.0 };
-    let pitch = extent / f64::from(side.saturating_sub(2).max(1));
-    let centre = if found { (low + high) / 2.0 } else { DVec3::ZERO };
-    let half = f64::from(side - 1) / 2.0 * pitch;
-    let (x0, top) = (centre.x - half, centre.y + half);
-    let z_range = if found { (depths.0 - pitch, depths.1 + pitch) } else { (0.0, 1.0) };
-    // The attachment's rows from its first: the band's first row lies at `top`.
-    let grid = ViewGrid {
-        origin: [x0, top + f64::from(band.row) * pitch],
-        pitch: [pitch, pitch],
-        width: side,
-        height: band.row + side,
-        z_range,
-    };
-    let viewport = ViewportFrame::new(&grid, viewport_half_side);
+/// A directional witness's band for `models` as `plan` places it: each draw's constants on
+/// its grid and cull mode (a proper rotation: the scanner's shadow view's).
+fn directional_witness(plan: &DirectionalPlan, models: &Models, viewport_half_side: f32) -> Result<WitnessDraws> {
+    let viewport = ViewportFrame::new(&plan.grid, viewport_half_side);
     let draws = models
         .draws
         .iter()
         .enumerate()
         .map(|(i, draw)| {
-            let constants = DrawConstants::new(&grid, from_reference, DVec3::ZERO, draw, i as u32, viewport_half_side);
+            let constants =
+                DrawConstants::new(&plan.grid, plan.from_reference, DVec3::ZERO, draw, i as u32, viewport_half_side);
             let constants =
                 constants.held_in_f32().ok_or_else(|| beyond_f32(models, i, "a directional witness's view"))?;
             Ok((constants, cull_mode(draw.mesh.solidity)))
         })
         .collect::<Result<_>>()?;
-    let area = if found { band } else { PixelRect::EMPTY };
-    Ok(([x0, top, pitch, pitch], WitnessDraws { directional: true, area, viewport, draws }))
+    Ok(WitnessDraws { attachment: WitnessAttachment::Directional, area: plan.area, viewport, draws })
 }
 
 /// Model i's pose holds no f32 value in `view`.

@@ -11,6 +11,7 @@
 //! scanner's shadow-view pipelines over each job's models; the mask binds two images whatever
 //! their number.
 
+mod directional;
 mod job;
 mod pipelines;
 mod witness_mask;
@@ -18,7 +19,7 @@ mod witness_set;
 
 pub(crate) use job::PinholeJob;
 pub use pipelines::PinholePipelines;
-pub(crate) use witness_mask::WitnessMaskBindings;
+pub(crate) use witness_mask::{WitnessAttachment, WitnessMaskBindings};
 pub(crate) use witness_set::{WitnessLayout, WitnessSet};
 
 use super::memory::rig_render_bytes;

@@ -24,9 +24,18 @@ pub struct WitnessConstants {
 
 matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band });
 
-/// Which attachment a witness's band lies in (`WitnessData.band.w`).
-const PINHOLE_ATTACHMENT: u32 = 0;
-const DIRECTIONAL_ATTACHMENT: u32 = 1;
+/// Which attachment a witness's band lies in: the pinhole witnesses' images, drawn in
+/// projection, or the directional witnesses', drawn orthographically (each kind has its own
+/// pipelines and depth order); `WitnessData.band.w`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum WitnessAttachment {
+    Pinhole = 0,
+    Directional = 1,
+}
+
+impl WitnessAttachment {
+    pub const ALL: [WitnessAttachment; 2] = [WitnessAttachment::Pinhole, WitnessAttachment::Directional];
+}
 
 impl WitnessConstants {
     /// A pinhole witness whose pose is reference-from-witness, whose label image has the
@@ -37,7 +46,7 @@ impl WitnessConstants {
             from_reference: rows(pose.inverse()),
             centre: pose.w_axis.as_vec4().to_array(),
             grid: [drawn.fx, drawn.fy, drawn.cx, drawn.cy].map(|v| v as f32),
-            band: [band.width, band.height, band.row, PINHOLE_ATTACHMENT],
+            band: [band.width, band.height, band.row, WitnessAttachment::Pinhole as u32],
         };
         let mut floats = constants.from_reference.iter().flatten().chain(&constants.centre).chain(&constants.grid);
         floats.all(|v| v.is_finite()).then_some(constants)
@@ -51,7 +60,7 @@ impl WitnessConstants {
             from_reference: rows(from_reference),
             centre: toward.extend(0.0).as_vec4().to_array(),
             grid: [0.0; 4],
-            band: [band.width, band.height, band.row, DIRECTIONAL_ATTACHMENT],
+            band: [band.width, band.height, band.row, WitnessAttachment::Directional as u32],
         }
     }
 

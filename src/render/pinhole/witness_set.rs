@@ -3,11 +3,13 @@
 //! projection, directional witnesses' orthographic images), and what the label test reads of
 //! each (witness_mask.rs).
 
-use super::witness_mask::WitnessConstants;
+use super::directional::DirectionalImage;
+use super::witness_mask::{WitnessAttachment, WitnessConstants};
 use crate::error::{Error, Result};
-use crate::gpu::GpuContext;
-use crate::sensor::{Intrinsics, PixelRect, Sensor, WitnessGeometry};
+use crate::gpu::{Buffer, GpuContext};
+use crate::sensor::{Intrinsics, PixelRect, Sensor, View, WitnessGeometry};
 use crate::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
+use ash::vk;
 use glam::{DMat4, DQuat, DVec3};
 use std::sync::Arc;
 
@@ -29,10 +31,10 @@ pub(super) enum WitnessImage {
     /// of the pinhole witnesses' attachment. The witness's frame is its own (x right, y down,
     /// z forward).
     Pinhole(Intrinsics),
-    /// A directional witness's: an orthographic image `side` pixels square, each job's planned
-    /// over its models (job.rs). The witness's frame turns its direction to +z, so that it
-    /// looks down −z as the paper's views do (larger z is nearer the witness).
-    Directional { side: u32 },
+    /// A directional witness's: an orthographic image, each job's planned over its models
+    /// (directional.rs). The witness's frame turns its direction to +z, so that it looks down
+    /// −z as the paper's views do (larger z is nearer the witness).
+    Directional(DirectionalImage),
 }
 
 /// Where a rig's witnesses' label images go, and what the label test reads of each: worked out
@@ -41,8 +43,8 @@ pub(crate) struct WitnessLayout {
     views: Vec<WitnessView>,
     /// What the label test reads of each witness; a directional witness's grid is each job's.
     table: Vec<WitnessConstants>,
-    /// Width and height of the attachment that holds the pinhole witnesses' bands, and of the
-    /// one that holds the directional witnesses' (0 × 0 where there are none).
+    /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
+    /// band lies in it.
     pub sizes: [(u32, u32); 2],
 }
 
@@ -60,25 +62,51 @@ impl WitnessLayout {
         }
         let (width, height) = sensor.reference.size();
         let sides = f64::from(width.max(height)) * f64::from(shadow.columns);
+        // A pixel's width at depth 1 is 1 / f.
+        let focal = match &sensor.reference {
+            View::Pinhole(p) => p.intrinsics.fx.max(p.intrinsics.fy),
+            _ => f64::INFINITY,
+        };
         let mut rows = [0u64; 2];
-        let mut views = Vec::with_capacity(sensor.witnesses.len());
+        let mut views: Vec<(WitnessAttachment, WitnessView)> = Vec::with_capacity(sensor.witnesses.len());
         let mut table = Vec::with_capacity(sensor.witnesses.len());
         for (index, witness) in sensor.witnesses.iter().enumerate() {
-            let (attachment, size) = match witness.geometry {
-                WitnessGeometry::Pinhole { intrinsics, .. } => {
+            let unheld = || {
+                Error::Scene(format!(
+                    "{}: its pose is beyond what the GPU's f32 arithmetic holds",
+                    witness.owner(index)
+                ))
+            };
+            // Its attachment and image's size, then its view and table entry in its band.
+            type InBand<'w> = Box<dyn FnOnce(PixelRect) -> Result<(WitnessView, WitnessConstants)> + 'w>;
+            let (attachment, size, in_band): (_, _, InBand) = match witness.geometry {
+                WitnessGeometry::Pinhole { pose, intrinsics } => {
                     let drawn = multiplied(&intrinsics, shadow.columns);
-                    (0, (u64::from(drawn.width), u64::from(drawn.height)))
+                    let in_band = move |band: PixelRect| {
+                        let constants = WitnessConstants::pinhole(pose, &drawn, band).ok_or_else(unheld)?;
+                        let image = WitnessImage::Pinhole(Intrinsics { cy: drawn.cy + f64::from(band.row), ..drawn });
+                        Ok((WitnessView { from_reference: pose.inverse(), image, band }, constants))
+                    };
+                    (WitnessAttachment::Pinhole, (u64::from(drawn.width), u64::from(drawn.height)), Box::new(in_band))
                 }
                 WitnessGeometry::Directional(direction) => {
-                    // A surface facing the reference view is foreshortened by the cosine of the
-                    // witness's slant from the reference's axis as the witness sees it: so many
-                    // more pixels keep the image as fine as the reference's points (at most 4×).
-                    let slant = direction.vector().normalize().z.abs().max(1.0 / MAX_DIRECTIONAL_FORESHORTENING);
+                    let toward = direction.vector().normalize();
+                    // A surface facing the reference view is foreshortened, as the witness sees
+                    // it, by the cosine of the witness's slant from the reference's axis: so
+                    // many more pixels keep the image as fine as the reference's points.
+                    let slant = toward.z.abs().max(1.0 / MAX_DIRECTIONAL_FORESHORTENING);
                     let side = (sides / slant).ceil() as u64;
-                    (1, (side, side))
+                    let finest = slant / (focal * f64::from(shadow.columns));
+                    let in_band = move |band: PixelRect| {
+                        let from_reference = DMat4::from_quat(DQuat::from_rotation_arc(toward, DVec3::Z));
+                        let constants = WitnessConstants::directional(from_reference, toward, band);
+                        let image = WitnessImage::Directional(DirectionalImage { side: band.width, finest });
+                        Ok((WitnessView { from_reference, image, band }, constants))
+                    };
+                    (WitnessAttachment::Directional, (side, side), Box::new(in_band))
                 }
             };
-            let row = rows[attachment];
+            let row = rows[attachment as usize];
             let fits = |side: u64| side <= u64::from(max_side);
             if !(fits(size.0) && fits(row + size.1)) {
                 return Err(Error::Scene(format!(
@@ -91,36 +119,16 @@ impl WitnessLayout {
             }
             // Both fit in a u32 now.
             let band = PixelRect { col: 0, row: row as u32, width: size.0 as u32, height: size.1 as u32 };
-            let unheld = || {
-                Error::Scene(format!(
-                    "{}: its pose is beyond what the GPU's f32 arithmetic holds",
-                    witness.owner(index)
-                ))
-            };
-            let (from_reference, image, constants) = match witness.geometry {
-                WitnessGeometry::Pinhole { pose, intrinsics } => {
-                    let drawn = multiplied(&intrinsics, shadow.columns);
-                    let constants = WitnessConstants::pinhole(pose, &drawn, band).ok_or_else(unheld)?;
-                    let drawn = Intrinsics { cy: drawn.cy + f64::from(band.row), ..drawn };
-                    (pose.inverse(), WitnessImage::Pinhole(drawn), constants)
-                }
-                WitnessGeometry::Directional(direction) => {
-                    let toward = direction.vector().normalize();
-                    let from_reference = DMat4::from_quat(DQuat::from_rotation_arc(toward, DVec3::Z));
-                    let constants = WitnessConstants::directional(from_reference, toward, band);
-                    (from_reference, WitnessImage::Directional { side: band.width }, constants)
-                }
-            };
-            views.push(WitnessView { from_reference, image, band });
+            let (view, constants) = in_band(band)?;
+            views.push((attachment, view));
             table.push(constants);
-            rows[attachment] += size.1;
+            rows[attachment as usize] += size.1;
         }
-        let size = |attachment: usize| {
-            let bands =
-                views.iter().filter(|w| matches!(w.image, WitnessImage::Directional { .. }) == (attachment == 1));
-            (bands.map(|w| w.band.width).max().unwrap_or(0), rows[attachment] as u32)
-        };
-        let sizes = [size(0), size(1)];
+        let sizes = WitnessAttachment::ALL.map(|attachment| {
+            let widths = views.iter().filter(|(a, _)| *a == attachment).map(|(_, w)| w.band.width);
+            (widths.max().unwrap_or(0), rows[attachment as usize] as u32)
+        });
+        let views = views.into_iter().map(|(_, view)| view).collect();
         Ok(Some(Self { views, table, sizes }))
     }
 
@@ -130,14 +138,15 @@ impl WitnessLayout {
     }
 }
 
-/// A rig's witnesses as every job of a submission draws and tests them: their layout and the
-/// label test's neighbourhood. Each job uploads the mask's table of them (job.rs), which
-/// holds its directional witnesses' grids.
+/// A rig's witnesses as every job of a submission draws and tests them: their layout, the
+/// label test's neighbourhood, and the mask's table of them on the device where it is the
+/// same for every job (no directional witness, whose grid is each job's: job.rs).
 pub(crate) struct WitnessSet {
     pub(super) views: Vec<WitnessView>,
     pub(super) table: Vec<WitnessConstants>,
-    /// Width and height of the pinhole witnesses' attachment and of the directional
-    /// witnesses' (0 × 0 where there are none).
+    pub(super) shared_table: Option<Buffer>,
+    /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
+    /// band lies in it.
     pub sizes: [(u32, u32); 2],
     pub neighbourhood: Neighbourhood,
 }
@@ -150,7 +159,11 @@ impl WitnessSet {
             return Ok(None);
         };
         let WitnessLayout { views, table, sizes } = layout;
-        Ok(Some(Self { views, table, sizes, neighbourhood: shadow.neighbourhood }))
+        let shared = views.iter().all(|w| matches!(w.image, WitnessImage::Pinhole(_)));
+        let shared_table = shared
+            .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "witness table"))
+            .transpose()?;
+        Ok(Some(Self { views, table, shared_table, sizes, neighbourhood: shadow.neighbourhood }))
     }
 
     /// Pixels of the attachments that hold every band.
