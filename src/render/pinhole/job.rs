@@ -40,8 +40,8 @@ pub(crate) struct PinholeJob {
     pub mask: WitnessMaskConstants,
 }
 
-/// A witness's band of its attachment, the pixels of it the job's models can cover, the viewport it is drawn
-/// through, and each draw's constants and cull mode in it.
+/// A witness's band: its attachment, the pixels of it the job draws (where the models can
+/// cover it), the viewport it is drawn through, and each draw's constants and cull mode in it.
 struct WitnessDraws {
     attachment: WitnessAttachment,
     area: PixelRect,
