@@ -492,10 +492,12 @@ fn hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>, n: usize) -> Ve
 /// sphere:100 at 256², a batch of 64, in shadow modes `depth` (a rig's images cast on the CPU)
 /// and `label` (drawn on the GPU; docs/sensors-and-rigs.md, "What renders a rig"). The rig is a
 /// 256² camera whose pixel covers the scanner's pitch at the model's depth (fx = 5 / 0.02) and
-/// a projector as far to its side as the model is deep (the 45° the scanner's θ gives); each
-/// hypothesis is the scanner's turned to face the camera 5 units away.
+/// a projector as far to its side as the model is deep (the 45° the scanner's θ gives), and in
+/// mode `label` also the camera with a lamp in the projector's direction (a directional
+/// witness, its image planned for each hypothesis); each hypothesis is the scanner's turned to
+/// face the camera 5 units away.
 fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
-    use rangesynth::sensor::{Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
+    use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
     let model = verifier.model("builtin:sphere:100", Path::new("."))?;
     let k = Intrinsics { width: 256, height: 256, fx: 250.0, fy: 250.0, cx: 127.5, cy: 127.5 };
     let projector = Witness {
@@ -510,6 +512,12 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
         reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }),
         witnesses: vec![projector],
     };
+    // The projector's direction as a distant lamp (a directional witness, mode label only).
+    let lamp = Witness {
+        name: "lamp".into(),
+        geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::new(1.0, 0.0, -1.0).normalize())),
+    };
+    let lamp_rig = Sensor { witnesses: vec![lamp], ..rig.clone() };
     let facing = DMat4::from_translation(DVec3::new(0.0, 0.0, 5.0)) * DMat4::from_rotation_x(std::f64::consts::PI);
     let scanner_hypotheses = hypotheses(&model, 64);
     let rig_hypotheses: Vec<Hypothesis> =
@@ -534,20 +542,30 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
     };
     // Each mode's pair in turn, the scanner's rate the ratio's base: the fastest of three
     // runs each, taken by turns (this machine's runs vary by up to a third).
+    let lamp_sensed = SensedImage::new(
+        &RangeImage::from(&verifier.renderer().render(&Scene { sensor: lamp_rig.clone(), ..rig_scene.clone() })?),
+        &lamp_rig,
+    )?;
     for (mode, rig_side) in [(ShadowMode::Depth, "CPU"), (ShadowMode::Label, "GPU")] {
-        let (mut scanner, mut pinhole) = (0.0f64, 0.0f64);
+        let (mut scanner, mut pinhole, mut lamp) = (0.0f64, 0.0f64, 0.0f64);
         for _ in 0..3 {
             scanner = scanner.max(rate(sensed, &settings(scene.sensor.clone(), mode), &scanner_hypotheses)?);
             pinhole = pinhole.max(rate(&rig_sensed, &settings(rig.clone(), mode), &rig_hypotheses)?);
+            if mode == ShadowMode::Label {
+                lamp = lamp.max(rate(&lamp_sensed, &settings(lamp_rig.clone(), mode), &rig_hypotheses)?);
+            }
         }
         let name = |who: &str| format!("{who}, {}", mode.as_str());
         println!("{:<34} {:>8.1} {:>7.2}×", name("the scanner (GPU)"), scanner, 1.0);
         println!(
-            "{:<28} {:>8.1} {:>7.2}×",
+            "{:<34} {:>8.1} {:>7.2}×",
             name(&format!("camera + projector ({rig_side})")),
             pinhole,
             pinhole / scanner
         );
+        if mode == ShadowMode::Label {
+            println!("{:<34} {:>8.1} {:>7.2}×", name("camera + lamp (GPU)"), lamp, lamp / scanner);
+        }
     }
     Ok(())
 }
