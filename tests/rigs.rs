@@ -1090,3 +1090,41 @@ fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
         }
     }
 }
+
+/// What BOP's scoring draws (`Renderer::draw_alone`: each model alone within its footprint,
+/// eight a submission) is what `render` draws of each model alone, under a camera with a
+/// projector and a lamp in mode `label`: labels, shadowed labels and depth bits, for ten
+/// models in two submissions (each job with its own table for the lamp's grid).
+#[test]
+fn models_drawn_alone_under_a_lamp_are_what_render_draws() {
+    let lamp = Witness {
+        name: "lamp".into(),
+        geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::new(0.3, -0.5, -0.8).normalize())),
+    };
+    let mut sensor = projector_rig();
+    sensor.witnesses.push(lamp);
+    let shadow = ShadowSettings::of(ShadowMode::Label);
+    let models: Vec<(std::sync::Arc<rangesynth::mesh::Mesh>, DMat4)> = (0..10)
+        .map(|i| {
+            let name = if i % 2 == 0 { "builtin:box" } else { "builtin:step" };
+            let at = DVec3::new(-1.5 + 0.35 * f64::from(i), 0.4 * f64::from(i % 3) - 0.4, 4.5 + 0.1 * f64::from(i));
+            let pose = facing_camera(at) * DMat4::from_rotation_z(0.3 * f64::from(i)) * DMat4::from_rotation_x(0.2);
+            (std::sync::Arc::new(rangesynth::mesh::builtin_mesh(name).unwrap()), pose)
+        })
+        .collect();
+    let drawn = common::renderer().draw_alone(&sensor, &shadow, &models, &|i| format!("model {i}")).unwrap();
+    common::assert_no_validation_messages();
+    let mut lost_by_lamp = 0;
+    for (i, ((mesh, pose), alone)) in models.iter().zip(&drawn).enumerate() {
+        let out = render(&scene(sensor.clone(), ShadowMode::Label, &[(mesh.name.as_str(), *pose)]));
+        assert!(alone.label.iter().any(|&l| l != 0), "model {i} is in view");
+        assert_eq!(alone.label, out.label_unshadowed, "model {i}: labels");
+        assert_eq!(alone.shadowed, out.label, "model {i}: shadowed labels");
+        lost_by_lamp += out.witness.iter().filter(|&&bits| bits == 2).count();
+        let seen = alone.label.iter().map(|&l| l != 0);
+        for (p, ((a, b), seen)) in alone.z.iter().zip(&out.z).zip(seen).enumerate() {
+            assert!(!seen || a.to_bits() == b.to_bits(), "model {i}, pixel {p}: z {a} vs {b}");
+        }
+    }
+    assert!(lost_by_lamp > 100, "the lamp alone loses pixels: {lost_by_lamp}");
+}
