@@ -107,8 +107,14 @@ pub fn depth_bounds(spheres: impl IntoIterator<Item = (DVec3, f64)>) -> (f64, f6
     if lo > hi {
         return (-1.0, 1.0);
     }
-    let margin = 0.01 * (hi - lo) + 1e-6 * (1.0 + lo.abs().max(hi.abs()));
+    let margin = depth_margin(lo, hi);
     (lo - margin, hi + margin)
+}
+
+/// How far a view's depth range reaches beyond the depths `lo`..`hi` of what it draws: 1% of
+/// their span, and f32's rounding of coordinates far from the frame's origin.
+pub fn depth_margin(lo: f64, hi: f64) -> f64 {
+    0.01 * (hi - lo) + 1e-6 * (1.0 + lo.abs().max(hi.abs()))
 }
 
 #[cfg(test)]

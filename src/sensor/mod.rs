@@ -15,7 +15,7 @@ mod pinhole;
 mod scanner;
 mod witness;
 
-pub use grid::{depth_bounds, PixelRect, ViewGrid};
+pub use grid::{depth_bounds, depth_margin, PixelRect, ViewGrid};
 pub use orthographic::{Orthographic, MAX_IMAGE_SIDE};
 pub use pinhole::{Intrinsics, Pinhole};
 pub use scanner::{Scanner, MAX_THETA_DEG};

@@ -4,7 +4,7 @@
 //! unbounded (a pinhole view sees to infinity).
 
 use super::Models;
-use crate::sensor::{Pinhole, PixelRect, ViewGrid};
+use crate::sensor::{depth_margin, Pinhole, PixelRect, ViewGrid};
 use glam::{DMat4, DVec3};
 
 /// A directional witness's label image as every job of a submission draws it: `side` pixels
@@ -29,21 +29,23 @@ pub(super) struct DirectionalPlan {
     pub area: PixelRect,
 }
 
-/// Plans `image` in `band` for `models` (each drawn in full) under `reference`, seen over
-/// `area` of it, in the witness's frame (`from_reference` turns its direction to +z): over the
-/// square holding, with a pixel to spare each way, each model's box cut by the frustum of
-/// `area` between the box's nearest and farthest depths; at the pitch that square needs in
+/// Plans `image` in `band` for `models` (each drawn in full) under `reference`, in the
+/// witness's frame (`from_reference` turns its direction to +z): over the square holding, with
+/// a pixel to spare each way, each model's box cut by the frustum of the whole image between
+/// the box's nearest and farthest depths (the whole image, not a job's area: a hypothesis tests
+/// the same in a batch as drawn alone); at the pitch that square needs in
 /// `image.side` pixels, or the finest worth drawing at the nearest depth seen, whichever is
 /// coarser. The depth range holds every model's box whole, so that nothing is clipped.
 pub(super) fn plan(
     from_reference: DMat4,
     (image, band): (DirectionalImage, PixelRect),
-    (reference, area): (&Pinhole, PixelRect),
+    reference: &Pinhole,
     models: &Models,
 ) -> DirectionalPlan {
     let mut depths = (f64::INFINITY, f64::NEG_INFINITY);
     let mut seen = [DVec3::INFINITY, DVec3::NEG_INFINITY];
     let mut nearest_seen = f64::INFINITY;
+    let corner_rays = reference.intrinsics.corner_rays();
     for draw in models.draws {
         // The box is in the model's frame (the mesh's origin already added back).
         let in_witness = bound(corners(draw.mesh.bounding_box, from_reference * draw.pose));
@@ -53,14 +55,9 @@ pub(super) fn plan(
         if near.is_nan() || far.is_nan() || near > far {
             continue;
         }
-        // The frustum over `area` between those depths: the point at depth Z on the ray
-        // through each corner (u, v) of the area.
-        let k = &reference.intrinsics;
-        let (left, right) = (f64::from(area.col) - 0.5, f64::from(area.col + area.width) - 0.5);
-        let (top, bottom) = (f64::from(area.row) - 0.5, f64::from(area.row + area.height) - 0.5);
-        let frustum = corners([DVec3::new(left, top, near), DVec3::new(right, bottom, far)], DMat4::IDENTITY)
-            .map(|p| from_reference.transform_point3(p.z * DVec3::new((p.x - k.cx) / k.fx, (p.y - k.cy) / k.fy, 1.0)));
-        let [f_low, f_high] = bound(frustum);
+        // The image's frustum between those depths, in the witness's frame.
+        let frustum = corner_rays.iter().flat_map(|&ray| [near * ray, far * ray]);
+        let [f_low, f_high] = bound(frustum.map(|p| from_reference.transform_point3(p)));
         let (low, high) = (in_witness[0].max(f_low), in_witness[1].min(f_high));
         if low.x <= high.x && low.y <= high.y {
             seen = [seen[0].min(low), seen[1].max(high)];
@@ -88,9 +85,8 @@ pub(super) fn plan(
     let centre = (low + high) / 2.0;
     let half = f64::from(drawn - 1) / 2.0 * pitch;
     let (x0, top) = (centre.x - half, centre.y + half);
-    // As the scanner's views are planned (sensor/grid.rs, depth_bounds): a margin of 1% of the
-    // depths, and f32's rounding of coordinates far from the frame's origin.
-    let margin = (0.01 * (depths.1 - depths.0) + 1e-6 * (1.0 + depths.0.abs().max(depths.1.abs()))).max(pitch);
+    // As the scanner's views are planned, and at least a pixel.
+    let margin = depth_margin(depths.0, depths.1).max(pitch);
     let grid = ViewGrid {
         origin: [x0, top + f64::from(band.row) * pitch],
         pitch: [pitch, pitch],

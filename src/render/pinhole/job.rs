@@ -78,9 +78,7 @@ impl PinholeJob {
                     pinhole_witness(w.from_reference, intrinsics, w.band, &models, viewport_half_side)?
                 }
                 WitnessImage::Directional(image) => {
-                    // Planned over the whole image, not the job's area: a hypothesis' label
-                    // test is the same in a batch as drawn alone.
-                    let plan = directional::plan(w.from_reference, (image, w.band), (reference, whole), &models);
+                    let plan = directional::plan(w.from_reference, (image, w.band), reference, &models);
                     *constants = constants.with_grid(plan.band_grid);
                     directional = true;
                     directional_witness(&plan, &models, viewport_half_side)?
