@@ -421,8 +421,8 @@ fn bad_bop_input_is_refused_by_name() {
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["000001.png"]);
 }
 
-/// The shadow mode the rig's images are made in is checked before any row: mode `depth` is
-/// refused by name, and mode `label` without a device to draw on is refused.
+/// The shadow mode the rig's images are made in is checked before any row: modes `depth` and
+/// `label` without a device to draw on are refused by name.
 #[test]
 fn shadow_modes_the_scorer_cannot_make_are_refused_by_name() {
     let root = dataset("modes", &[(1, square(295..=344, 215..=264, 1000), vec![at(0.0, 0.0, 1000.0)])]);
@@ -432,8 +432,8 @@ fn shadow_modes_the_scorer_cannot_make_are_refused_by_name() {
         let settings = BopSettings { rig, delta: DELTA, shadow: ShadowSettings::of(mode) };
         BopScorer::new(&dataset, &settings, renderer, &ledger).err().map(|e| e.to_string()).unwrap_or_default()
     };
-    let e = refused(rig(75.0), ShadowMode::Depth, Some(common::renderer()));
-    assert!(e.contains("shadow mode \"depth\""), "{e}");
-    let e = refused(rig(75.0), ShadowMode::Label, None);
-    assert!(e.contains("needs a renderer"), "{e}");
+    for mode in [ShadowMode::Depth, ShadowMode::Label] {
+        let e = refused(rig(75.0), mode, None);
+        assert!(e.contains(&format!("shadow mode \"{}\"", mode.as_str())) && e.contains("needs a renderer"), "{e}");
+    }
 }

@@ -71,7 +71,7 @@ fn projector_image() -> Intrinsics {
 /// depth 4), and beyond it the plane again, lit (the projector's shadow on that side lies
 /// under the box's far edge, which the camera does not see).
 ///
-/// In every shadow mode: `exact` and `depth` cast on the CPU, `label` drawn on the GPU (whose
+/// In every shadow mode: `exact` cast on the CPU, `depth` and `label` drawn on the GPU (whose
 /// f32 depths and points are held to 4e-7 of the depth, a few f32 roundings, where the CPU's
 /// are held to 1e-6 absolute).
 #[test]
@@ -80,8 +80,11 @@ fn a_box_on_a_plane_casts_the_projectors_geometric_shadow() {
         let mut rig =
             box_on_plane(vec![projector("projector", DVec3::new(PROJECTOR_BASELINE, 0.0, 0.0), projector_image())]);
         rig.shadow.mode = mode;
-        let tolerance = if mode == ShadowMode::Label { 4e-7 * 5.0 } else { 1e-6 };
-        let checked = box_shadow_row(&render(&rig), tolerance, &format!("{mode:?}"));
+        let on_gpu = mode != ShadowMode::Exact;
+        let tolerance = if on_gpu { 4e-7 * 5.0 } else { 1e-6 };
+        let out = render(&rig);
+        assert_eq!(out.raster.is_some(), on_gpu, "{mode:?}: drawn on the GPU");
+        let checked = box_shadow_row(&out, tolerance, &format!("{mode:?}"));
         assert_eq!(checked, 640 - 5, "{mode:?}");
     }
 }
@@ -234,6 +237,7 @@ fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
         let truth = rig_reference(&rig);
         let tested = mode != ShadowMode::None;
         assert!(out.shadow_pass == tested, "{mode:?}: the witnesses were tested");
+        assert_eq!(out.raster.is_some(), mode != ShadowMode::Exact, "{mode:?}: drawn on the GPU");
         let (wrong, wrong_interior) = differences(&out, &truth, tested, 1e-6);
         let lost = if tested { truth.witness.iter().filter(|&&bits| bits != 0).count() } else { 0 };
         eprintln!("{mode:?}: {wrong} pixels differ from the reference, {wrong_interior} interior; {lost} lost");
@@ -241,6 +245,50 @@ fn a_sphere_and_a_cluttered_table_match_the_brute_force_reference() {
         if tested {
             assert!(lost > 200, "the rig loses pixels to its witnesses: {lost}");
         }
+    }
+}
+
+/// Mode `depth` where its walk over the surfaces matters: a dense ball (9,800 triangles, about
+/// two to a pixel of the camera and of the projector) before a plane, under a projector 0.5
+/// to the camera's right and a lamp high to its left. Each witness sees the ball's self-shadow
+/// (the band past its terminator) and its cast shadow on the plane; the triangles over a
+/// point are mostly missing from the witness's image and are found by walking to them. Labels,
+/// depths and witness bits against the brute-force reference, with no interior pixel wrong.
+#[test]
+fn depth_mode_walks_a_dense_ball_to_its_self_shadow_as_the_reference_casts_it() {
+    let k = Intrinsics { width: 96, height: 72, fx: 160.0, fy: 160.0, cx: 47.5, cy: 35.5 };
+    let lamp = DVec3::new(-0.6, -0.3, -0.74).normalize();
+    let witnesses = vec![
+        projector("projector", DVec3::new(0.5, 0.0, 0.0), Intrinsics { width: 320, cx: 159.5, ..k }),
+        Witness { name: "lamp".into(), geometry: WitnessGeometry::Directional(Direction::Vector(lamp)) },
+    ];
+    let sensor =
+        Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }), witnesses };
+    let objects = [
+        ("builtin:plane:4", facing_camera(DVec3::new(0.0, 0.0, 1.4)), 2.0),
+        ("builtin:sphere:100", facing_camera(DVec3::new(0.02, 0.01, 1.0)), 0.3),
+    ];
+    let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
+    let mut rig = scene(sensor, ShadowMode::Depth, &posed);
+    for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
+        object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
+    }
+    let out = render(&rig);
+    assert_eq!(out.raster, Some(rangesynth::render::Raster::Graphics), "drawn on the GPU");
+    let truth = rig_reference(&rig);
+    let (wrong, wrong_interior) = differences(&out, &truth, true, 1e-6);
+    eprintln!("{wrong} pixels differ from the reference, {wrong_interior} interior");
+    assert_eq!(wrong_interior, 0, "{wrong} pixels differ, {wrong_interior} interior");
+    // Each witness loses pixels of the ball alone (its self-shadow) and of the plane.
+    let ball = |i: usize| truth.label[i] > 1;
+    for (bit, what) in [(1, "the projector"), (2, "the lamp")] {
+        let lost =
+            |on_ball: bool| (0..truth.label.len()).filter(|&i| truth.witness[i] == bit && ball(i) == on_ball).count();
+        let (on_ball, on_plane) = (lost(true), lost(false));
+        assert!(
+            on_ball > 50 && on_plane > 50,
+            "{what} alone loses {on_ball} pixels of the ball, {on_plane} of the plane"
+        );
     }
 }
 
@@ -737,9 +785,9 @@ fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_score
                     assert!((ours - cpu).abs() <= 1e-12 * scale, "{name}{which} score {k}: {ours} vs CPU {cpu}");
                 }
             }
-            // Modes `none` and `label` are drawn on the GPU, the others cast on the CPU; a
-            // hypothesis out of view is drawn by neither.
-            let drawn = matches!(mode, ShadowMode::None | ShadowMode::Label) && h.id != "behind";
+            // Modes `none`, `label` and `depth` are drawn on the GPU, `exact` cast on the CPU;
+            // a hypothesis out of view is drawn by neither.
+            let drawn = mode != ShadowMode::Exact && h.id != "behind";
             assert_eq!(v.raster, drawn.then_some(rangesynth::render::Raster::Graphics), "{name}");
         }
         let score = |id: &str| results.iter().find(|v| v.id == id).map(|v| v.scores.s).unwrap();
@@ -1008,17 +1056,17 @@ fn noise_incidence_under_a_rig_is_measured_back_along_each_ray() {
     }
 }
 
-/// Directional witnesses in mode `label`: two lamps, high to the left and low to the right,
-/// over a box, a step and a plank on a table (flat faces, none grazed by a lamp), under a
-/// camera with a projector beside it, and under the camera and the lamps alone (photometric
-/// stereo: no pinhole witness). The lamps' label images are drawn orthographically along their
-/// directions over what the camera can see (at `[shadow] columns = 2`); labels, depths and
+/// Directional witnesses in modes `label` and `depth`: two lamps, high to the left and low to
+/// the right, over a box, a step and a plank on a table (flat faces, none grazed by a lamp),
+/// under a camera with a projector beside it, and under the camera and the lamps alone
+/// (photometric stereo: no pinhole witness). The lamps' images are drawn orthographically along
+/// their directions over what the camera can see (at `[shadow] columns = 2`); labels, depths and
 /// witness bits against the brute-force reference, with no interior pixel wrong, as in mode
 /// `exact`, each lamp losing pixels alone. Under the lamps alone, once more with the step alone,
 /// stored 40 units from its model frame's origin (the mesh keeps an origin of its own) and
 /// posed back: the same.
 #[test]
-fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
+fn directional_witnesses_in_modes_label_and_depth_match_the_brute_force_reference() {
     let k = Intrinsics { width: 160, height: 120, fx: 150.0, fy: 150.0, cx: 79.5, cy: 59.5 };
     let lamp = |name: &str, toward: DVec3| Witness {
         name: name.into(),
@@ -1038,12 +1086,12 @@ fn directional_witnesses_in_mode_label_match_the_brute_force_reference() {
         ("builtin:box", tilt(DVec3::new(-0.3, -0.25, 1.5), 1.1), 0.15),
     ];
     let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
-    let runs =
-        [(&with_projector, ShadowMode::Exact, false), (&with_projector, ShadowMode::Label, false)].into_iter().chain([
-            (&lamps, ShadowMode::Exact, false),
-            (&lamps, ShadowMode::Label, false),
-            (&lamps, ShadowMode::Label, true),
-        ]);
+    let modes = [ShadowMode::Exact, ShadowMode::Label, ShadowMode::Depth];
+    let runs = modes.iter().flat_map(|&mode| {
+        [(&with_projector, mode, false), (&lamps, mode, false)]
+            .into_iter()
+            .chain((mode != ShadowMode::Exact).then_some((&lamps, mode, true)))
+    });
     for (witnesses, mode, stored_away) in runs {
         let reference = View::Pinhole(Pinhole { intrinsics: k, near: 0.1, far: f64::INFINITY });
         let sensor = Sensor { reference, witnesses: witnesses.clone() };

@@ -489,13 +489,12 @@ fn hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>, n: usize) -> Ve
 }
 
 /// A pinhole rig beside the paper's scanner on the same triangles and pixel count: the
-/// sphere:100 at 256², a batch of 64, in shadow modes `depth` (a rig's images cast on the CPU)
-/// and `label` (drawn on the GPU; docs/sensors-and-rigs.md, "What renders a rig"). The rig is a
-/// 256² camera whose pixel covers the scanner's pitch at the model's depth (fx = 5 / 0.02) and
-/// a projector as far to its side as the model is deep (the 45° the scanner's θ gives), and in
-/// mode `label` also the camera with a lamp in the projector's direction (a directional
-/// witness, its image planned for each hypothesis); each hypothesis is the scanner's turned to
-/// face the camera 5 units away.
+/// sphere:100 at 256², a batch of 64, in shadow modes `depth` and `label` (a rig's images drawn
+/// on the GPU; docs/sensors-and-rigs.md, "What renders a rig"). The rig is a 256² camera whose
+/// pixel covers the scanner's pitch at the model's depth (fx = 5 / 0.02) and a projector as far
+/// to its side as the model is deep (the 45° the scanner's θ gives), and also the camera with a
+/// lamp in the projector's direction (a directional witness, its image planned for each
+/// hypothesis); each hypothesis is the scanner's turned to face the camera 5 units away.
 fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
     use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
     let model = verifier.model("builtin:sphere:100", Path::new("."))?;
@@ -512,7 +511,7 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
         reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }),
         witnesses: vec![projector],
     };
-    // The projector's direction as a distant lamp (a directional witness, mode label only).
+    // The projector's direction as a distant lamp (a directional witness).
     let lamp = Witness {
         name: "lamp".into(),
         geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::new(1.0, 0.0, -1.0).normalize())),
@@ -546,26 +545,17 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
         &RangeImage::from(&verifier.renderer().render(&Scene { sensor: lamp_rig.clone(), ..rig_scene.clone() })?),
         &lamp_rig,
     )?;
-    for (mode, rig_side) in [(ShadowMode::Depth, "CPU"), (ShadowMode::Label, "GPU")] {
+    for mode in [ShadowMode::Depth, ShadowMode::Label] {
         let (mut scanner, mut pinhole, mut lamp) = (0.0f64, 0.0f64, 0.0f64);
         for _ in 0..3 {
             scanner = scanner.max(rate(sensed, &settings(scene.sensor.clone(), mode), &scanner_hypotheses)?);
             pinhole = pinhole.max(rate(&rig_sensed, &settings(rig.clone(), mode), &rig_hypotheses)?);
-            if mode == ShadowMode::Label {
-                lamp = lamp.max(rate(&lamp_sensed, &settings(lamp_rig.clone(), mode), &rig_hypotheses)?);
-            }
+            lamp = lamp.max(rate(&lamp_sensed, &settings(lamp_rig.clone(), mode), &rig_hypotheses)?);
         }
         let name = |who: &str| format!("{who}, {}", mode.as_str());
-        println!("{:<34} {:>8.1} {:>7.2}×", name("the scanner (GPU)"), scanner, 1.0);
-        println!(
-            "{:<34} {:>8.1} {:>7.2}×",
-            name(&format!("camera + projector ({rig_side})")),
-            pinhole,
-            pinhole / scanner
-        );
-        if mode == ShadowMode::Label {
-            println!("{:<34} {:>8.1} {:>7.2}×", name("camera + lamp (GPU)"), lamp, lamp / scanner);
-        }
+        println!("{:<34} {:>8.1} {:>7.2}×", name("the scanner"), scanner, 1.0);
+        println!("{:<34} {:>8.1} {:>7.2}×", name("camera + projector"), pinhole, pinhole / scanner);
+        println!("{:<34} {:>8.1} {:>7.2}×", name("camera + lamp"), lamp, lamp / scanner);
     }
     Ok(())
 }

@@ -119,125 +119,20 @@ vec3 view_normal(DrawData d, uint t) {
 #endif
 }
 
-// Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
-float edge_function(vec2 a, vec2 b, vec2 q) {
-    precise float area = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
-    return area;
+// What the depth test's walk (occluder_walk.glsl) reads of the shadow view.
+uvec4 occluder_seen(ivec2 q) {
+    return shadow_seen(q);
 }
 
-// Distance from q to the segment a–b.
-float segment_distance(vec2 q, vec2 a, vec2 b) {
-    precise vec2 ab = b - a;
-    precise float along = (q.x - a.x) * ab.x + (q.y - a.y) * ab.y;
-    precise float t = clamp(along / max(ab.x * ab.x + ab.y * ab.y, 1e-30), 0.0, 1.0);
-    precise vec2 off = q - (a + t * ab);
-    return length(off);
+ivec2 occluder_image_size() {
+    return m.sizes.zw;
 }
 
-float l1_length(vec2 v) {
-    return abs(v.x) + abs(v.y);
+DrawData occluder_draw(uint draw) {
+    return draws[draw];
 }
 
-// Steps a walk over a surface may take before giving up; see walk_to.
-const int MAX_WALK_STEPS = 32;
-// walk_to's answer when it gave up.
-const uint WALK_TOO_LONG = 0xfffffffeu;
-
-// Walks over the surface of draw d, from triangle t across edges toward the point p (shadow
-// frame xy), each step leaving through the edge p lies farthest outside of. Returns the
-// triangle whose projection holds p (edges included, within `tolerance`), NO_NEIGHBOUR where
-// this layer of the surface ends before p — a border, or a fold, where the surface turns away
-// from the camera (its silhouette) — or WALK_TOO_LONG.
-uint walk_to(DrawData d, uint t, vec2 p, float tolerance) {
-    // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
-    // Each step's corners are the ones the step before had.
-    vec2 a = view_corner(d, t, 0u).xy, b = view_corner(d, t, 1u).xy, c = view_corner(d, t, 2u).xy;
-    for (int step = 0; step < MAX_WALK_STEPS; step++) {
-        float winding = edge_function(a, b, c) >= 0.0 ? -1.0 : 1.0;
-        // How far p lies outside each edge's line (a–b, b–c, c–a).
-        vec3 outside = winding * vec3(edge_function(a, b, p), edge_function(b, c, p), edge_function(c, a, p))
-                     / max(vec3(length(b - a), length(c - b), length(a - c)), vec3(1e-30));
-        float farthest = max(outside.x, max(outside.y, outside.z));
-        if (farthest <= tolerance) {
-            return t;
-        }
-        uint exit = outside.x == farthest ? 0u : (outside.y == farthest ? 1u : 2u);
-        uint link = triangle_link(d, t, exit);
-        if (link == NO_NEIGHBOUR) {
-            return NO_NEIGHBOUR;
-        }
-        // Across the edge the surface goes on only if the neighbour lies on the other side of
-        // the edge's line; on the same side, it folds back.
-        vec2 from = exit == 0u ? a : (exit == 1u ? b : c);
-        vec2 to = exit == 0u ? b : (exit == 1u ? c : a);
-        vec2 opposite = exit == 0u ? c : (exit == 1u ? a : b);
-        // The neighbour shares from and to (the same points: vertices are matched by
-        // position), so only its third corner is read.
-        uint next = link >> LINK_INDEX_SHIFT, edge = link & LINK_EDGE_MASK;
-        vec2 third = view_corner(d, next, (edge + 2u) % 3u).xy;
-        if (edge_function(from, to, opposite) * edge_function(from, to, third) >= 0.0) {
-            return NO_NEIGHBOUR;
-        }
-        // Its corners in order: its edge number `edge` runs from → to, or back.
-        bool same_way = (link & LINK_SAME_WAY) != 0u;
-        vec2 first = same_way ? from : to, second = same_way ? to : from;
-        a = edge == 0u ? first : (edge == 1u ? third : second);
-        b = edge == 0u ? second : (edge == 1u ? first : third);
-        c = edge == 0u ? third : (edge == 1u ? second : first);
-        t = next;
-    }
-    return WALK_TOO_LONG;
-}
-
-// How far the plane of triangle t of draw d lies above p' (shadow frame) on the camera ray
-// through it (negative: below), and how much of that f32 rounding of the plane may account
-// for, on top of the point's own `bias` (its error grows with the plane's steepness). A
-// triangle seen edge-on has no plane over p': it rises by −∞.
-vec2 plane_rise(DrawData d, uint t, vec3 ps, float scale, float bias, out vec2 gradient) {
-    vec3 n = view_normal(d, t);
-    if (n.z == 0.0) {
-        gradient = vec2(0.0);
-        return vec2(-1.0 / 0.0, bias);
-    }
-    vec3 a = view_corner(d, t, 0u);
-    gradient = -n.xy / n.z;
-    precise float rise = a.z + (gradient.x * (ps.x - a.x) + gradient.y * (ps.y - a.y)) - ps.z;
-    precise float allowance = bias + m.bias_relative * scale * l1_length(gradient);
-    return vec2(rise, allowance);
-}
-
-// Whether the surface seen at shadow pixel q hides p' (shadow frame): the triangle over p' on
-// that surface — found by walking from the one the pixel saw, since triangles smaller than a
-// pixel are missing from the shadow buffer — rises above p' by more than the bias (exact ray
-// casting). `own` is the gradient of the surface through p', for the rare walk that gives up:
-// then the plane of the pixel's triangle, extrapolated to p', must rise above it by more than
-// a crease between them could explain (each edge bends a polyhedral surface's gradient by at
-// most their difference, over at most p''s distance from the triangle).
-// `lower` is the (draw, triangle) over p' last found not to hide it: walks from the pixels
-// around p' mostly end on the same triangle, whose plane is then not evaluated again.
-bool hides(DrawData d, uvec2 seen_at, vec3 ps, vec2 own, float scale, float bias, inout uvec2 lower) {
-    uint seen = seen_at.y;
-    uint t = walk_to(d, seen, ps.xy, m.bias_relative * scale);
-    if (t == NO_NEIGHBOUR || uvec2(seen_at.x, t) == lower) {
-        return false;
-    }
-    float beyond = 0.0; // how far the plane is extrapolated beyond its triangle
-    if (t == WALK_TOO_LONG) {
-        t = seen;
-        vec2 a = view_corner(d, t, 0u).xy, b = view_corner(d, t, 1u).xy, c = view_corner(d, t, 2u).xy;
-        beyond = min(segment_distance(ps.xy, a, b), min(segment_distance(ps.xy, b, c), segment_distance(ps.xy, c, a)));
-    }
-    vec2 gradient;
-    vec2 rise = plane_rise(d, t, ps, scale, bias, gradient);
-    precise float bound = rise.y + l1_length(gradient - own) * beyond;
-    if (rise.x > bound) {
-        return true;
-    }
-    if (beyond == 0.0) {
-        lower = uvec2(seen_at.x, t);
-    }
-    return false;
-}
+#include "occluder_walk.glsl"
 
 bool shadowed(ivec2 pixel, RangePixel range) {
     uint label = range.label;
@@ -266,7 +161,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     precise float facing = m.cos_theta - m.sin_theta * gradient.x;
     float scale = max(max(abs(ps.x), abs(ps.y)), max(abs(ps.z), abs(z)));
     // z came from a plane evaluated in f32, which errs in proportion to its steepness.
-    precise float steepness = 1.0 + l1_length(gradient);
+    precise float steepness = 1.0 + (abs(gradient.x) + abs(gradient.y));
     precise float bias = m.bias_pitch + m.bias_relative * scale * (1.0 + steepness);
     // The gradient came from an f32 normal; its error grows with the square of steepness.
     precise float facing_bound = m.bias_relative * steepness * steepness;
@@ -278,50 +173,8 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     if (!in_grid) {
         return false;
     }
-    // Then whatever lies between the point and the camera: the surfaces seen at the shadow
-    // pixels around p', each once. Exact wherever the occluder over p' is seen at one of those
-    // nine pixel centres, or is joined by its edges to a triangle that is.
-    // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
-    // are not walked again (a large triangle fills the whole neighbourhood).
-    uvec4 at_centre = shadow_seen(s);
-    // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
-    uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
-    uvec2 previous = centre;
-    // The draw last read from the table, read again only for a pixel that saw another (a view
-    // of one object has one): a software rasterizer gathers it word by word.
-    uint loaded = 0xffffffffu;
-    DrawData d;
-    uvec2 lower = uvec2(0xffffffffu);
-    // Each invocation goes through its nine on its own cursor, one walk a round: invocations
-    // that run in lockstep then take as many rounds as the most walks any of them needs, not
-    // one for each of the nine that any of them walks from.
-    int k = 0;
-    while (true) {
-        // The next pixel to walk from: the centre first, then its eight neighbours in rows.
-        uvec2 seen = uvec2(0xffffffffu);
-        bool found = false;
-        for (; k < 9 && !found; k++) {
-            int i = k == 0 ? 4 : k - int(k <= 4);
-            ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
-            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, m.sizes.zw))) {
-                continue;
-            }
-            uvec4 at = shadow_seen(q);
-            seen = at.yz;
-            found = at.x != 0u && (k == 0 || (seen != centre && seen != previous));
-        }
-        if (!found) {
-            return false;
-        }
-        previous = seen;
-        if (seen.x != loaded) {
-            d = draws[seen.x];
-            loaded = seen.x;
-        }
-        if (hides(d, seen, ps, own, scale, bias, lower)) {
-            return true;
-        }
-    }
+    // Then whatever lies between the point and the camera.
+    return occluded(s, ps, vec3(own, 0.0), scale, bias, false);
 }
 
 #ifdef FROM_WORDS

@@ -1,15 +1,16 @@
 #version 460
-// The label test of a rig on the GPU (src/render/pinhole/; docs/sensors-and-rigs.md): one
+// The shadow test of a rig on the GPU (src/render/pinhole/; docs/sensors-and-rigs.md): one
 // invocation per pixel of a region of a pinhole reference view. Its point p = Z · ray is seen by
 // a witness when p's surface faces the witness, p lies in front of it (a pinhole witness) and
-// on its image, and the witness's label image carries p's label at p's projection (the paper's
-// test, Fig. 4): the nearest pixel, or any of the four around it (TEST_LABEL_SQUARE). A pinhole
-// witness's image is drawn in projection, a directional witness's orthographically along its
-// direction. A point any witness does not see is shadowed; bit k of its `lost_by` word says
-// witness k did not see it.
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
-#include "../common/view.glsl"
+// on its image, and then, by the test this pipeline runs:
+// - the label tests: the witness's image carries p's label at p's projection (the paper's
+//   test, Fig. 4): the nearest pixel, or any of the four around it (TEST_LABEL_SQUARE);
+// - the depth test: no surface lies between p and the witness, found by walking over the
+//   surfaces the witness's image saw around p's projection (occluder_walk.glsl).
+// A pinhole witness's image is drawn in projection, a directional witness's orthographically
+// along its direction. A point any witness does not see is shadowed; bit k of its `lost_by`
+// word says witness k did not see it.
+#include "../raster/draw.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -29,13 +30,18 @@ struct WitnessData {
     vec4 from_reference[3]; // rows of witness-from-reference, composed in f64 on the host
     vec4 centre;            // a pinhole witness's centre (w = 1), or the unit direction toward a
                             // directional one (w = 0), in the reference frame
-    vec4 grid;              // its label image's grid (view.glsl): a pinhole witness's fx, fy,
-                            // cx, cy (`columns` applied), a directional one's x0, y0, dx, dy
+    vec4 grid;              // its image's grid (view.glsl): a pinhole witness's fx, fy, cx, cy
+                            // (`columns` applied), a directional one's x0, y0, dx, dy
     uvec4 band;             // its image's width, height, first row, and attachment (0: the
                             // pinhole witnesses', 1: the directional witnesses')
+    uvec2 draws;            // the depth test: device address of its draw table (WitnessDraws),
+                            // each draw in its frame at the draw index its image holds
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Witnesses {
     WitnessData witnesses[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer WitnessDraws {
+    DrawData draws[];
 };
 
 layout(push_constant, std430) uniform WitnessMask {
@@ -45,50 +51,102 @@ layout(push_constant, std430) uniform WitnessMask {
     uint witness_count;
     uvec2 witnesses;        // device address of the job's witnesses (Witnesses)
     float facing_tolerance; // the least cosine at which a surface faces a witness (src/exact/)
+    float bias_per_depth;   // the depth test's constant bias, model units per unit of depth
+    float bias_relative;    // the depth test's f32 rounding allowance, relative
 } m;
 
-// The label test, by the codes of ShadowTest (src/shadow.rs).
+// The test, by the codes of ShadowTest (src/shadow.rs).
 layout(constant_id = 0) const uint TEST = 0xffffffffu;
 layout(constant_id = 1) const uint TEST_LABEL_SQUARE = 0xffffffffu;
+layout(constant_id = 2) const uint TEST_DEPTH = 0xffffffffu;
+// How an edge link packs the neighbour (src/mesh/adjacency.rs, given by the host).
+layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
+layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
+layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 
-// Whether pixel q of a witness's image exists and carries `label`.
-bool carries(WitnessData w, ivec2 q, uint label) {
-    if (!(all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(w.band.xy))))) {
-        return false;
-    }
-    ivec2 at = q + ivec2(0, w.band.z);
-    uint seen = w.band.w == 0u ? imageLoad(witness_visibility, at).r : imageLoad(directional_visibility, at).r;
-    return seen == label;
+// The witness being tested, whose image and draw table the depth test's walk reads.
+WitnessData witness;
+
+// What the witness's image holds at pixel q (within it): label, draw index, triangle.
+uvec4 occluder_seen(ivec2 q) {
+    ivec2 at = q + ivec2(0, witness.band.z);
+    return witness.band.w == 0u ? imageLoad(witness_visibility, at) : imageLoad(directional_visibility, at);
 }
 
-// Whether witness w sees p, whose surface has normal `lit` (on the side the reference sees).
-bool sees(WitnessData w, vec3 p, vec3 lit, uint label) {
-    bool directional = w.centre.w == 0.0;
-    precise vec3 toward = directional ? w.centre.xyz : w.centre.xyz - p;
+ivec2 occluder_image_size() {
+    return ivec2(witness.band.xy);
+}
+
+DrawData occluder_draw(uint draw) {
+    return WitnessDraws(witness.draws).draws[draw];
+}
+
+vec3 view_corner(DrawData d, uint t, uint k) {
+    return triangle_corner(d, t, k);
+}
+
+vec3 view_normal(DrawData d, uint t) {
+    return triangle_normal(d, t);
+}
+
+#include "occluder_walk.glsl"
+
+// Whether pixel q of the witness's image exists and carries `label`.
+bool carries(ivec2 q, uint label) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, occluder_image_size())) && occluder_seen(q).r == label;
+}
+
+// The rows of witness-from-reference applied to v, translated (w = 1) or not (w = 0).
+vec3 to_witness(vec3 v, float w) {
+    precise vec3 q = vec3(dot(witness.from_reference[0].xyz, v) + w * witness.from_reference[0].w,
+                          dot(witness.from_reference[1].xyz, v) + w * witness.from_reference[1].w,
+                          dot(witness.from_reference[2].xyz, v) + w * witness.from_reference[2].w);
+    return q;
+}
+
+// Whether the witness sees p, whose surface has normal `lit` (on the side the reference sees)
+// and errs by up to `steepness` times f32 rounding of p's coordinates (the depth test).
+bool sees(vec3 p, vec3 lit, uint label, float steepness) {
+    bool directional = witness.centre.w == 0.0;
+    precise vec3 toward = directional ? witness.centre.xyz : witness.centre.xyz - p;
     precise float facing = dot(lit, toward);
     if (!(facing > m.facing_tolerance * length(lit) * length(toward))) {
         return false;
     }
-    precise vec3 q = vec3(dot(w.from_reference[0].xyz, p) + w.from_reference[0].w,
-                          dot(w.from_reference[1].xyz, p) + w.from_reference[1].w,
-                          dot(w.from_reference[2].xyz, p) + w.from_reference[2].w);
+    vec3 q = to_witness(p, 1.0);
     // Parallel rays come from beyond everything; a pinhole witness sees what lies in front.
     if (!(directional || q.z > 0.0)) {
         return false;
     }
-    precise vec2 uv = directional ? orthographic_pixel(w.grid, q.xy) : pinhole_pixel(w.grid, q);
+    precise vec2 uv = directional ? orthographic_pixel(witness.grid, q.xy) : pinhole_pixel(witness.grid, q);
     // Off the image by more than a pixel (checked in floats: a far projection does not fit an
     // int, whose conversion is then undefined).
-    if (!(all(greaterThanEqual(uv, vec2(-1.0))) && all(lessThanEqual(uv, vec2(w.band.xy))))) {
+    if (!(all(greaterThanEqual(uv, vec2(-1.0))) && all(lessThanEqual(uv, vec2(witness.band.xy))))) {
         return false;
     }
     if (TEST == TEST_LABEL_SQUARE) {
         ivec2 corner = ivec2(floor(uv));
-        return carries(w, corner, label) || carries(w, corner + ivec2(1, 0), label)
-            || carries(w, corner + ivec2(0, 1), label) || carries(w, corner + ivec2(1, 1), label);
+        return carries(corner, label) || carries(corner + ivec2(1, 0), label) || carries(corner + ivec2(0, 1), label)
+            || carries(corner + ivec2(1, 1), label);
     }
     // The nearest pixel; its square around its centre is the image's (Intrinsics::contains).
-    return carries(w, ivec2(floor(uv + 0.5)), label);
+    ivec2 s = ivec2(floor(uv + 0.5));
+    if (TEST != TEST_DEPTH) {
+        return carries(s, label);
+    }
+    // The depth test. A pinhole witness sees only its image's squares; a directional
+    // witness's image covers every point the reference view can see (directional.rs), and a
+    // point outside it can only come from rounding at its border.
+    if (!(all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, occluder_image_size())))) {
+        return directional;
+    }
+    float scale = max(max(max(abs(q.x), abs(q.y)), abs(q.z)), max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    // p came from a plane evaluated in f32, which errs in proportion to its steepness.
+    precise float bias = m.bias_per_depth * p.z + m.bias_relative * scale * (1.0 + steepness);
+    // p's own plane, and the rays toward the witness, in its frame.
+    vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
+    vec3 own = ray_slope(to_witness(lit, 0.0), rays);
+    return !occluded(s, q, own, scale, bias, !directional);
 }
 
 void main() {
@@ -108,8 +166,13 @@ void main() {
         n /= max(1.0, max(abs(n.x), abs(n.y)));
         // The side of the surface the reference view sees: the one facing back along its ray.
         vec3 lit = dot(n, p) > 0.0 ? -n : n;
+        // How steeply the plane lies along the pixel's ray: Z, from the plane in f32, errs in
+        // proportion (∞ for a plane along the ray, which then hides nothing behind it).
+        vec3 ray = pinhole_ray(m.intrinsics, vec2(pixel));
+        float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
         for (uint k = 0u; k < m.witness_count; k++) {
-            if (!sees(Witnesses(m.witnesses).witnesses[k], p, lit, label)) {
+            witness = Witnesses(m.witnesses).witnesses[k];
+            if (!sees(p, lit, label, steepness)) {
                 lost |= 1u << k;
             }
         }

@@ -34,7 +34,7 @@ use crate::render::pinhole::draws_rig;
 use crate::render::{DrawnAlone, Renderer};
 use crate::scene::load_model_as;
 use crate::sensor::{Intrinsics, Pinhole, PixelRect, Sensor, View};
-use crate::shadow::{ShadowMode, ShadowSettings};
+use crate::shadow::ShadowSettings;
 use glam::DMat4;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -163,16 +163,8 @@ impl<'a> BopScorer<'a> {
         ledger: &'a Ledger,
     ) -> Result<Self> {
         settings.shadow.validate()?;
-        let on_gpu = match settings.shadow.mode {
-            ShadowMode::Exact => false,
-            ShadowMode::Depth => {
-                return Err(Error::Unsupported(
-                    "shadow mode \"depth\" under a rig is answered exactly: use mode \"exact\"".into(),
-                ))
-            }
-            // Refuses a rig whose witnesses the label test cannot read.
-            mode => draws_rig(&settings.rig, mode)?,
-        };
+        // Refuses a rig whose witnesses the label test cannot read.
+        let on_gpu = draws_rig(&settings.rig, settings.shadow.mode)?;
         if on_gpu && renderer.is_none() {
             return Err(Error::Unsupported(format!(
                 "shadow mode \"{}\" draws the rig's images on the GPU: the scorer needs a renderer",

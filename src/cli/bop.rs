@@ -49,9 +49,10 @@ pub struct BopArgs {
     /// as those in rigs/ are; 1 for a rig written in millimetres.
     #[arg(long, default_value_t = 1000.0)]
     rig_scale: f64,
-    /// How the rig's images are made: exact (f64 rays on the CPU), label (the paper's label
-    /// test, the rows of an image drawn together on the GPU), or none (no shadows, on the GPU).
-    #[arg(long, default_value = "exact", value_parser = ["exact", "label", "none"])]
+    /// How the rig's images are made: exact (f64 rays on the CPU), depth (the depth test's
+    /// walk toward each witness) or label (the paper's label test), the rows of an image drawn
+    /// together on the GPU, or none (no shadows, on the GPU).
+    #[arg(long, default_value = "exact", value_parser = ["exact", "depth", "label", "none"])]
     shadow_mode: String,
 }
 
@@ -78,6 +79,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     let rig_text = read_input_text(&args.rig, "rig", &ledger)?;
     let rig: RigFile = parse_toml(&rig_text).with_context(|| format!("rig {}", args.rig.display()))?;
     let mode = match args.shadow_mode.as_str() {
+        "depth" => ShadowMode::Depth,
         "label" => ShadowMode::Label,
         "none" => ShadowMode::None,
         _ => ShadowMode::Exact,

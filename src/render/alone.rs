@@ -27,7 +27,7 @@ pub struct DrawnAlone {
 
 impl Renderer {
     /// Draws each of `models` (a mesh and its pose, camera-from-model) alone under `sensor`,
-    /// whose reference view is a pinhole one, in shadow mode `none` or `label`
+    /// whose reference view is a pinhole one, in shadow mode `none`, `label` or `depth`
     /// (`pinhole::draws_rig`), within its footprint; `name(i)` names model i in errors.
     pub fn draw_alone(
         &self,
@@ -41,7 +41,7 @@ impl Renderer {
         };
         if !draws_rig(sensor, shadow.mode)? {
             return Err(Error::Unsupported(format!(
-                "the GPU draws a rig's pinhole views in shadow modes \"none\" and \"label\", not \"{}\"",
+                "the GPU draws a rig's pinhole views in shadow modes \"none\", \"label\" and \"depth\", not \"{}\"",
                 shadow.mode.as_str()
             )));
         }

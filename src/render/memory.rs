@@ -11,7 +11,7 @@ use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
 const SHADOWED_LABEL_BYTES: u64 = 4;
-/// Bytes a range pixel's witness bits take, where a rig's label test runs on the GPU.
+/// Bytes a range pixel's witness bits take, where a rig's shadow test runs on the GPU.
 const WITNESS_BITS_BYTES: u64 = 4;
 /// Bytes a range pixel's effect outputs take: its loss and its measured z.
 const EFFECT_OUTPUT_BYTES: u64 = 8;

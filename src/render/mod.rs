@@ -469,7 +469,7 @@ impl Renderer {
     }
 
     /// Renders a rig other than the paper's scanner: on the GPU, a pinhole reference view in
-    /// shadow modes `none` and `label` (pinhole/); on the CPU by exact ray casting
+    /// shadow modes `none`, `label` and `depth` (pinhole/); on the CPU by exact ray casting
     /// (src/exact/rig.rs), any other, to the reference view and every witness in modes `exact`
     /// and `depth`, to the reference view alone in mode `none`. Its effects, where it names
     /// any, run as GPU passes over the image. Mode `label` on a rig whose label images the GPU
@@ -531,7 +531,8 @@ impl Cast {
 
 /// Whether the scene's witnesses were tested outside the scanner's shadow pass: on the CPU in
 /// shadow mode `exact`, and under a rig other than the paper's scanner (`scanner` `None`) in
-/// mode `depth` too, and on the GPU in mode `label` (pinhole/).
+/// modes `depth` (on the GPU under a pinhole reference view, else on the CPU) and `label` (on
+/// the GPU: pinhole/).
 fn casts_shadows(scene: &Scene, scanner: Option<&Scanner>) -> bool {
     matches!((scanner, scene.shadow.mode), (_, ShadowMode::Exact) | (None, ShadowMode::Depth | ShadowMode::Label))
 }

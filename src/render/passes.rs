@@ -4,7 +4,7 @@
 //!
 //! or, in shadow mode `exact`, the range view and its shadowed labels copied from the host
 //! (stages/host_view.rs) in place of the three passes before the effects; or, under a rig's
-//! pinhole reference view, its views drawn and the witnesses' label test (pinhole/) in their
+//! pinhole reference view, its views drawn and the witnesses' shadow test (pinhole/) in their
 //! place.
 //!
 //! where the sink is a readback of the images (`render`, a batch of one job) or a caller's
@@ -33,7 +33,7 @@ use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
 use crate::sensor::{PixelRect, Scanner, ViewGrid};
-use crate::shadow::{Neighbourhood, ShadowSettings, ShadowTest};
+use crate::shadow::{ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::DMat4;
 use std::sync::Arc;
@@ -54,20 +54,20 @@ pub(crate) struct Slot<'a> {
     /// The compute rasterizer's state for the range view and the shadow view, where it
     /// renders.
     compute: Option<ComputeViews<'a>>,
-    /// A rig's witnesses' label images and their label test, in shadow mode `label` under a
+    /// A rig's witnesses' images and their shadow test, in shadow modes `label` and `depth` under a
     /// pinhole reference view (src/render/pinhole/).
     witnesses: Option<WitnessSlot<'a>>,
 }
 
-/// What a slot holds for a rig's witnesses: the attachments of their label images (the
+/// What a slot holds for a rig's witnesses: the attachments of their images (the
 /// pinhole witnesses', the directional witnesses', where the rig has any), the bits of the
-/// witnesses that lost each pixel (host-visible for a readback slot), and the label test's
+/// witnesses that lost each pixel (host-visible for a readback slot), and the shadow test's
 /// bindings.
 struct WitnessSlot<'a> {
     targets: [Option<PooledTargets<'a>>; 2],
     lost_by: Buffer,
     bindings: WitnessMaskBindings,
-    neighbourhood: Neighbourhood,
+    test: ShadowTest,
 }
 
 /// What a slot must hold.
@@ -169,14 +169,14 @@ impl<'a> Slot<'a> {
                 let [pinhole, directional] = targets;
                 let targets = [pinhole?, directional?];
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
-                let mask = p.pinhole()?.mask(set.neighbourhood);
+                let mask = p.pinhole()?.mask(set.test);
                 // A rig without a kind of witness binds the other's images in its place (a
                 // witness set holds one witness at least: the error cannot arise).
                 let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
                 let images = pinhole.or(directional).zip(directional.or(pinhole)).map(|(p, d)| [p, d]);
                 let images = images.ok_or_else(|| Error::Scene("a rig's witness set holds no witness".into()))?;
                 let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by))?;
-                Some(WitnessSlot { targets, lost_by, bindings, neighbourhood: set.neighbourhood })
+                Some(WitnessSlot { targets, lost_by, bindings, test: set.test })
             }
             _ => None,
         };
@@ -185,7 +185,7 @@ impl<'a> Slot<'a> {
         Ok(Self { range, shadow, masked, mask_bindings, shadow_table, effects, reflectivities, compute, witnesses })
     }
 
-    /// The bits of the witnesses that lost each pixel, where a rig's label test ran
+    /// The bits of the witnesses that lost each pixel, where a rig's shadow test ran
     /// (host-visible for a readback slot).
     pub fn witness_bits(&self) -> Option<&Buffer> {
         self.witnesses.as_ref().map(|w| &w.lost_by)
@@ -533,7 +533,7 @@ impl<'p> Passes<'p> {
     }
 
     /// A job's passes under a rig's pinhole reference view: the reference view and the
-    /// witnesses' label images drawn, the label test, then the effects and the sink.
+    /// witnesses' images drawn, the shadow test, then the effects and the sink.
     fn pinhole_steps<'s>(
         &'s self,
         slot: &'s Slot<'_>,
@@ -579,7 +579,7 @@ impl<'p> Passes<'p> {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
                 images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
                 let buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
-                let mask = pipelines.mask(w.neighbourhood);
+                let mask = pipelines.mask(w.test);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &pinhole.mask);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));
                 Some(masked)

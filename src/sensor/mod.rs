@@ -215,7 +215,7 @@ impl Sensor {
             Error::Scene(format!(
                 "{what} renders the paper's scanner (an orthographic [sensor] with theta_deg and no \
                  [[sensor.witness]]) only so far; this sensor has a {} reference view and {} witnesses: render it \
-                 with [shadow] mode = \"exact\", \"depth\" or \"none\" (cast on the CPU)",
+                 with [shadow] mode = \"exact\", \"depth\" or \"none\"",
                 self.reference.kind(),
                 self.witnesses.len()
             ))

@@ -194,7 +194,7 @@ pub(crate) fn count_batch(
         })
         .collect();
     let draws: Vec<[Draw; 1]> = items.iter().map(|item| [item.draw()]).collect();
-    // Under a rig the GPU draws (modes `none` and `label` under a pinhole reference view), each
+    // Under a rig the GPU draws (modes `none`, `label` and `depth` under a pinhole reference view), each
     // hypothesis' pinhole views within its footprint (render/pinhole/).
     let pinhole = match (&settings.sensor.reference, settings.scanner) {
         (View::Pinhole(reference), None) if draws_rig(settings.sensor, settings.shadow.mode)? => {

@@ -258,7 +258,7 @@ impl Verifier {
         settings.shadow.validate()?;
         // Refuses mode `label` on a rig whose witnesses it cannot read, and what the GPU cannot
         // draw of a pinhole rig (the compute rasterizer, views or witness bands too large).
-        // Where the GPU draws the rig: its witnesses' label images' pixels (0 without any).
+        // Where the GPU draws the rig: its witnesses' images' pixels (0 without any).
         let mut rig_witness_pixels = None;
         if scanner.is_none() && draws_rig(&settings.sensor, settings.shadow.mode)? {
             if let View::Pinhole(reference) = &settings.sensor.reference {

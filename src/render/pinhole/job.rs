@@ -1,6 +1,7 @@
 //! One job's pinhole views: each draw's constants in the reference view and in every
 //! witness's band, with the depth range and cull mode each view draws it with; and the table
-//! of witnesses the job's label test reads, with its directional witnesses' grids.
+//! of witnesses the job's shadow test reads, with its directional witnesses' grids and, for
+//! the depth test, each witness's draw table.
 
 use super::directional::{self, DirectionalPlan};
 use super::witness_mask::{WitnessAttachment, WitnessMaskConstants};
@@ -11,6 +12,7 @@ use crate::gpu::{Buffer, GpuContext};
 use crate::render::raster::draw::{cull_mode, Band, DrawConstants, PinholeDrawing, ViewportFrame};
 use crate::render::FOOTPRINT_MARGIN;
 use crate::sensor::{Intrinsics, Pinhole, PixelRect, View};
+use crate::shadow::ShadowTest;
 use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
@@ -28,15 +30,16 @@ const NEAR_MARGIN: f64 = 1.0 - 1.0 / 1024.0;
 type ViewDraws = Vec<(DrawConstants, vk::CullModeFlags)>;
 
 /// One job's pinhole views: its draws' constants in the reference view and in each witness's
-/// band, and the label test's constants over its area with the job's table of witnesses.
+/// band, and the shadow test's constants over its area with the job's table of witnesses.
 pub(crate) struct PinholeJob {
     /// Every pixel of the reference view.
     whole: PixelRect,
     reference: ViewDraws,
     witnesses: Vec<WitnessDraws>,
-    /// What the label test reads of each witness, where the job's directional witnesses make
-    /// it the job's own; `mask` holds its address (or the witness set's), which it keeps alive.
-    _job_table: Option<Buffer>,
+    /// What the shadow test reads of each witness, where the job's directional witnesses or
+    /// the depth test's draw tables make it the job's own, and those draw tables: `mask` holds
+    /// the table's address (or the witness set's), so the job keeps them alive.
+    _job_table: Option<(Buffer, Option<Buffer>)>,
     pub mask: WitnessMaskConstants,
 }
 
@@ -86,12 +89,30 @@ impl PinholeJob {
             };
             witness_draws.push(drawn);
         }
-        // A table of its own where its directional witnesses' grids are the job's; else the
-        // set's, the same for every job.
-        let job_table = directional
-            .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "a job's witnesses"))
+        // The depth test walks each witness's draws in its frame: their constants in its band,
+        // one table a witness, in one buffer.
+        let walked = witnesses.is_some_and(|set| set.test == ShadowTest::Depth);
+        let draw_tables = walked
+            .then(|| {
+                let entries: Vec<DrawConstants> =
+                    witness_draws.iter().flat_map(|w| w.draws.iter().map(|&(constants, _)| constants)).collect();
+                Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &entries, "a job's witness draw tables")
+            })
             .transpose()?;
-        let table_buffer = job_table.as_ref().or(witnesses.and_then(|set| set.shared_table.as_ref()));
+        if let Some(tables) = &draw_tables {
+            let table_bytes = (models.draws.len() * size_of::<DrawConstants>()) as u64;
+            for (k, constants) in (0..).zip(&mut table) {
+                *constants = constants.with_draws(tables.device_address() + k * table_bytes);
+            }
+        }
+        // A table of its own where its directional witnesses' grids or its draw tables are the
+        // job's; else the set's, the same for every job.
+        let job_table = (directional || walked)
+            .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "a job's witnesses"))
+            .transpose()?
+            .map(|table| (table, draw_tables));
+        let table_buffer =
+            job_table.as_ref().map(|(table, _)| table).or(witnesses.and_then(|set| set.shared_table.as_ref()));
         Ok(Self {
             whole,
             reference: view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?,

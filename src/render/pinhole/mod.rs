@@ -1,8 +1,8 @@
 //! A rig's pinhole views on the GPU (docs/sensors-and-rigs.md, "On the GPU"): the reference
-//! view and, in shadow mode `label`, every witness's label image, drawn by the graphics
-//! pipeline in projection (shaders/raster/draw.glsl, `pinhole_clip_position`); then the paper's
-//! label test of each reference pixel's point against every witness, in one compute pass
-//! (witness_mask.rs). A job's passes (src/render/passes.rs) draw them in place of the
+//! view and, in shadow modes `label` and `depth`, every witness's image, drawn by the graphics
+//! pipeline in projection (shaders/raster/draw.glsl, `pinhole_clip_position`); then the shadow
+//! test of each reference pixel's point against every witness, in one compute pass
+//! (witness_mask.rs): the paper's label test, or the depth test's walk toward the witness. A job's passes (src/render/passes.rs) draw them in place of the
 //! scanner's range and shadow passes, so that `render` reads them back and `verify` scores
 //! them in its batches as it does the scanner's.
 //!
@@ -32,13 +32,13 @@ use crate::shadow::ShadowMode;
 use glam::DVec3;
 use std::sync::Arc;
 
-/// Whether the GPU draws a rig: a pinhole reference view in shadow modes `none` and `label`.
-/// Mode `label` under an orthographic reference view other than the paper's scanner is
-/// refused: the label test reads a pinhole reference view's points.
+/// Whether the GPU draws a rig: a pinhole reference view in shadow modes `none`, `label` and
+/// `depth`. Mode `label` under an orthographic reference view other than the paper's scanner
+/// is refused: the label test reads a pinhole reference view's points.
 pub(crate) fn draws_rig(sensor: &Sensor, mode: ShadowMode) -> Result<bool> {
     let pinhole = matches!(sensor.reference, View::Pinhole(_));
     match mode {
-        ShadowMode::None => Ok(pinhole),
+        ShadowMode::None | ShadowMode::Depth => Ok(pinhole),
         ShadowMode::Label if !pinhole => Err(Error::Unsupported(
             "[shadow] mode = \"label\" reads the witnesses' label images at a pinhole reference view's points; \
              under an orthographic reference view other than the paper's scanner, use mode \"depth\" or \"exact\""
@@ -59,8 +59,9 @@ pub(crate) struct Models<'a> {
 
 impl Renderer {
     /// Draws a scene whose rig the GPU draws ([`draws_rig`]) on `views` (the reference view's
-    /// pixels): the reference view's labels, depths and gradients, and in mode `label` the
-    /// witnesses' label test, as exact ray casting would return them, then its effects.
+    /// pixels): the reference view's labels, depths and gradients, and in modes `label` and
+    /// `depth` the witnesses' shadow test, as exact ray casting would return them, then its
+    /// effects.
     pub(super) fn render_pinhole_rig(&self, scene: &Scene, views: &Views) -> Result<RenderOutput> {
         let View::Pinhole(reference) = scene.sensor.reference else {
             return Err(Error::Unsupported("the GPU draws a pinhole reference view only".into()));

@@ -1,14 +1,15 @@
 //! The pipelines of a rig's pinhole views: the reference view's and the witnesses' raster
-//! pipelines (shaders/raster/ with PINHOLE) and the witness mask's, one per label test.
+//! pipelines (shaders/raster/ with PINHOLE) and the witness mask's, one per shadow test.
 
 use super::witness_mask::{WitnessMaskBindings, WitnessMaskConstants};
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::WITNESS_MASK_COMP as spec;
 use crate::gpu::{shaders, ComputePipeline, GpuContext, SetShape};
+use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::raster::draw::ViewPipelines;
 use crate::render::raster::graphics::{view_pipelines, Projection};
 use crate::render::targets::ViewKind;
-use crate::shadow::{Neighbourhood, ShadowTest};
+use crate::shadow::ShadowTest;
 use ash::vk;
 use std::sync::Arc;
 
@@ -18,6 +19,7 @@ pub struct PinholePipelines {
     pub witnesses: ViewPipelines,
     mask_label: ComputePipeline,
     mask_label_square: ComputePipeline,
+    mask_depth: ComputePipeline,
 }
 
 impl PinholePipelines {
@@ -29,12 +31,20 @@ impl PinholePipelines {
                 SetShape::storage(WitnessMaskBindings::IMAGES, WitnessMaskBindings::BUFFERS),
                 size_of::<WitnessMaskConstants>(),
                 shaders::WITNESS_MASK_COMP,
-                &[(spec::TEST, test as u32), (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32)],
+                &[
+                    (spec::TEST, test as u32),
+                    (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
+                    (spec::TEST_DEPTH, ShadowTest::Depth as u32),
+                    (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
+                    (spec::LINK_SAME_WAY, LINK_SAME_WAY),
+                    (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
+                ],
                 name,
             )
         };
         let mask_label = mask(ShadowTest::Label, "witness mask (label test)")?;
         let mask_label_square = mask(ShadowTest::LabelSquare, "witness mask (2x2 label test)")?;
+        let mask_depth = mask(ShadowTest::Depth, "witness mask (depth test)")?;
         let reference = view_pipelines(ctx, layout, ViewKind::Range, Projection::Pinhole)?;
         let witnesses = match view_pipelines(ctx, layout, ViewKind::Shadow, Projection::Pinhole) {
             Ok(witnesses) => witnesses,
@@ -43,14 +53,15 @@ impl PinholePipelines {
                 return Err(e);
             }
         };
-        Ok(Self { ctx: ctx.clone(), reference, witnesses, mask_label, mask_label_square })
+        Ok(Self { ctx: ctx.clone(), reference, witnesses, mask_label, mask_label_square, mask_depth })
     }
 
-    /// The mask pipeline of the label test that reads `neighbourhood`.
-    pub fn mask(&self, neighbourhood: Neighbourhood) -> &ComputePipeline {
-        match neighbourhood {
-            Neighbourhood::Nearest => &self.mask_label,
-            Neighbourhood::Square2 => &self.mask_label_square,
+    /// The mask pipeline of `test`.
+    pub fn mask(&self, test: ShadowTest) -> &ComputePipeline {
+        match test {
+            ShadowTest::Label => &self.mask_label,
+            ShadowTest::LabelSquare => &self.mask_label_square,
+            ShadowTest::Depth => &self.mask_depth,
         }
     }
 }

@@ -1,6 +1,6 @@
 //! The compute pass that tests a pinhole reference view's points against every witness's
-//! label image (shaders/stages/witness_mask.comp): what it reads of each witness, its push
-//! constants, and its bindings.
+//! image (shaders/stages/witness_mask.comp), by the label test or the depth test: what it
+//! reads of each witness, its push constants, and its bindings.
 
 use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
@@ -8,6 +8,7 @@ use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{Intrinsics, PixelRect};
+use crate::shadow::{DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
@@ -20,9 +21,11 @@ pub struct WitnessConstants {
     centre: [f32; 4],
     grid: [f32; 4],
     band: [u32; 4],
+    draws: [u32; 2],
+    _pad: [u32; 2],
 }
 
-matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band });
+matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band, draws });
 
 /// Which attachment a witness's band lies in: the pinhole witnesses' images, drawn in
 /// projection, or the directional witnesses', drawn orthographically (each kind has its own
@@ -47,6 +50,8 @@ impl WitnessConstants {
             centre: pose.w_axis.as_vec4().to_array(),
             grid: [drawn.fx, drawn.fy, drawn.cx, drawn.cy].map(|v| v as f32),
             band: [band.width, band.height, band.row, WitnessAttachment::Pinhole as u32],
+            draws: [0; 2],
+            _pad: [0; 2],
         };
         let mut floats = constants.from_reference.iter().flatten().chain(&constants.centre).chain(&constants.grid);
         floats.all(|v| v.is_finite()).then_some(constants)
@@ -61,6 +66,8 @@ impl WitnessConstants {
             centre: toward.extend(0.0).as_vec4().to_array(),
             grid: [0.0; 4],
             band: [band.width, band.height, band.row, WitnessAttachment::Directional as u32],
+            draws: [0; 2],
+            _pad: [0; 2],
         }
     }
 
@@ -68,6 +75,12 @@ impl WitnessConstants {
     /// pixel's centre and the pitch) set: a directional witness's, planned for one job.
     pub fn with_grid(self, grid: [f64; 4]) -> Self {
         Self { grid: grid.map(|v| v as f32), ..self }
+    }
+
+    /// The witness with its draw table, which the depth test walks (each job's): at the
+    /// device address `draws`.
+    pub fn with_draws(self, draws: u64) -> Self {
+        Self { draws: [draws as u32, (draws >> 32) as u32], ..self }
     }
 }
 
@@ -87,12 +100,23 @@ pub struct WitnessMaskConstants {
     witness_count: u32,
     witnesses: [u32; 2],
     facing_tolerance: f32,
-    _pad: [u32; 3],
+    bias_per_depth: f32,
+    bias_relative: f32,
+    _pad: u32,
 }
 
 matches_shader_struct!(
     WitnessMaskConstants,
-    WitnessMask { intrinsics, region, width, witness_count, witnesses, facing_tolerance }
+    WitnessMask {
+        intrinsics,
+        region,
+        width,
+        witness_count,
+        witnesses,
+        facing_tolerance,
+        bias_per_depth,
+        bias_relative
+    }
 );
 
 impl WitnessMaskConstants {
@@ -107,12 +131,16 @@ impl WitnessMaskConstants {
             witness_count: witness_count as u32,
             witnesses: table.map_or([0; 2], Buffer::address_words),
             facing_tolerance: FACING_TOLERANCE as f32,
-            _pad: [0; 3],
+            // The depth test's constant bias: DEPTH_BIAS_PIXELS of a pixel's width at p's
+            // depth, the finer axis's.
+            bias_per_depth: (DEPTH_BIAS_PIXELS / reference.fx.max(reference.fy)) as f32,
+            bias_relative: DEPTH_BIAS_RELATIVE as f32,
+            _pad: 0,
         }
     }
 }
 
-/// The mask's descriptor set: the reference view's attachments, the pinhole witnesses' label
+/// The mask's descriptor set: the reference view's attachments, the pinhole witnesses'
 /// images and the directional witnesses', then the masked labels and each pixel's witness
 /// bits.
 pub struct WitnessMaskBindings {
@@ -149,7 +177,7 @@ impl WitnessMaskBindings {
         Ok(Self { set })
     }
 
-    /// Records the label test of `pipeline` over the constants' region (8×8 workgroups).
+    /// Records the test of `pipeline` over the constants' region (8×8 workgroups).
     pub fn record(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &WitnessMaskConstants) {
         let groups = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
         self.set.dispatch(cmd, pipeline, bytemuck::bytes_of(constants), groups);

@@ -1,14 +1,14 @@
-//! A rig's witnesses as the GPU draws and tests them in shadow mode `label`: their label
-//! images, stacked in bands of rows of two attachments (pinhole witnesses' images in
-//! projection, directional witnesses' orthographic images), and what the label test reads of
-//! each (witness_mask.rs).
+//! A rig's witnesses as the GPU draws and tests them in shadow modes `label` and `depth`: their
+//! images (visibility: label, draw index, triangle), stacked in bands of rows of two
+//! attachments (pinhole witnesses' images in projection, directional witnesses' orthographic
+//! images), and what the shadow test reads of each (witness_mask.rs).
 
 use super::directional::DirectionalImage;
 use super::witness_mask::{WitnessAttachment, WitnessConstants};
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
 use crate::sensor::{Intrinsics, PixelRect, Sensor, View, WitnessGeometry};
-use crate::shadow::{Neighbourhood, ShadowMode, ShadowSettings};
+use crate::shadow::{ShadowSettings, ShadowTest};
 use ash::vk;
 use glam::{DMat4, DQuat, DVec3};
 use std::sync::Arc;
@@ -17,15 +17,15 @@ use std::sync::Arc;
 /// view's axis ([`WitnessLayout::new`]).
 const MAX_DIRECTIONAL_FORESHORTENING: f64 = 4.0;
 
-/// A witness as every job draws it: the move into its frame, its label image and its band of
-/// its attachment.
+/// A witness as every job draws it: the move into its frame, its image and its band of its
+/// attachment.
 pub(super) struct WitnessView {
     pub from_reference: DMat4,
     pub image: WitnessImage,
     pub band: PixelRect,
 }
 
-/// A witness's label image.
+/// A witness's image.
 pub(super) enum WitnessImage {
     /// A pinhole witness's: its intrinsics times `[shadow] columns`, cy counted from the top
     /// of the pinhole witnesses' attachment. The witness's frame is its own (x right, y down,
@@ -37,11 +37,12 @@ pub(super) enum WitnessImage {
     Directional(DirectionalImage),
 }
 
-/// Where a rig's witnesses' label images go, and what the label test reads of each: worked out
+/// Where a rig's witnesses' images go, and what the shadow test reads of each: worked out
 /// on the host alone, so that a plan can be refused before anything is allocated.
 pub(crate) struct WitnessLayout {
     views: Vec<WitnessView>,
-    /// What the label test reads of each witness; a directional witness's grid is each job's.
+    /// What the shadow test reads of each witness; a directional witness's grid (and, in the
+    /// depth test, every witness's draw table) is each job's.
     table: Vec<WitnessConstants>,
     /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
     /// band lies in it.
@@ -49,15 +50,16 @@ pub(crate) struct WitnessLayout {
 }
 
 impl WitnessLayout {
-    /// The witnesses of `sensor` under `shadow`, their label images stacked in bands of rows
-    /// in file order: a pinhole witness's at its own intrinsics times `[shadow] columns`, a
+    /// The witnesses of `sensor` under `shadow`, their images stacked in bands of rows in file
+    /// order: a pinhole witness's at its own intrinsics times `[shadow] columns`, a
     /// directional witness's a square as many pixels a side as the reference view's larger
     /// side times `columns`, over the cosine of its slant from the reference's optical axis.
-    /// `None` where no label test runs (mode `none`, or no witnesses).
+    /// `None` where no shadow test runs on the GPU (modes `none` and `exact`, or no
+    /// witnesses).
     /// Refused where they do not fit a view of `max_side` pixels a side (the device's
     /// largest).
     pub fn new(max_side: u32, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
-        if shadow.mode != ShadowMode::Label || sensor.witnesses.is_empty() {
+        if shadow.test().is_none() || sensor.witnesses.is_empty() {
             return Ok(None);
         }
         let (width, height) = sensor.reference.size();
@@ -110,7 +112,7 @@ impl WitnessLayout {
             let fits = |side: u64| side <= u64::from(max_side);
             if !(fits(size.0) && fits(row + size.1)) {
                 return Err(Error::Scene(format!(
-                    "{}: the witnesses' label images, {} rows in all by then at [shadow] columns = {}, exceed the \
+                    "{}: the witnesses' images, {} rows in all by then at [shadow] columns = {}, exceed the \
                      largest view this device draws ({max_side} pixels a side)",
                     witness.owner(index),
                     row + size.1,
@@ -139,8 +141,9 @@ impl WitnessLayout {
 }
 
 /// A rig's witnesses as every job of a submission draws and tests them: their layout, the
-/// label test's neighbourhood, and the mask's table of them on the device where it is the
-/// same for every job (no directional witness, whose grid is each job's: job.rs).
+/// shadow test, and the mask's table of them on the device where it is the same for every job
+/// (the label test without directional witnesses: a directional witness's grid, and the depth
+/// test's draw tables, are each job's: job.rs).
 pub(crate) struct WitnessSet {
     pub(super) views: Vec<WitnessView>,
     pub(super) table: Vec<WitnessConstants>,
@@ -148,22 +151,24 @@ pub(crate) struct WitnessSet {
     /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
     /// band lies in it.
     pub sizes: [(u32, u32); 2],
-    pub neighbourhood: Neighbourhood,
+    pub test: ShadowTest,
 }
 
 impl WitnessSet {
     /// The witnesses of `sensor` under `shadow` laid out for `ctx`'s device ([`WitnessLayout`]);
-    /// `None` where no label test runs.
+    /// `None` where no shadow test runs on the GPU.
     pub fn new(ctx: &Arc<GpuContext>, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
         let Some(layout) = WitnessLayout::new(ctx.max_view_side(), sensor, shadow)? else {
             return Ok(None);
         };
         let WitnessLayout { views, table, sizes } = layout;
-        let shared = views.iter().all(|w| matches!(w.image, WitnessImage::Pinhole(_)));
+        // The layout exists only where a test runs.
+        let Some(test) = shadow.test() else { return Ok(None) };
+        let shared = test != ShadowTest::Depth && views.iter().all(|w| matches!(w.image, WitnessImage::Pinhole(_)));
         let shared_table = shared
             .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "witness table"))
             .transpose()?;
-        Ok(Some(Self { views, table, shared_table, sizes, neighbourhood: shadow.neighbourhood }))
+        Ok(Some(Self { views, table, shared_table, sizes, test }))
     }
 
     /// Pixels of the attachments that hold every band.
@@ -172,7 +177,7 @@ impl WitnessSet {
     }
 }
 
-/// A witness's label image: its intrinsics with `columns` = k pixels to each of the
+/// A witness's image: its intrinsics with `columns` = k pixels to each of the
 /// witness's, in both axes (pixel centres stay at whole image coordinates).
 fn multiplied(k: &Intrinsics, columns: u32) -> Intrinsics {
     let c = f64::from(columns);

@@ -1,0 +1,266 @@
+// The depth test's search for a surface between a point and a witness (src/shadow.rs,
+// "depth"): the scanner's shadow mask (shadow_mask.comp) and a rig's witness mask
+// (witness_mask.comp) both ask it of the visibility image a witness saw. It works in the
+// witness's frame, where the rays toward the witness either run parallel along +z (a
+// directional witness, the paper's camera: `central` false, larger z nearer the witness) or
+// meet at the frame's origin, the witness's centre (a pinhole witness: `central` true). A
+// central projection maps the surface's triangles onto triangles of rays and its planes onto
+// planes, so the same walk over the surface's edges finds the triangle a point's ray crosses:
+// only which side of an edge a point lies on, and how far along its ray a plane lies, are
+// worked out for each kind of ray.
+//
+// The includer defines, before including this file: `view_corner(d, t, k)` and
+// `view_normal(d, t)` (a triangle's corner and unit normal in the witness's frame);
+// `occluder_seen(q)` (what the witness's visibility image holds at pixel q: label, draw
+// index, triangle, or zeros), `occluder_image_size()` and `occluder_draw(draw)` (the draw
+// table's entry at a draw index the image holds); the edge links' spec constants
+// LINK_INDEX_SHIFT, LINK_SAME_WAY and LINK_EDGE_MASK; and push constants `m` with
+// `bias_relative`, the f32 rounding allowance relative to the coordinates.
+
+// Twice the signed area of (a, b, q): which side of the line a → b the point q lies on.
+float edge_function(vec2 a, vec2 b, vec2 q) {
+    precise float area = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+    return area;
+}
+
+// Which side of edge a → b, as the witness sees it, the point q lies on: for parallel rays,
+// edge_function in xy; for rays from the origin, the volume of (a, b, q) from it, whose sign
+// says which side of the plane through the origin, a and b the point lies on.
+float edge_side(vec3 a, vec3 b, vec3 q, bool central) {
+    if (central) {
+        precise float volume = dot(cross(a, b), q);
+        return volume;
+    }
+    return edge_function(a.xy, b.xy, q.xy);
+}
+
+// What edge_side is divided by to give q's distance from the edge's line (parallel rays) or
+// from its plane through the origin (central rays).
+float edge_span(vec3 a, vec3 b, bool central) {
+    return central ? length(cross(a, b)) : length(b.xy - a.xy);
+}
+
+// How far p lies outside each edge of triangle (a, b, c) (a–b, b–c, c–a), as the witness sees
+// them: negative inside.
+vec3 outside_edges(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
+    float winding = edge_side(a, b, c, central) >= 0.0 ? -1.0 : 1.0;
+    return winding * vec3(edge_side(a, b, p, central), edge_side(b, c, p, central), edge_side(c, a, p, central))
+         / max(vec3(edge_span(a, b, central), edge_span(b, c, central), edge_span(c, a, central)), vec3(1e-30));
+}
+
+// Distance from q to the segment a–b.
+float segment_distance(vec2 q, vec2 a, vec2 b) {
+    precise vec2 ab = b - a;
+    precise float along = (q.x - a.x) * ab.x + (q.y - a.y) * ab.y;
+    precise float t = clamp(along / max(ab.x * ab.x + ab.y * ab.y, 1e-30), 0.0, 1.0);
+    precise vec2 off = q - (a + t * ab);
+    return length(off);
+}
+
+float l1_length(vec3 v) {
+    return abs(v.x) + abs(v.y) + abs(v.z);
+}
+
+// Steps a walk over a surface may take before giving up; see walk_to.
+const int MAX_WALK_STEPS = 32;
+// walk_to's answer when it gave up.
+const uint WALK_TOO_LONG = 0xfffffffeu;
+
+// Walks over the surface of draw d, from triangle t across edges toward the ray through p,
+// each step leaving through the edge p lies farthest outside of. Returns the triangle whose
+// rays hold p's (edges included, within `tolerance`), NO_NEIGHBOUR where this layer of the
+// surface ends before p — a border, or a fold, where the surface turns away from the witness
+// (its silhouette) — or WALK_TOO_LONG.
+uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central) {
+    // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
+    // Each step's corners are the ones the step before had.
+    vec3 a = view_corner(d, t, 0u), b = view_corner(d, t, 1u), c = view_corner(d, t, 2u);
+    for (int step = 0; step < MAX_WALK_STEPS; step++) {
+        vec3 outside = outside_edges(a, b, c, p, central);
+        float farthest = max(outside.x, max(outside.y, outside.z));
+        if (farthest <= tolerance) {
+            return t;
+        }
+        uint exit = outside.x == farthest ? 0u : (outside.y == farthest ? 1u : 2u);
+        uint link = triangle_link(d, t, exit);
+        if (link == NO_NEIGHBOUR) {
+            return NO_NEIGHBOUR;
+        }
+        // Across the edge the surface goes on only if the neighbour lies on the other side of
+        // the edge's line; on the same side, it folds back.
+        vec3 from = exit == 0u ? a : (exit == 1u ? b : c);
+        vec3 to = exit == 0u ? b : (exit == 1u ? c : a);
+        vec3 opposite = exit == 0u ? c : (exit == 1u ? a : b);
+        // The neighbour shares from and to (the same points: vertices are matched by
+        // position), so only its third corner is read.
+        uint next = link >> LINK_INDEX_SHIFT, edge = link & LINK_EDGE_MASK;
+        vec3 third = view_corner(d, next, (edge + 2u) % 3u);
+        if (edge_side(from, to, opposite, central) * edge_side(from, to, third, central) >= 0.0) {
+            return NO_NEIGHBOUR;
+        }
+        // Its corners in order: its edge number `edge` runs from → to, or back.
+        bool same_way = (link & LINK_SAME_WAY) != 0u;
+        vec3 first = same_way ? from : to, second = same_way ? to : from;
+        a = edge == 0u ? first : (edge == 1u ? third : second);
+        b = edge == 0u ? second : (edge == 1u ? first : third);
+        c = edge == 0u ? third : (edge == 1u ? second : first);
+        t = next;
+    }
+    return WALK_TOO_LONG;
+}
+
+// The slope of a plane of normal n along the rays toward the witness, `toward` their unit
+// direction at the point: how much nearer the witness the plane lies for each unit moved
+// across the rays (the plane's gradient (∂z/∂x, ∂z/∂y, 0) for rays along +z). Infinite for
+// a plane along the rays.
+vec3 ray_slope(vec3 n, vec3 toward) {
+    precise float across = dot(n, toward);
+    precise vec3 slope = -(n - across * toward) / across;
+    return slope;
+}
+
+// How far the plane of triangle t of draw d lies nearer the witness than p (witness frame)
+// along the ray through p (negative: farther), and how much of that f32 rounding of the
+// plane may account for, on top of the point's own `bias` (its error grows with the plane's
+// slope). A plane the ray does not cross between p and the witness (seen edge-on, or met only
+// at or behind a pinhole witness's centre) rises by −∞.
+vec2 plane_rise(DrawData d, uint t, vec3 p, float scale, float bias, bool central, out vec3 slope) {
+    vec3 n = view_normal(d, t);
+    vec3 a = view_corner(d, t, 0u);
+    if (central) {
+        float distance = length(p);
+        precise vec3 toward = -p / distance;
+        precise float across = dot(n, toward);
+        slope = ray_slope(n, toward);
+        precise float rise = dot(n, a - p) / across;
+        if (across == 0.0 || !(rise < distance)) {
+            slope = vec3(0.0);
+            return vec2(-1.0 / 0.0, bias);
+        }
+        precise float allowance = bias + m.bias_relative * scale * l1_length(slope);
+        return vec2(rise, allowance);
+    }
+    if (n.z == 0.0) {
+        slope = vec3(0.0);
+        return vec2(-1.0 / 0.0, bias);
+    }
+    vec2 gradient = -n.xy / n.z;
+    slope = vec3(gradient, 0.0);
+    precise float rise = a.z + (gradient.x * (p.x - a.x) + gradient.y * (p.y - a.y)) - p.z;
+    precise float allowance = bias + m.bias_relative * scale * (abs(gradient.x) + abs(gradient.y));
+    return vec2(rise, allowance);
+}
+
+// Distance from q to the segment a–b, in space.
+float segment_distance(vec3 q, vec3 a, vec3 b) {
+    precise vec3 ab = b - a;
+    precise float t = clamp(dot(q - a, ab) / max(dot(ab, ab), 1e-30), 0.0, 1.0);
+    precise vec3 off = q - (a + t * ab);
+    return length(off);
+}
+
+// How far p lies from triangle (a, b, c) across the rays: the distance to its nearest edge in
+// xy (parallel rays), or in the plane through p across its ray, where the rays through the
+// corners meet it (central rays; infinite where a corner's ray does not).
+float distance_across(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
+    if (central) {
+        float along = dot(p, p);
+        vec3 reach = vec3(dot(a, p), dot(b, p), dot(c, p));
+        if (!all(greaterThan(reach, vec3(0.0)))) {
+            return 1.0 / 0.0;
+        }
+        a *= along / reach.x;
+        b *= along / reach.y;
+        c *= along / reach.z;
+        return min(segment_distance(p, a, b), min(segment_distance(p, b, c), segment_distance(p, c, a)));
+    }
+    return min(segment_distance(p.xy, a.xy, b.xy),
+               min(segment_distance(p.xy, b.xy, c.xy), segment_distance(p.xy, c.xy, a.xy)));
+}
+
+// Whether the surface seen at a pixel of the witness's image hides p (witness frame): the
+// triangle over p on that surface — found by walking from the one the pixel saw, since
+// triangles smaller than a pixel are missing from the image — rises above p by more than the
+// bias (exact ray casting). The plane is evaluated up to the walk's tolerance beyond its
+// triangle, or, for the rare walk that gives up, the plane of the pixel's triangle is
+// extrapolated to p: either way it must rise above p by more than a crease between it and p's
+// own surface could explain. `own` is the slope of the surface through p (ray_slope): each
+// edge bends a polyhedral surface's slope by at most their difference, over at most p's
+// distance from the triangle. (A plane seen nearly edge-on rises steeply across the walk's
+// tolerance: where p's ray skims the edge of such a triangle, which side of the edge it passes
+// is not told apart in f32, and the difference of slopes over the tolerance lets it pass.)
+// `lower` is the (draw, triangle) over p last found not to hide it: walks from the pixels
+// around p mostly end on the same triangle, whose plane is then not evaluated again.
+bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias, bool central, inout uvec2 lower) {
+    uint seen = seen_at.y;
+    float tolerance = m.bias_relative * scale;
+    uint t = walk_to(d, seen, p, tolerance, central);
+    if (t == NO_NEIGHBOUR || uvec2(seen_at.x, t) == lower) {
+        return false;
+    }
+    bool found = t != WALK_TOO_LONG;
+    float beyond = tolerance; // how far the plane is evaluated beyond its triangle
+    if (!found) {
+        t = seen;
+        beyond = distance_across(view_corner(d, t, 0u), view_corner(d, t, 1u), view_corner(d, t, 2u), p, central);
+    }
+    vec3 slope;
+    vec2 rise = plane_rise(d, t, p, scale, bias, central, slope);
+    precise float bound = rise.y + l1_length(slope - own) * beyond;
+    if (rise.x > bound) {
+        return true;
+    }
+    if (found) {
+        lower = uvec2(seen_at.x, t);
+    }
+    return false;
+}
+
+// Whether a surface lies between p (witness frame) and the witness, p's ray meeting the
+// witness's image nearest pixel s (within it): the surfaces seen at the pixels around s, each
+// once. Exact wherever the occluder over p is seen at one of those nine pixel centres, or is
+// joined by its edges to a triangle that is.
+bool occluded(ivec2 s, vec3 p, vec3 own, float scale, float bias, bool central) {
+    // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
+    // are not walked again (a large triangle fills the whole neighbourhood).
+    uvec4 at_centre = occluder_seen(s);
+    // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
+    uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
+    uvec2 previous = centre;
+    // The draw last read from the table, read again only for a pixel that saw another (a view
+    // of one object has one): a software rasterizer gathers it word by word.
+    uint loaded = 0xffffffffu;
+    DrawData d;
+    uvec2 lower = uvec2(0xffffffffu);
+    ivec2 size = occluder_image_size();
+    // Each invocation goes through its nine on its own cursor, one walk a round: invocations
+    // that run in lockstep then take as many rounds as the most walks any of them needs, not
+    // one for each of the nine that any of them walks from.
+    int k = 0;
+    while (true) {
+        // The next pixel to walk from: the centre first, then its eight neighbours in rows.
+        uvec2 seen = uvec2(0xffffffffu);
+        bool found = false;
+        for (; k < 9 && !found; k++) {
+            int i = k == 0 ? 4 : k - int(k <= 4);
+            ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+                continue;
+            }
+            uvec4 at = occluder_seen(q);
+            seen = at.yz;
+            found = at.x != 0u && (k == 0 || (seen != centre && seen != previous));
+        }
+        if (!found) {
+            return false;
+        }
+        previous = seen;
+        if (seen.x != loaded) {
+            d = occluder_draw(seen.x);
+            loaded = seen.x;
+        }
+        if (hides(d, seen, p, own, scale, bias, central, lower)) {
+            return true;
+        }
+    }
+}
