@@ -21,8 +21,10 @@
 //!   centres or joined by edges to a triangle that is: only an occluder thinner than a pixel
 //!   and seen nowhere near p' escapes. The bias is [`DEPTH_BIAS_PIXELS`] of a pixel pitch plus
 //!   f32 rounding ([`DEPTH_BIAS_RELATIVE`] of the coordinates, scaled by how steep the planes
-//!   are). A walk is at most 32 steps; one that gives up falls back on the seen triangle's
-//!   plane, extrapolated to p', with an allowance for the creases in between.
+//!   are), and a plane is evaluated up to the walk's f32 tolerance beyond its triangle. A walk
+//!   is at most 256 steps (a dense sphere's pole takes up to half its segments); one that gives
+//!   up has wandered off the layer over p' (across a silhouette f32 misjudged) and says
+//!   nothing of it. Under a rig the same walk runs toward each witness (src/render/pinhole/).
 //! - `exact`: two rays in f64 on the CPU at every pixel centre (src/exact/): the first hit
 //!   along −z, then a ray from it toward the camera. The product's own ground truth, and the
 //!   slow end of `rangesynth accuracy`'s curve; its images go through the same effect and

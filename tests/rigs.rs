@@ -292,6 +292,69 @@ fn depth_mode_walks_a_dense_ball_to_its_self_shadow_as_the_reference_casts_it() 
     }
 }
 
+/// Mode `depth` against the brute-force reference on random rigs: a tilted table, one to four
+/// models (boxes, steps, cylinders, balls of 2,208 and 25,280 triangles) of random size and
+/// pose, one to three witnesses (pinhole ones of random pose and intrinsics, some behind the
+/// camera, directional ones of random direction), in metres or millimetres. Labels and witness
+/// bits have no interior pixel wrong, depths agree to 10⁻⁵ of Z (f32 depths on faces seen
+/// nearly edge-on err by about 10⁻⁶). The seeds are those where walks over the balls' poles
+/// and along their silhouettes once gave up and guessed a shadow.
+#[test]
+fn depth_mode_under_random_rigs_matches_the_brute_force_reference() {
+    use rand::{Rng, SeedableRng};
+    let models = ["builtin:box", "builtin:sphere:48", "builtin:cylinder:32", "builtin:step", "builtin:sphere:160"];
+    for seed in [19u64, 20, 23] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let unit = if seed % 2 == 0 { 1.0 } else { 1000.0 };
+        let f = rng.gen_range(100.0..300.0);
+        let k = Intrinsics { width: 128, height: 96, fx: f, fy: f * rng.gen_range(0.9..1.1), cx: 63.5, cy: 47.5 };
+        let witnesses = (0..rng.gen_range(1..4))
+            .map(|j| {
+                let geometry = if rng.gen_bool(0.6) {
+                    let centre =
+                        DVec3::new(rng.gen_range(-0.4..0.4), rng.gen_range(-0.3..0.3), rng.gen_range(-0.2..0.3));
+                    let turn = DMat4::from_rotation_y(rng.gen_range(-0.4..0.4))
+                        * DMat4::from_rotation_x(rng.gen_range(-0.3..0.3));
+                    let (width, height) = (rng.gen_range(100..300), rng.gen_range(80..250));
+                    let (fx, fy) = (rng.gen_range(80.0..300.0), rng.gen_range(80.0..300.0));
+                    let (cx, cy) = (f64::from(width) / 2.0 - 0.5, f64::from(height) / 2.0 - 0.5);
+                    let intrinsics = Intrinsics { width, height, fx, fy, cx, cy };
+                    WitnessGeometry::Pinhole { pose: DMat4::from_translation(centre * unit) * turn, intrinsics }
+                } else {
+                    let toward = DVec3::new(rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9), -1.0);
+                    WitnessGeometry::Directional(Direction::Vector(toward.normalize()))
+                };
+                Witness { name: format!("witness {j}"), geometry }
+            })
+            .collect();
+        let reference = View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY });
+        let depth = rng.gen_range(0.6..1.5);
+        let table = DMat4::from_translation(DVec3::new(0.0, 0.0, depth + 0.3) * unit)
+            * DMat4::from_rotation_x(std::f64::consts::PI + rng.gen_range(-0.5..0.5));
+        let mut objects = vec![("builtin:plane:4", table, 3.0 * unit)];
+        for _ in 0..rng.gen_range(1..5) {
+            let model = models[rng.gen_range(0..models.len())];
+            let at = DVec3::new(rng.gen_range(-0.3..0.3), rng.gen_range(-0.25..0.25), depth + rng.gen_range(-0.2..0.2));
+            let pose = DMat4::from_translation(at * unit)
+                * DMat4::from_rotation_x(rng.gen_range(0.0..6.3))
+                * DMat4::from_rotation_z(rng.gen_range(0.0..6.3));
+            objects.push((model, pose, rng.gen_range(0.08..0.3) * unit));
+        }
+        let posed: Vec<(&str, DMat4)> = objects.iter().map(|&(model, pose, _)| (model, pose)).collect();
+        let mut rig = scene(Sensor { reference, witnesses }, ShadowMode::Depth, &posed);
+        for (object, &(_, _, scale)) in rig.objects.iter_mut().zip(&objects) {
+            object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
+        }
+        let out = render(&rig);
+        let truth = rig_reference(&rig);
+        let (wrong, wrong_interior) = differences(&out, &truth, true, 1e-5);
+        let lost = truth.witness.iter().filter(|&&bits| bits != 0).count();
+        eprintln!("seed {seed}: {wrong} pixels differ from the reference, {wrong_interior} interior; {lost} lost");
+        assert_eq!(wrong_interior, 0, "seed {seed}: {wrong} pixels differ, {wrong_interior} interior");
+        assert!(lost > 100, "seed {seed}: the witnesses lose pixels: {lost}");
+    }
+}
+
 /// The GPU draws a pinhole view between its `near` and `far` (depth along the optical axis)
 /// as the brute-force reference casts it: a plane tilted 57° to the axis, crossing depths
 /// from about 1.6 to 4.4 over the image, and a ball on it which the near plane cuts open, so

@@ -48,21 +48,12 @@ vec3 outside_edges(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
          / max(vec3(edge_span(a, b, central), edge_span(b, c, central), edge_span(c, a, central)), vec3(1e-30));
 }
 
-// Distance from q to the segment a–b.
-float segment_distance(vec2 q, vec2 a, vec2 b) {
-    precise vec2 ab = b - a;
-    precise float along = (q.x - a.x) * ab.x + (q.y - a.y) * ab.y;
-    precise float t = clamp(along / max(ab.x * ab.x + ab.y * ab.y, 1e-30), 0.0, 1.0);
-    precise vec2 off = q - (a + t * ab);
-    return length(off);
-}
-
 float l1_length(vec3 v) {
     return abs(v.x) + abs(v.y) + abs(v.z);
 }
 
-// Steps a walk over a surface may take before giving up; see walk_to.
-const int MAX_WALK_STEPS = 32;
+// Steps a walk over a surface may take before giving up; see walk_to and hides.
+const int MAX_WALK_STEPS = 256;
 // walk_to's answer when it gave up.
 const uint WALK_TOO_LONG = 0xfffffffeu;
 
@@ -151,68 +142,34 @@ vec2 plane_rise(DrawData d, uint t, vec3 p, float scale, float bias, bool centra
     return vec2(rise, allowance);
 }
 
-// Distance from q to the segment a–b, in space.
-float segment_distance(vec3 q, vec3 a, vec3 b) {
-    precise vec3 ab = b - a;
-    precise float t = clamp(dot(q - a, ab) / max(dot(ab, ab), 1e-30), 0.0, 1.0);
-    precise vec3 off = q - (a + t * ab);
-    return length(off);
-}
-
-// How far p lies from triangle (a, b, c) across the rays: the distance to its nearest edge in
-// xy (parallel rays), or in the plane through p across its ray, where the rays through the
-// corners meet it (central rays; infinite where a corner's ray does not).
-float distance_across(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
-    if (central) {
-        float along = dot(p, p);
-        vec3 reach = vec3(dot(a, p), dot(b, p), dot(c, p));
-        if (!all(greaterThan(reach, vec3(0.0)))) {
-            return 1.0 / 0.0;
-        }
-        a *= along / reach.x;
-        b *= along / reach.y;
-        c *= along / reach.z;
-        return min(segment_distance(p, a, b), min(segment_distance(p, b, c), segment_distance(p, c, a)));
-    }
-    return min(segment_distance(p.xy, a.xy, b.xy),
-               min(segment_distance(p.xy, b.xy, c.xy), segment_distance(p.xy, c.xy, a.xy)));
-}
-
 // Whether the surface seen at a pixel of the witness's image hides p (witness frame): the
 // triangle over p on that surface — found by walking from the one the pixel saw, since
 // triangles smaller than a pixel are missing from the image — rises above p by more than the
-// bias (exact ray casting). The plane is evaluated up to the walk's tolerance beyond its
-// triangle, or, for the rare walk that gives up, the plane of the pixel's triangle is
-// extrapolated to p: either way it must rise above p by more than a crease between it and p's
-// own surface could explain. `own` is the slope of the surface through p (ray_slope): each
-// edge bends a polyhedral surface's slope by at most their difference, over at most p's
-// distance from the triangle. (A plane seen nearly edge-on rises steeply across the walk's
-// tolerance: where p's ray skims the edge of such a triangle, which side of the edge it passes
-// is not told apart in f32, and the difference of slopes over the tolerance lets it pass.)
+// bias (exact ray casting). The walk holds p within its tolerance of the triangle, so the
+// plane is evaluated up to that far beyond the triangle's edges: it must rise above p by more
+// than a crease between it and p's own surface could explain there (each edge bends a
+// polyhedral surface's slope by at most their difference; `own` is the slope of the surface
+// through p, ray_slope). A ray that skims the edge of a face seen nearly edge-on, which f32
+// cannot tell on which side of the edge it passes, passes it so. A walk that gives up says
+// nothing of p: an occluder over p lies within a pixel or two of where a pixel saw it, a few
+// steps away (a dense sphere's pole, whose fan of slivers a walk may cross, takes at most half
+// its segments), and a walk that goes on longer has wandered off the layer over p (across a
+// silhouette f32 misjudged).
 // `lower` is the (draw, triangle) over p last found not to hide it: walks from the pixels
 // around p mostly end on the same triangle, whose plane is then not evaluated again.
 bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias, bool central, inout uvec2 lower) {
-    uint seen = seen_at.y;
     float tolerance = m.bias_relative * scale;
-    uint t = walk_to(d, seen, p, tolerance, central);
-    if (t == NO_NEIGHBOUR || uvec2(seen_at.x, t) == lower) {
+    uint t = walk_to(d, seen_at.y, p, tolerance, central);
+    if (t == NO_NEIGHBOUR || t == WALK_TOO_LONG || uvec2(seen_at.x, t) == lower) {
         return false;
-    }
-    bool found = t != WALK_TOO_LONG;
-    float beyond = tolerance; // how far the plane is evaluated beyond its triangle
-    if (!found) {
-        t = seen;
-        beyond = distance_across(view_corner(d, t, 0u), view_corner(d, t, 1u), view_corner(d, t, 2u), p, central);
     }
     vec3 slope;
     vec2 rise = plane_rise(d, t, p, scale, bias, central, slope);
-    precise float bound = rise.y + l1_length(slope - own) * beyond;
+    precise float bound = rise.y + l1_length(slope - own) * tolerance;
     if (rise.x > bound) {
         return true;
     }
-    if (found) {
-        lower = uvec2(seen_at.x, t);
-    }
+    lower = uvec2(seen_at.x, t);
     return false;
 }
 
