@@ -1204,17 +1204,17 @@ fn directional_witnesses_in_modes_label_and_depth_match_the_brute_force_referenc
 
 /// What BOP's scoring draws (`Renderer::draw_alone`: each model alone within its footprint,
 /// eight a submission) is what `render` draws of each model alone, under a camera with a
-/// projector and a lamp in mode `label`: labels, shadowed labels and depth bits, for ten
-/// models in two submissions (each job with its own table for the lamp's grid).
+/// projector and a lamp in modes `label` and `depth`: labels, shadowed labels and depth bits,
+/// for ten models in two submissions (each job with its own table for the lamp's grid, and in
+/// mode `depth` its witnesses' draw tables).
 #[test]
-fn models_drawn_alone_under_a_lamp_are_what_render_draws() {
+fn models_drawn_alone_under_a_lamp_are_what_render_draws_in_modes_label_and_depth() {
     let lamp = Witness {
         name: "lamp".into(),
         geometry: WitnessGeometry::Directional(Direction::Vector(DVec3::new(0.3, -0.5, -0.8).normalize())),
     };
     let mut sensor = projector_rig();
     sensor.witnesses.push(lamp);
-    let shadow = ShadowSettings::of(ShadowMode::Label);
     let models: Vec<(std::sync::Arc<rangesynth::mesh::Mesh>, DMat4)> = (0..10)
         .map(|i| {
             let name = if i % 2 == 0 { "builtin:box" } else { "builtin:step" };
@@ -1223,19 +1223,22 @@ fn models_drawn_alone_under_a_lamp_are_what_render_draws() {
             (std::sync::Arc::new(rangesynth::mesh::builtin_mesh(name).unwrap()), pose)
         })
         .collect();
-    let drawn = common::renderer().draw_alone(&sensor, &shadow, &models, &|i| format!("model {i}")).unwrap();
-    common::assert_no_validation_messages();
-    let mut lost_by_lamp = 0;
-    for (i, ((mesh, pose), alone)) in models.iter().zip(&drawn).enumerate() {
-        let out = render(&scene(sensor.clone(), ShadowMode::Label, &[(mesh.name.as_str(), *pose)]));
-        assert!(alone.label.iter().any(|&l| l != 0), "model {i} is in view");
-        assert_eq!(alone.label, out.label_unshadowed, "model {i}: labels");
-        assert_eq!(alone.shadowed, out.label, "model {i}: shadowed labels");
-        lost_by_lamp += out.witness.iter().filter(|&&bits| bits == 2).count();
-        let seen = alone.label.iter().map(|&l| l != 0);
-        for (p, ((a, b), seen)) in alone.z.iter().zip(&out.z).zip(seen).enumerate() {
-            assert!(!seen || a.to_bits() == b.to_bits(), "model {i}, pixel {p}: z {a} vs {b}");
+    for mode in [ShadowMode::Label, ShadowMode::Depth] {
+        let shadow = ShadowSettings::of(mode);
+        let drawn = common::renderer().draw_alone(&sensor, &shadow, &models, &|i| format!("model {i}")).unwrap();
+        common::assert_no_validation_messages();
+        let mut lost_by_lamp = 0;
+        for (i, ((mesh, pose), alone)) in models.iter().zip(&drawn).enumerate() {
+            let out = render(&scene(sensor.clone(), mode, &[(mesh.name.as_str(), *pose)]));
+            assert!(alone.label.iter().any(|&l| l != 0), "{mode:?}, model {i} is in view");
+            assert_eq!(alone.label, out.label_unshadowed, "{mode:?}, model {i}: labels");
+            assert_eq!(alone.shadowed, out.label, "{mode:?}, model {i}: shadowed labels");
+            lost_by_lamp += out.witness.iter().filter(|&&bits| bits == 2).count();
+            let seen = alone.label.iter().map(|&l| l != 0);
+            for (p, ((a, b), seen)) in alone.z.iter().zip(&out.z).zip(seen).enumerate() {
+                assert!(!seen || a.to_bits() == b.to_bits(), "{mode:?}, model {i}, pixel {p}: z {a} vs {b}");
+            }
         }
+        assert!(lost_by_lamp > 100, "{mode:?}: the lamp alone loses pixels: {lost_by_lamp}");
     }
-    assert!(lost_by_lamp > 100, "the lamp alone loses pixels: {lost_by_lamp}");
 }
