@@ -33,7 +33,7 @@ const WORKLOADS: [(&str, &str, u32, f64); 3] = [
     ("sphere-256", "builtin:sphere:320", 256, 1.05),
     ("sphere-1024", "builtin:sphere:320", 1024, 1.05),
 ];
-const MODES: [ShadowMode; 1] = [ShadowMode::Exact];
+const MODES: [ShadowMode; 3] = [ShadowMode::Label, ShadowMode::Depth, ShadowMode::Exact];
 const BATCH: usize = 16;
 const ROUNDS: usize = 3;
 

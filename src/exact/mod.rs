@@ -201,18 +201,8 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
     let to_camera = sensor.to_shadow_frame();
     // The two casters are built side by side: for a dense model at a small image, building
     // them is most of the work.
-    let t0 = std::time::Instant::now();
     let (range, camera) = rayon::join(
-        || {
-            let a = std::time::Instant::now();
-            let t = posed_triangles(objects, DMat4::IDENTITY);
-            let b = std::time::Instant::now();
-            let c = VerticalCaster::new(t);
-            if std::env::var("PROF").is_ok() {
-                eprintln!("PROF pose {:.2} grid {:.2}", (b - a).as_secs_f64() * 1e3, b.elapsed().as_secs_f64() * 1e3);
-            }
-            c
-        },
+        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY)),
         || VerticalCaster::new(posed_triangles(objects, to_camera)),
     );
     let largest = |caster: &VerticalCaster| {
@@ -241,12 +231,7 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
         // The camera is witness 0.
         ExactPixel { label: triangle.label, z, gradient, lost_by: u32::from(occluded) }
     };
-    let t1 = std::time::Instant::now();
-    let img = cast_image((width, height), PixelRect { col: 0, row: 0, width, height }, cast);
-    if std::env::var("PROF").is_ok() {
-        eprintln!("PROF build {:.2} ms cast {:.2} ms", (t1 - t0).as_secs_f64() * 1e3, t1.elapsed().as_secs_f64() * 1e3);
-    }
-    Ok(img)
+    Ok(cast_image((width, height), PixelRect { col: 0, row: 0, width, height }, cast))
 }
 
 /// What exact ray casting finds at one pixel centre.
