@@ -894,8 +894,7 @@ fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
 }
 
 /// `verify` under an orthographic view that is not the paper's scanner (its one witness a
-/// light from a direction, not `theta_deg`): the images are cast on the CPU as under a pinhole
-/// rig, and the counts and scores are the independent CPU scorer's (orthographic areas and
+/// light from a direction, not `theta_deg`): the images are cast on the CPU, and the counts and scores are the independent CPU scorer's (orthographic areas and
 /// N1− looking down z), the true pose scoring 1.
 #[test]
 fn verify_under_an_orthographic_rig_matches_the_cpu_scorer() {

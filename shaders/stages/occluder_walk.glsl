@@ -12,8 +12,8 @@
 // The includer defines, before including this file: `view_corner(d, t, k)` and
 // `view_normal(d, t)` (a triangle's corner and unit normal in the witness's frame);
 // `occluder_seen(q)` (what the witness's visibility image holds at pixel q: label, draw
-// index, triangle, or zeros), `occluder_image_size()` and `occluder_draw(draw)` (the draw
-// table's entry at a draw index the image holds); the edge links' spec constants
+// index, triangle, or zeros), `occluder_holds(q)` (whether the image holds pixel q, drawn for
+// this point) and `occluder_draw(draw)` (the draw table's entry at a draw index the image holds); the edge links' spec constants
 // LINK_INDEX_SHIFT, LINK_SAME_WAY and LINK_EDGE_MASK; and push constants `m` with
 // `bias_relative`, the f32 rounding allowance relative to the coordinates.
 
@@ -174,13 +174,13 @@ bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias,
 }
 
 // Whether a surface lies between p (witness frame) and the witness, p's ray meeting the
-// witness's image nearest pixel s (within it): the surfaces seen at the pixels around s, each
+// witness's image nearest pixel s: the surfaces seen at the pixels around s, each
 // once. Exact wherever the occluder over p is seen at one of those nine pixel centres, or is
 // joined by its edges to a triangle that is.
 bool occluded(ivec2 s, vec3 p, vec3 own, float scale, float bias, bool central) {
     // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
     // are not walked again (a large triangle fills the whole neighbourhood).
-    uvec4 at_centre = occluder_seen(s);
+    uvec4 at_centre = occluder_holds(s) ? occluder_seen(s) : uvec4(0u);
     // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
     uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
     uvec2 previous = centre;
@@ -189,7 +189,6 @@ bool occluded(ivec2 s, vec3 p, vec3 own, float scale, float bias, bool central) 
     uint loaded = 0xffffffffu;
     DrawData d;
     uvec2 lower = uvec2(0xffffffffu);
-    ivec2 size = occluder_image_size();
     // Each invocation goes through its nine on its own cursor, one walk a round: invocations
     // that run in lockstep then take as many rounds as the most walks any of them needs, not
     // one for each of the nine that any of them walks from.
@@ -201,7 +200,7 @@ bool occluded(ivec2 s, vec3 p, vec3 own, float scale, float bias, bool central) 
         for (; k < 9 && !found; k++) {
             int i = k == 0 ? 4 : k - int(k <= 4);
             ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
-            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+            if (!occluder_holds(q)) {
                 continue;
             }
             uvec4 at = occluder_seen(q);

@@ -124,8 +124,8 @@ uvec4 occluder_seen(ivec2 q) {
     return shadow_seen(q);
 }
 
-ivec2 occluder_image_size() {
-    return m.sizes.zw;
+bool occluder_holds(ivec2 q) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw));
 }
 
 DrawData occluder_draw(uint draw) {

@@ -18,8 +18,8 @@ layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
 layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
 layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
 layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
-// The witnesses' label images, one band of rows each (label, draw index, triangle): the
-// pinhole witnesses' and the directional witnesses'.
+// The witnesses' images, one band of rows each (label, draw index, triangle): the pinhole
+// witnesses' and the directional witnesses'.
 layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D witness_visibility;
 layout(set = 0, binding = 5, rgba32ui) uniform readonly uimage2D directional_visibility;
 layout(set = 0, binding = 6, std430) writeonly buffer Masked { uint masked_label[]; };
@@ -34,6 +34,8 @@ struct WitnessData {
                             // (`columns` applied), a directional one's x0, y0, dx, dy
     uvec4 band;             // its image's width, height, first row, and attachment (0: the
                             // pinhole witnesses', 1: the directional witnesses')
+    uvec4 drawn;            // the depth test: the pixels of its image the job drew (first
+                            // column, first row, width, height; rows from the band's first)
     uvec2 draws;            // the depth test: device address of its draw table (WitnessDraws),
                             // each draw in its frame at the draw index its image holds
 };
@@ -73,7 +75,14 @@ uvec4 occluder_seen(ivec2 q) {
     return witness.band.w == 0u ? imageLoad(witness_visibility, at) : imageLoad(directional_visibility, at);
 }
 
-ivec2 occluder_image_size() {
+// Whether the job drew pixel q of the witness's image: the depth test reads no other (beyond
+// it, an attachment the jobs of a batch share holds an earlier job's triangles).
+bool occluder_holds(ivec2 q) {
+    ivec4 drawn = ivec4(witness.drawn);
+    return all(greaterThanEqual(q, drawn.xy)) && all(lessThan(q, drawn.xy + drawn.zw));
+}
+
+ivec2 image_size() {
     return ivec2(witness.band.xy);
 }
 
@@ -93,7 +102,7 @@ vec3 view_normal(DrawData d, uint t) {
 
 // Whether pixel q of the witness's image exists and carries `label`.
 bool carries(ivec2 q, uint label) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, occluder_image_size())) && occluder_seen(q).r == label;
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, image_size())) && occluder_seen(q).r == label;
 }
 
 // The rows of witness-from-reference applied to v, translated (w = 1) or not (w = 0).
@@ -137,8 +146,15 @@ bool sees(vec3 p, vec3 lit, uint label, float steepness) {
     // The depth test. A pinhole witness sees only its image's squares; a directional
     // witness's image covers every point the reference view can see (directional.rs), and a
     // point outside it can only come from rounding at its border.
-    if (!(all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, occluder_image_size())))) {
+    if (!(all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, image_size())))) {
         return directional;
+    }
+    // The normal came from an f32 gradient, whose error grows with the square of steepness:
+    // as the scanner's mask does, a surface turned from the witness by less than that counts
+    // as turned away (which also bounds its slope along the witness's rays, `own`).
+    precise float facing_bound = m.bias_relative * steepness * steepness;
+    if (!(facing > facing_bound * length(lit) * length(toward))) {
+        return false;
     }
     float scale = max(max(max(abs(q.x), abs(q.y)), abs(q.z)), max(max(abs(p.x), abs(p.y)), abs(p.z)));
     // p came from a plane evaluated in f32, which errs in proportion to its steepness.

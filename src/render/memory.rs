@@ -44,7 +44,7 @@ pub(crate) fn slot_bytes(
 }
 
 /// Bytes a render of a rig's pinhole views takes at its peak (pinhole/), rendering or writing
-/// its files after: its slot, with the witnesses' label images of `witness_pixels` in place
+/// its files after: its slot, with the witnesses' images of `witness_pixels` in place
 /// of a shadow view's and each pixel's witness bits, and what it returns on the host.
 pub(crate) fn rig_render_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
     let returned = RETURNED_BYTES + WITNESS_BITS_BYTES + if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
@@ -52,7 +52,7 @@ pub(crate) fn rig_render_bytes((pixels, witness_pixels): (u64, u64), effects: &E
 }
 
 /// GPU bytes one job's slot takes under a rig's pinhole views: [`slot_bytes`] with the
-/// witnesses' label images of `witness_pixels` in place of a shadow view's, and each range
+/// witnesses' images of `witness_pixels` in place of a shadow view's, and each range
 /// pixel's witness bits.
 pub(crate) fn rig_slot_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
     slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels

@@ -89,7 +89,8 @@ pub(crate) struct SlotShape<'a> {
     /// Jobs bring their range view from the host (shadow mode `exact`): the slot holds
     /// shadowed labels without a shadow view.
     pub from_host: bool,
-    /// A rig's witnesses, which jobs under a pinhole reference view test in mode `label`.
+    /// A rig's witnesses, which jobs under a pinhole reference view test in modes `label` and
+    /// `depth`.
     pub witnesses: Option<&'a WitnessSet>,
 }
 

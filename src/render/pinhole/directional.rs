@@ -1,4 +1,4 @@
-//! Where a job draws a directional witness's label image (witness_set.rs): an orthographic
+//! Where a job draws a directional witness's image (witness_set.rs): an orthographic
 //! image along the witness's direction, planned for each job over what the reference view can
 //! see of its models, since a fixed grid over everything the reference could ever see would be
 //! unbounded (a pinhole view sees to infinity).
@@ -7,7 +7,7 @@ use super::Models;
 use crate::sensor::{depth_margin, Pinhole, PixelRect, ViewGrid};
 use glam::{DMat4, DVec3};
 
-/// A directional witness's label image as every job of a submission draws it: `side` pixels
+/// A directional witness's image as every job of a submission draws it: `side` pixels
 /// square at most, and the finest pitch worth drawing per unit of depth, `finest` (a
 /// reference pixel's width at depth 1, foreshortened by the witness's slant, over `columns`).
 #[derive(Debug, Clone, Copy)]
@@ -22,7 +22,7 @@ pub(super) struct DirectionalPlan {
     pub from_reference: DMat4,
     /// The grid the job's draws are drawn on, its rows counted from the attachment's first.
     pub grid: ViewGrid,
-    /// The grid the label test reads: x0, y0 of the band's first pixel, dx, dy.
+    /// The grid the shadow test reads: x0, y0 of the band's first pixel, dx, dy.
     pub band_grid: [f64; 4],
     /// The pixels of the attachment the job draws (and clears): the square the models' seen
     /// points fill, at the band's top left; empty where the reference view sees none of them.

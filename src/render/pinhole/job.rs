@@ -54,7 +54,7 @@ struct WitnessDraws {
 
 impl PinholeJob {
     /// The job that draws `models` under the pinhole `reference` view (and `witnesses`, in
-    /// mode `label`) over `area` of it (a hypothesis' footprint, or the whole image), with the
+    /// modes `label` and `depth`) over `area` of it (a hypothesis' footprint, or the whole image), with the
     /// device's `viewport_half_side`.
     pub fn new(
         ctx: &Arc<GpuContext>,
@@ -101,8 +101,8 @@ impl PinholeJob {
             .transpose()?;
         if let Some(tables) = &draw_tables {
             let table_bytes = (models.draws.len() * size_of::<DrawConstants>()) as u64;
-            for (k, constants) in (0..).zip(&mut table) {
-                *constants = constants.with_draws(tables.device_address() + k * table_bytes);
+            for ((k, constants), drawn) in (0..).zip(&mut table).zip(&witness_draws) {
+                *constants = constants.with_job(drawn.area, tables.device_address() + k * table_bytes);
             }
         }
         // A table of its own where its directional witnesses' grids or its draw tables are the
@@ -138,14 +138,14 @@ impl PinholeJob {
     }
 
     /// The pixels of one of the witnesses' attachments that the job draws (and clears): every
-    /// band's where the models can cover it. The label test reads no other.
+    /// band's where the models can cover it. The shadow test reads no other.
     pub fn witness_area(&self, attachment: WitnessAttachment) -> PixelRect {
         let bands = self.witnesses.iter().filter(|w| w.attachment == attachment);
         bands.map(|w| w.area).fold(PixelRect::EMPTY, PixelRect::union)
     }
 }
 
-/// A pinhole witness's band for `models`: its label image `drawn` (cy counted from the top of
+/// A pinhole witness's band for `models`: its image `drawn` (cy counted from the top of
 /// the attachment), drawn where the models can cover it.
 fn pinhole_witness(
     from_reference: DMat4,
@@ -160,7 +160,7 @@ fn pinhole_witness(
         size: (drawn.width, drawn.height),
         depth: depth_constants(models.spheres, from_reference, (0.0, f64::INFINITY)),
     };
-    // The pixels of its image the models can cover: the label test reads no other, as every
+    // The pixels of its image the models can cover: the shadow test reads no other, as every
     // point it tests lies on a model.
     let image = Intrinsics { cy: drawn.cy - f64::from(band.row), ..drawn };
     let image = View::Pinhole(Pinhole { intrinsics: image, near: 0.0, far: f64::INFINITY });

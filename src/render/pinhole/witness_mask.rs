@@ -21,11 +21,12 @@ pub struct WitnessConstants {
     centre: [f32; 4],
     grid: [f32; 4],
     band: [u32; 4],
+    drawn: [u32; 4],
     draws: [u32; 2],
     _pad: [u32; 2],
 }
 
-matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band, draws });
+matches_shader_struct!(WitnessConstants, WitnessData { from_reference, centre, grid, band, drawn, draws });
 
 /// Which attachment a witness's band lies in: the pinhole witnesses' images, drawn in
 /// projection, or the directional witnesses', drawn orthographically (each kind has its own
@@ -41,7 +42,7 @@ impl WitnessAttachment {
 }
 
 impl WitnessConstants {
-    /// A pinhole witness whose pose is reference-from-witness, whose label image has the
+    /// A pinhole witness whose pose is reference-from-witness, whose image has the
     /// `drawn` intrinsics (its `columns` applied) and lies in `band` of the pinhole witnesses'
     /// attachment. `None` where a value does not hold in f32.
     pub fn pinhole(pose: DMat4, drawn: &Intrinsics, band: PixelRect) -> Option<Self> {
@@ -50,6 +51,7 @@ impl WitnessConstants {
             centre: pose.w_axis.as_vec4().to_array(),
             grid: [drawn.fx, drawn.fy, drawn.cx, drawn.cy].map(|v| v as f32),
             band: [band.width, band.height, band.row, WitnessAttachment::Pinhole as u32],
+            drawn: [0, 0, band.width, band.height],
             draws: [0; 2],
             _pad: [0; 2],
         };
@@ -66,6 +68,7 @@ impl WitnessConstants {
             centre: toward.extend(0.0).as_vec4().to_array(),
             grid: [0.0; 4],
             band: [band.width, band.height, band.row, WitnessAttachment::Directional as u32],
+            drawn: [0, 0, band.width, band.height],
             draws: [0; 2],
             _pad: [0; 2],
         }
@@ -77,10 +80,12 @@ impl WitnessConstants {
         Self { grid: grid.map(|v| v as f32), ..self }
     }
 
-    /// The witness with its draw table, which the depth test walks (each job's): at the
-    /// device address `draws`.
-    pub fn with_draws(self, draws: u64) -> Self {
-        Self { draws: [draws as u32, (draws >> 32) as u32], ..self }
+    /// The witness with the pixels of its image a job draws, `area` of the attachment (the
+    /// depth test reads no other), and its draw table for that job, which the depth test walks:
+    /// at the device address `draws`.
+    pub fn with_job(self, area: PixelRect, draws: u64) -> Self {
+        let row = area.row.saturating_sub(self.band[2]);
+        Self { drawn: [area.col, row, area.width, area.height], draws: [draws as u32, (draws >> 32) as u32], ..self }
     }
 }
 

@@ -13,7 +13,7 @@ use ash::vk;
 use glam::{DMat4, DQuat, DVec3};
 use std::sync::Arc;
 
-/// The most a directional witness's label image is enlarged for its slant from the reference
+/// The most a directional witness's image is enlarged for its slant from the reference
 /// view's axis ([`WitnessLayout::new`]).
 const MAX_DIRECTIONAL_FORESHORTENING: f64 = 4.0;
 
@@ -47,6 +47,8 @@ pub(crate) struct WitnessLayout {
     /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
     /// band lies in it.
     pub sizes: [(u32, u32); 2],
+    /// The shadow test that reads them.
+    test: ShadowTest,
 }
 
 impl WitnessLayout {
@@ -59,9 +61,9 @@ impl WitnessLayout {
     /// Refused where they do not fit a view of `max_side` pixels a side (the device's
     /// largest).
     pub fn new(max_side: u32, sensor: &Sensor, shadow: &ShadowSettings) -> Result<Option<Self>> {
-        if shadow.test().is_none() || sensor.witnesses.is_empty() {
+        let Some(test) = shadow.test().filter(|_| !sensor.witnesses.is_empty()) else {
             return Ok(None);
-        }
+        };
         let (width, height) = sensor.reference.size();
         let sides = f64::from(width.max(height)) * f64::from(shadow.columns);
         // A pixel's width at depth 1 is 1 / f.
@@ -131,7 +133,7 @@ impl WitnessLayout {
             (widths.max().unwrap_or(0), rows[attachment as usize] as u32)
         });
         let views = views.into_iter().map(|(_, view)| view).collect();
-        Ok(Some(Self { views, table, sizes }))
+        Ok(Some(Self { views, table, sizes, test }))
     }
 
     /// Pixels of the attachments that hold every band.
@@ -161,9 +163,7 @@ impl WitnessSet {
         let Some(layout) = WitnessLayout::new(ctx.max_view_side(), sensor, shadow)? else {
             return Ok(None);
         };
-        let WitnessLayout { views, table, sizes } = layout;
-        // The layout exists only where a test runs.
-        let Some(test) = shadow.test() else { return Ok(None) };
+        let WitnessLayout { views, table, sizes, test } = layout;
         let shared = test != ShadowTest::Depth && views.iter().all(|w| matches!(w.image, WitnessImage::Pinhole(_)));
         let shared_table = shared
             .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "witness table"))
