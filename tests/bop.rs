@@ -136,8 +136,8 @@ fn row(im_id: u32, pose: DMat4) -> ResultRow {
     ResultRow { scene_id: 1, im_id, obj_id: 1, pose, fields }
 }
 
-/// The rows' scores, the rig's images made in shadow mode `mode` (`label` and `none` on the
-/// GPU, with validation on).
+/// The rows' scores, the rig's images made in shadow mode `mode` (`depth`, `label` and `none`
+/// on the GPU, with validation on).
 fn score(root: &Path, baseline: f64, rows: &[ResultRow], mode: ShadowMode) -> Vec<RowScores> {
     let ledger = Ledger::default();
     let dataset = Dataset::open(root, "test", &ledger).unwrap();
@@ -163,8 +163,8 @@ fn score(root: &Path, baseline: f64, rows: &[ResultRow], mode: ShadowMode) -> Ve
 /// - 30 mm nearer: the sensed surface lies 30 mm beyond it on its 2,500 pixels the image
 ///   measured, violations, of 2,704; the other 204 are missing: depth score 0.
 ///
-/// In shadow mode `exact` (cast on the CPU) and `label` (drawn on the GPU), with one allowance
-/// for the label test's edge.
+/// In shadow mode `exact` (cast on the CPU), and `depth` and `label` (drawn on the GPU), with one
+/// allowance for the label test's edge.
 /// - Image 2's depth is 500 mm everywhere, something in front of the whole box: the truth is
 ///   visible nowhere, nor the estimate; VSD 1 (recall 0); every pixel occluded.
 #[test]
@@ -175,8 +175,8 @@ fn vsd_and_the_depth_scores_take_their_hand_worked_values() {
         &[(1, square(295..=344, 215..=264, 1000), vec![truth]), (2, vec![500; 640 * 480], vec![truth])],
     );
     let rows = [row(1, truth), row(1, at(0.0, 0.0, 1045.0)), row(1, at(0.0, 0.0, 970.0)), row(2, truth)];
-    // Cast on the CPU, and drawn on the GPU (the paper's label test).
-    for mode in [ShadowMode::Exact, ShadowMode::Label] {
+    // Cast on the CPU, and drawn on the GPU (the depth test's walk, and the paper's label test).
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::Label] {
         let scores = score(&root, 75.0, &rows, mode);
         let [same, farther, nearer, hidden] = [scores[0], scores[1], scores[2], scores[3]];
         assert_eq!(same.vsd, Some((0.0, 1.0)), "{mode:?}");
@@ -191,7 +191,7 @@ fn vsd_and_the_depth_scores_take_their_hand_worked_values() {
         // measured, and the 52 lost pixels explained holes of the depth score.
         let (violation, depth_score) = (nearer.depth.violation, nearer.depth.depth_score);
         match mode {
-            ShadowMode::Exact => assert_eq!((violation, depth_score), (2500.0 / 2704.0, 0.0)),
+            ShadowMode::Exact | ShadowMode::Depth => assert_eq!((violation, depth_score), (2500.0 / 2704.0, 0.0)),
             _ => {
                 let column_lost = (violation, depth_score) == (2500.0 / 2652.0, 52.0 / 2704.0);
                 assert!(column_lost || (violation, depth_score) == (2500.0 / 2704.0, 0.0), "{mode:?}: {nearer:?}");
@@ -234,7 +234,7 @@ fn the_rigs_shadow_on_the_model_is_an_explained_hole_where_the_image_is_empty() 
         }
     }
     let root = dataset("holes", &[(1, front, vec![truth]), (2, measured, vec![truth])]);
-    for mode in [ShadowMode::Exact, ShadowMode::Label] {
+    for mode in [ShadowMode::Exact, ShadowMode::Depth, ShadowMode::Label] {
         let scores = score(&root, 300.0, &[row(1, truth), row(2, truth)], mode);
         let first = (scores[0].depth.explained_holes, scores[0].depth.depth_score);
         assert_eq!(first, (Some(1.0), 1.0), "{mode:?}: {:?}", scores[0]);
