@@ -48,6 +48,10 @@ vec3 outside_edges(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
          / max(vec3(edge_span(a, b, central), edge_span(b, c, central), edge_span(c, a, central)), vec3(1e-30));
 }
 
+float l1_length(vec2 v) {
+    return abs(v.x) + abs(v.y);
+}
+
 float l1_length(vec3 v) {
     return abs(v.x) + abs(v.y) + abs(v.z);
 }
@@ -138,7 +142,7 @@ vec2 plane_rise(DrawData d, uint t, vec3 p, float scale, float bias, bool centra
     vec2 gradient = -n.xy / n.z;
     slope = vec3(gradient, 0.0);
     precise float rise = a.z + (gradient.x * (p.x - a.x) + gradient.y * (p.y - a.y)) - p.z;
-    precise float allowance = bias + m.bias_relative * scale * (abs(gradient.x) + abs(gradient.y));
+    precise float allowance = bias + m.bias_relative * scale * l1_length(gradient);
     return vec2(rise, allowance);
 }
 

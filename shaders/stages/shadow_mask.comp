@@ -90,9 +90,14 @@ uvec4 shadow_seen(ivec2 q) {
 #endif
 }
 
+// Whether shadow pixel q lies in the shadow view's grid.
+bool in_shadow_grid(ivec2 q) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw));
+}
+
 // Whether shadow pixel q exists and carries `label`.
 bool shadow_label_is(ivec2 q, uint label) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw)) && shadow_seen(q).r == label;
+    return in_shadow_grid(q) && shadow_seen(q).r == label;
 }
 
 // The arithmetic of the shadow test is unfused (`precise`) wherever it decides a pixel, so
@@ -125,7 +130,7 @@ uvec4 occluder_seen(ivec2 q) {
 }
 
 bool occluder_holds(ivec2 q) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, m.sizes.zw));
+    return in_shadow_grid(q);
 }
 
 DrawData occluder_draw(uint draw) {
@@ -144,7 +149,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     ivec2 s = ivec2(floor(projected + 0.5));
     // The shadow grid covers every point the range view can see (sensor.rs); a point
     // outside it can only come from rounding at its border and is treated as lit.
-    bool in_grid = all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, m.sizes.zw));
+    bool in_grid = in_shadow_grid(s);
     if (TEST == TEST_LABEL) {
         return in_grid && shadow_seen(s).r != label;
     }
@@ -161,7 +166,7 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     precise float facing = m.cos_theta - m.sin_theta * gradient.x;
     float scale = max(max(abs(ps.x), abs(ps.y)), max(abs(ps.z), abs(z)));
     // z came from a plane evaluated in f32, which errs in proportion to its steepness.
-    precise float steepness = 1.0 + (abs(gradient.x) + abs(gradient.y));
+    precise float steepness = 1.0 + l1_length(gradient);
     precise float bias = m.bias_pitch + m.bias_relative * scale * (1.0 + steepness);
     // The gradient came from an f32 normal; its error grows with the square of steepness.
     precise float facing_bound = m.bias_relative * steepness * steepness;

@@ -82,8 +82,9 @@ bool occluder_holds(ivec2 q) {
     return all(greaterThanEqual(q, drawn.xy)) && all(lessThan(q, drawn.xy + drawn.zw));
 }
 
-ivec2 image_size() {
-    return ivec2(witness.band.xy);
+// Whether pixel q lies on the witness's image.
+bool on_image(ivec2 q) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(witness.band.xy)));
 }
 
 DrawData occluder_draw(uint draw) {
@@ -102,7 +103,7 @@ vec3 view_normal(DrawData d, uint t) {
 
 // Whether pixel q of the witness's image exists and carries `label`.
 bool carries(ivec2 q, uint label) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, image_size())) && occluder_seen(q).r == label;
+    return on_image(q) && occluder_seen(q).r == label;
 }
 
 // The rows of witness-from-reference applied to v, translated (w = 1) or not (w = 0).
@@ -146,7 +147,7 @@ bool sees(vec3 p, vec3 lit, uint label, float steepness) {
     // The depth test. A pinhole witness sees only its image's squares; a directional
     // witness's image covers every point the reference view can see (directional.rs), and a
     // point outside it can only come from rounding at its border.
-    if (!(all(greaterThanEqual(s, ivec2(0))) && all(lessThan(s, image_size())))) {
+    if (!on_image(s)) {
         return directional;
     }
     // The normal came from an f32 gradient, whose error grows with the square of steepness:
