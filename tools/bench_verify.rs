@@ -24,6 +24,11 @@
 //! hypothesis for the box with depth-mode shadows in batches of 64, and the ratio to the same
 //! batch without effects, measured in the same run (each the best of five).
 //!
+//! Cold start (`cold_start`; `-- --cold-start` runs only it): a fresh process's time from its
+//! start to its first verified hypothesis (the sphere:100 in label mode against the sensed
+//! scene, which it renders first), with an empty pipeline cache and then with the cache the
+//! first process left (src/gpu/pipeline_cache.rs), in the same run.
+//!
 //! Run: `cargo run --release --example bench_verify` (add `-- --quick` for a short run).
 //! RANGESYNTH_DEVICE picks the device.
 
@@ -43,7 +48,13 @@ use std::time::Instant;
 const SENSED: &str = include_str!("../docs/example/sensed.toml");
 
 fn main() -> anyhow::Result<()> {
+    if std::env::args().any(|a| a == FIRST_HYPOTHESIS) {
+        return first_hypothesis();
+    }
     let quick = std::env::args().any(|a| a == "--quick");
+    if std::env::args().any(|a| a == "--cold-start") {
+        return cold_start();
+    }
     let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?.with_raster(Raster::Graphics))?;
     let scene = Scene::from_toml(SENSED, Path::new("."), &Ledger::default())?;
     let image = RangeImage::from(&verifier.renderer().render(&scene)?);
@@ -96,6 +107,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     effect_costs(&verifier, &sensed, &scene)?;
+    cold_start()?;
     rig_costs(&verifier, &sensed, &scene)?;
     raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
     filling_costs(&[&verifier, &compute], quick)
@@ -594,5 +606,55 @@ fn effect_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> any
         let none = *baseline.get_or_insert(best);
         println!("{name:<14} {best:>12.3} {:>9.2}×", best / none);
     }
+    Ok(())
+}
+
+/// The argument that makes this program the process `cold_start` times.
+const FIRST_HYPOTHESIS: &str = "--first-hypothesis";
+
+/// What a process started cold does before its first result: start Vulkan (with the pipeline
+/// cache `RANGESYNTH_CACHE_DIR` names), render the sensed scene, verify one hypothesis; then
+/// it says so on a line of its own.
+fn first_hypothesis() -> anyhow::Result<()> {
+    let verifier = Verifier::new(Renderer::new(&ContextOptions::from_env())?)?;
+    let scene = Scene::from_toml(SENSED, Path::new("."), &Ledger::default())?;
+    let image = RangeImage::from(&verifier.renderer().render(&scene)?);
+    let sensed = SensedImage::new(&image, &scene.sensor)?;
+    let model = verifier.model("builtin:sphere:100", Path::new("."))?;
+    let scores =
+        verifier.verify(&sensed, &settings(scene.sensor, ShadowMode::Label), &hypotheses(&model, 1), &mut |_| {})?;
+    anyhow::ensure!(scores.len() == 1, "one hypothesis verified");
+    println!("verified");
+    Ok(())
+}
+
+/// Milliseconds from starting this program as a [`first_hypothesis`] process with its
+/// pipeline cache in `cache_dir` to its first line (its teardown, which writes the cache, not
+/// counted).
+fn time_to_first_hypothesis(cache_dir: &Path) -> anyhow::Result<f64> {
+    use std::io::BufRead;
+    let start = Instant::now();
+    let mut child = std::process::Command::new(std::env::current_exe()?)
+        .arg(FIRST_HYPOTHESIS)
+        .env(rangesynth::gpu::CACHE_DIR_ENV, cache_dir)
+        .stdout(std::process::Stdio::piped())
+        .spawn()?;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().expect("piped")).read_line(&mut line)?;
+    let elapsed = start.elapsed().as_secs_f64() * 1e3;
+    anyhow::ensure!(child.wait()?.success() && line.trim() == "verified", "the cold-start process failed");
+    Ok(elapsed)
+}
+
+/// Process start to first verified hypothesis, with an empty pipeline cache and then three
+/// times with the one the first process left (their best). A driver's own shader cache
+/// (Mesa's, NVIDIA's) is left as it is: what it saves shows in both rows alike.
+fn cold_start() -> anyhow::Result<()> {
+    let dir = tempfile::tempdir()?;
+    let empty = time_to_first_hypothesis(dir.path())?;
+    let warm = (0..3).map(|_| time_to_first_hypothesis(dir.path())).collect::<anyhow::Result<Vec<f64>>>()?;
+    let warm = warm.into_iter().fold(f64::INFINITY, f64::min);
+    println!("\nprocess start to first verified hypothesis (sphere:100, label mode, 256²):");
+    println!("  empty pipeline cache {empty:.0} ms, warm {warm:.0} ms ({:.2}× the empty one's time)", warm / empty);
     Ok(())
 }

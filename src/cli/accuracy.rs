@@ -84,7 +84,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -
     print!("{}", Summary(&rows));
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     for verifier in std::iter::once(&graphics).chain(compute.as_ref()) {
-        super::check_validation(verifier.renderer())?;
+        super::check_device(verifier.renderer())?;
     }
     Ok(())
 }

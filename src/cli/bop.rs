@@ -134,7 +134,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     println!("scored {} rows in {seconds:.2} s ({:.1} rows/s)", rows.len(), rows.len() as f64 / seconds.max(1e-9));
     println!("wrote {}", args.out.display());
     match &renderer {
-        Some(renderer) => super::check_validation(renderer),
+        Some(renderer) => super::check_device(renderer),
         None => Ok(()),
     }
 }

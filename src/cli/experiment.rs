@@ -49,5 +49,5 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
         output.views,
         args.out.display()
     );
-    super::check_validation(verifier.renderer())
+    super::check_device(verifier.renderer())
 }

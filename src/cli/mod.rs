@@ -12,7 +12,7 @@ mod verify;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use rangesynth::effects::Reason;
-use rangesynth::gpu::ContextOptions;
+use rangesynth::gpu::{CacheLoad, ContextOptions};
 use rangesynth::io::refuse_overwriting_inputs;
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::Mesh;
@@ -121,7 +121,7 @@ pub fn run(cli: Cli) -> Result<()> {
     let written = write_render_set(set, &scene, &output, depth_png)?;
     print_summary(&renderer, &scene, &output)?;
     println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
-    check_validation(&renderer)
+    check_device(&renderer)
 }
 
 /// Tells the user about triangles the model lost (they are dropped, not rendered).
@@ -131,8 +131,19 @@ fn warn_degenerate(mesh: &Mesh) {
     }
 }
 
-/// Fails when validation (if on) reported anything.
-fn check_validation(renderer: &Renderer) -> Result<()> {
+/// Says when the device's pipeline cache could not be used or written (the run goes on
+/// without it: src/gpu/pipeline_cache.rs), and fails when validation (if on) reported anything.
+fn check_device(renderer: &Renderer) -> Result<()> {
+    let cache = renderer.context().pipeline_cache_report();
+    let path = cache.path.as_deref().map_or(String::new(), |p| escaped(&p.display().to_string(), 200));
+    if let CacheLoad::Ignored(why) = &cache.load {
+        eprintln!("note: the pipeline cache {path} was not used ({why}); its pipelines were built anew");
+    }
+    if let Some(Err(why)) = &cache.last_save {
+        eprintln!(
+            "warning: the pipeline cache {path} could not be written: {why}; the next run builds its pipelines again"
+        );
+    }
     let messages = renderer.context().take_validation_messages();
     if !messages.is_empty() {
         anyhow::bail!("Vulkan validation reported {} message(s):\n{}", messages.len(), messages.join("\n"));

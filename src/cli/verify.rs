@@ -9,7 +9,7 @@
 //! the lines go to a temporary file that replaces `--out` only once it is complete.
 
 use super::shard::Shard;
-use super::{check_validation, warn_degenerate};
+use super::{check_device, warn_degenerate};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::effects::Effects;
@@ -195,7 +195,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     bar.finish_and_clear();
     print_summary(&verifier, &settings, &rows, args.top, start.elapsed().as_secs_f64());
     println!("wrote {}", args.out.display());
-    check_validation(verifier.renderer())
+    check_device(verifier.renderer())
 }
 
 /// Each key in which two sensors differ as files write them, with both values (the

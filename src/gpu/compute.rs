@@ -84,7 +84,7 @@ impl ComputePipeline {
                 .specialization_info(&specialization);
             let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
             // SAFETY: valid layout and module.
-            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            unsafe { d.create_compute_pipelines(ctx.pipeline_cache(), &info, None) }
                 .map(|p| p[0])
                 .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))
         });

@@ -14,11 +14,14 @@
 //! context picks one set at creation and every caller goes through it
 //! ([`GpuContext::cmd_pipeline_barrier2`] and its siblings).
 
+use super::devices::device_uuid;
+use super::pipeline_cache::{default_cache_dir, PipelineCache, PipelineCacheReport};
 use crate::error::{Error, Result, VkResultExt};
 use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -41,11 +44,15 @@ pub struct ContextOptions {
     /// Use at most this Vulkan version (`vk::API_VERSION_1_2` takes the extension path even
     /// on a 1.3 device, which is how the tests cover it); `None` uses what the device has.
     pub max_vulkan_version: Option<u32>,
+    /// Where the driver's compiled pipelines are kept between runs (pipeline_cache.rs); `None`
+    /// keeps them for this context only.
+    pub pipeline_cache_dir: Option<PathBuf>,
 }
 
 impl ContextOptions {
     /// Options from `RANGESYNTH_VALIDATION`, `RANGESYNTH_DEVICE` and `RANGESYNTH_MAX_VULKAN`
-    /// (an unreadable version is ignored).
+    /// (an unreadable version is ignored), and the pipeline cache in its usual place
+    /// ([`default_cache_dir`]).
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"),
@@ -55,6 +62,7 @@ impl ContextOptions {
                 "1.3" => Some(vk::API_VERSION_1_3),
                 _ => None,
             }),
+            pipeline_cache_dir: default_cache_dir(),
         }
     }
 }
@@ -71,6 +79,9 @@ pub struct GpuContext {
     queue: Mutex<vk::Queue>,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Every pipeline is built through it, and it is written back to disk after each build
+    /// ([`GpuContext::save_pipeline_cache`]).
+    pipeline_cache: PipelineCache,
     pub(crate) limits: vk::PhysicalDeviceLimits,
     /// Nanoseconds per timestamp tick; `None` when the queue has no timestamps.
     pub(crate) timestamp_period: Option<f64>,
@@ -218,6 +229,19 @@ impl GpuContext {
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
         let timestamp_period = (families[queue_family as usize].timestamp_valid_bits > 0)
             .then_some(f64::from(properties.limits.timestamp_period));
+        let uuid = device_uuid(&instance, physical_device, &properties);
+        let pipeline_cache =
+            match PipelineCache::open(&device, &properties, &uuid, options.pipeline_cache_dir.as_deref()) {
+                Ok(cache) => cache,
+                Err(e) => {
+                    // SAFETY: nothing else was created from the device.
+                    unsafe { device.destroy_device(None) };
+                    drop(debug);
+                    // SAFETY: nothing else was created from the instance.
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(e);
+                }
+            };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -246,6 +270,7 @@ impl GpuContext {
             queue: Mutex::new(queue),
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            pipeline_cache,
             limits: properties.limits,
             timestamp_period,
             device_name,
@@ -403,6 +428,23 @@ impl GpuContext {
             .map(|h| h.size)
             .min()
             .unwrap_or(0)
+    }
+
+    /// The cache every pipeline is built through.
+    pub(crate) fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache.raw
+    }
+
+    /// Writes the pipeline cache back to disk where pipelines were built since it was last
+    /// read or written; a failure is noted in [`GpuContext::pipeline_cache_report`], never
+    /// returned. Called after each set of pipelines is built, and when the context ends.
+    pub fn save_pipeline_cache(&self) {
+        self.pipeline_cache.save(&self.device);
+    }
+
+    /// Where the pipeline cache is, what was found there, and how its last write went.
+    pub fn pipeline_cache_report(&self) -> PipelineCacheReport {
+        self.pipeline_cache.report()
     }
 
     pub fn device_name(&self) -> &str {
@@ -575,6 +617,8 @@ impl Drop for GpuContext {
         // allocator goes before the device, the device before the instance.
         unsafe {
             let _ = self.device.device_wait_idle();
+            self.pipeline_cache.save(&self.device);
+            self.pipeline_cache.destroy(&self.device);
             for recorder in std::mem::take(self.recorders.get_mut().unwrap_or_else(|p| p.into_inner())) {
                 self.destroy_recorder(recorder);
             }

@@ -1,5 +1,5 @@
 //! The explicit-Vulkan layer: one file per concept (context, memory, barriers, shaders,
-//! timestamps). Nothing here knows about range images.
+//! the pipeline cache, timestamps). Nothing here knows about range images.
 
 mod barrier;
 mod compute;
@@ -8,6 +8,7 @@ mod descriptors;
 mod devices;
 mod encoder;
 mod memory;
+mod pipeline_cache;
 pub(crate) mod shaders;
 mod timing;
 mod upload;
@@ -19,4 +20,5 @@ pub use descriptors::{SetShape, StorageSet};
 pub use devices::{list_devices, DeviceInfo};
 pub use encoder::{Encoder, Step};
 pub use memory::{Buffer, BufferDesc, Image, ImageDesc, DEPTH_FORMAT};
+pub use pipeline_cache::{default_cache_dir, CacheLoad, PipelineCacheReport, CACHE_DIR_ENV, MAX_PIPELINE_CACHE_BYTES};
 pub use timing::Timestamps;

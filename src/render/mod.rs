@@ -98,8 +98,10 @@ impl Renderer {
 
     /// A renderer on `ctx` with the default memory budget.
     pub fn with_context(ctx: Arc<GpuContext>) -> Result<Self> {
+        let pipelines = Pipelines::new(&ctx)?;
+        ctx.save_pipeline_cache();
         Ok(Self {
-            pipelines: Pipelines::new(&ctx)?,
+            pipelines,
             hypotheses_per_dispatch: default_hypotheses_per_dispatch(&ctx),
             ctx,
             ledger: Arc::default(),

@@ -60,19 +60,19 @@ impl Pipelines {
     /// A rig's pinhole pipelines, built on first use: a renderer that never meets a pinhole
     /// view never compiles them.
     pub fn pinhole(&self) -> Result<&PinholePipelines> {
-        built_once(&self.pinhole, || PinholePipelines::new(&self.ctx, self.raster_layout))
+        built_once(&self.ctx, &self.pinhole, || PinholePipelines::new(&self.ctx, self.raster_layout))
     }
 
     /// The effect pipelines, built on first use: a renderer that never meets an effect never
     /// compiles them.
     pub fn effects(&self) -> Result<&EffectPipelines> {
-        built_once(&self.effects, || EffectPipelines::new(&self.ctx))
+        built_once(&self.ctx, &self.effects, || EffectPipelines::new(&self.ctx))
     }
 
     /// The compute rasterizer's pipelines, built on first use; an error on a device without
     /// 64-bit buffer atomics.
     pub fn compute_raster(&self) -> Result<&ComputeRasterPipelines> {
-        built_once(&self.compute_raster, || {
+        built_once(&self.ctx, &self.compute_raster, || {
             if !compute::device_supports(&self.ctx) {
                 return Err(Error::Unsupported(format!(
                     "the compute rasterizer needs shaderInt64 and shaderBufferInt64Atomics, which {} lacks; \

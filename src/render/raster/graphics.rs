@@ -156,7 +156,7 @@ fn raster_pipeline(
         .layout(layout)
         .push_next(&mut rendering)];
     // SAFETY: all referenced state outlives the call.
-    let pipeline = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+    let pipeline = unsafe { ctx.device.create_graphics_pipelines(ctx.pipeline_cache(), &info, None) }
         .map(|p| p[0])
         .map_err(|(_, e)| Error::vulkan(&format!("creating the {name} pipeline"), e))?;
     ctx.name_object(pipeline, name);

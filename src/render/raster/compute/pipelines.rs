@@ -77,7 +77,7 @@ impl CoveragePipelines {
         if !one_tile {
             return Ok(&self.tiled);
         }
-        built_once(&self.one_tile, || SmallTriangles::new(&self.ctx, self.members, self.kind, false))
+        built_once(&self.ctx, &self.one_tile, || SmallTriangles::new(&self.ctx, self.members, self.kind, false))
     }
 }
 
@@ -194,7 +194,7 @@ impl ComputeRasterPipelines {
         cell: &'s OnceLock<CoveragePipelines>,
         kind: Coverage,
     ) -> Result<&'s CoveragePipelines> {
-        built_once(cell, || CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind))
+        built_once(&self.ctx, cell, || CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind))
     }
 }
 
