@@ -140,8 +140,12 @@ fn write_dataset(root: &Path, sphere: bool, truth: DMat4) -> anyhow::Result<()> 
         1.0,
     )?;
     let full = PixelRect { col: 0, row: 0, width: k.width, height: k.height };
-    let image =
-        render_rig(&rig(true), &[ExactObject { mesh: &mesh, pose: truth, label_base: 0 }], ShadowMode::Exact, full)?;
+    let image = render_rig(
+        &rig(true),
+        &[ExactObject { mesh: &mesh, pose: truth, label_base: 0, solidity: mesh.solidity() }],
+        ShadowMode::Exact,
+        full,
+    )?;
     let values: Vec<u16> =
         image.shadowed.iter().zip(&image.z).map(|(&l, &z)| if l != 0 { (z / 0.1).round() as u16 } else { 0 }).collect();
     write_depth_png(&scene.join("depth/000001.png"), k.width, k.height, &values)?;

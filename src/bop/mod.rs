@@ -29,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::exact::{self, render_rig, ExactImage, ExactObject};
 use crate::io::read_depth_png;
 use crate::limits::Ledger;
-use crate::mesh::{Mesh, SurfaceChoice, SurfaceRule};
+use crate::mesh::{Mesh, Solidity, SurfaceChoice, SurfaceRule};
 use crate::render::pinhole::draws_rig;
 use crate::render::{DrawnAlone, Renderer};
 use crate::scene::load_model_as;
@@ -294,7 +294,7 @@ impl<'a> BopScorer<'a> {
                 let (centre, radius) = mesh.bounding_sphere();
                 let footprint = sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN);
                 let footprint = footprint.unwrap_or(PixelRect::EMPTY);
-                let object = ExactObject { mesh, pose: *pose, label_base: 0 };
+                let object = ExactObject { mesh, pose: *pose, label_base: 0, solidity: Solidity::Open };
                 let image = render_rig(sensor, &[object], self.settings.shadow.mode, footprint).map_err(about)?;
                 Ok(Rendering::cast(image))
             })

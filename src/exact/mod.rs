@@ -7,7 +7,10 @@
 //! d_cam; rotated by R_y(−θ) it travels down −z too, so both rays ask one question of a
 //! `VerticalCaster`: which triangles lie over (x, y), and at what heights. Each caster
 //! answers it from a grid over the triangles' xy bounds (src/exact/column_grid.rs), with an
-//! exact f64 point-in-triangle test, edges included.
+//! exact f64 point-in-triangle test, edges included. A solid's triangles that face away from
+//! a caster's rays are left out of it, as the GPU's rasterizers cull them: a closed solid is
+//! met first through a triangle that faces the ray, so about half of a solid's triangles need
+//! neither posing into a grid nor testing.
 //!
 //! The point is shadowed when its surface's lit side turns away from the camera (n · d_cam ≤ 0,
 //! however thin the surface, as in depth mode) or when any surface lies above p on the camera
@@ -21,7 +24,7 @@ mod ray_caster;
 mod rig;
 
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Solidity};
 use crate::scene::Scene;
 use crate::sensor::{PixelRect, Scanner, Sensor};
 use crate::shadow::ShadowMode;
@@ -56,13 +59,16 @@ pub fn casters(sensor: &Sensor) -> u64 {
     2 + sensor.witnesses.len() as u64
 }
 
-/// One object of the scene: a mesh, its pose (model → range frame) and the label of its
-/// surface 0 (its surface s is labelled `label_base + s`).
+/// One object of the scene: a mesh, its pose (model → range frame), the label of its
+/// surface 0 (its surface s is labelled `label_base + s`), and whether it bounds a solid
+/// ([`Mesh::solidity`], which a caller that casts the same mesh again keeps: finding it costs
+/// more than casting a small image).
 #[derive(Clone, Copy)]
 pub struct ExactObject<'a> {
     pub mesh: &'a Mesh,
     pub pose: DMat4,
     pub label_base: u32,
+    pub solidity: Solidity,
 }
 
 /// The range image exact ray casting sees, unshadowed and shadowed.
@@ -133,13 +139,26 @@ fn height_over(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
     w.iter().all(|&w| w >= 0.0).then(|| w[0] * c[0].z + w[1] * c[1].z + w[2] * c[2].z)
 }
 
-fn posed_triangles(objects: &[ExactObject], frame: DMat4) -> Vec<Triangle> {
+/// Every object's triangles in `frame`, where rays run down −z. With `cull`, a solid's
+/// triangles that face away from +z are left out (src/mesh/solid.rs): a ray down −z meets
+/// the solid first through one that faces +z, or at the silhouette, where one that faces +z
+/// meets it at the same height. (`frame` is rigid, so it keeps a triangle's winding.)
+fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: bool) -> Vec<Triangle> {
     let mut out = Vec::new();
     for object in objects {
         let m = frame * object.pose;
         let mesh = object.mesh;
+        let away = match (cull, object.solidity) {
+            (false, _) | (_, Solidity::Open) => 0.0,
+            (true, Solidity::Outward) => -1.0,
+            (true, Solidity::Inward) => 1.0,
+        };
         for (triangle, &surface) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
             let corners = triangle.map(|v| m.transform_point3(mesh.vertex(v)));
+            let [a, b, c] = corners;
+            if away * (b - a).cross(c - a).z > 0.0 {
+                continue;
+            }
             out.push(Triangle { corners, label: object.label_base + surface });
         }
     }
@@ -151,7 +170,12 @@ fn scene_objects(scene: &Scene) -> Result<Vec<ExactObject<'_>>> {
         .objects
         .iter()
         .zip(scene.label_bases()?)
-        .map(|(object, label_base)| ExactObject { mesh: &object.mesh, pose: object.pose, label_base })
+        .map(|(object, label_base)| ExactObject {
+            mesh: &object.mesh,
+            pose: object.pose,
+            label_base,
+            solidity: object.mesh.solidity(),
+        })
         .collect())
 }
 
@@ -202,8 +226,8 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
     // The two casters are built side by side: for a dense model at a small image, building
     // them is most of the work.
     let (range, camera) = rayon::join(
-        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY)),
-        || VerticalCaster::new(posed_triangles(objects, to_camera)),
+        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, true)),
+        || VerticalCaster::new(posed_triangles(objects, to_camera, true)),
     );
     let largest = |caster: &VerticalCaster| {
         caster.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()))

@@ -45,7 +45,7 @@ pub fn render_rig(
     region: PixelRect,
 ) -> Result<ExactImage> {
     sensor.validate()?;
-    let triangles = posed_triangles(objects, DMat4::IDENTITY);
+    let triangles = posed_triangles(objects, DMat4::IDENTITY, false);
     let scale = triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     if !scale.is_finite() {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
@@ -62,7 +62,7 @@ pub fn render_rig(
             WitnessGeometry::Directional(direction) => {
                 let frame = directional_frame(direction);
                 WitnessTest::Directional {
-                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame))),
+                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame, false))),
                     frame,
                 }
             }

@@ -221,7 +221,7 @@ pub(crate) fn count_batch(
     // Shadow mode `exact`, and any other rig but the scanner: each hypothesis' range view cast
     // on the CPU (a rig's within the hypothesis' footprint), to be copied in.
     let cast = |(item, views): (&BatchItem, &Views), footprint: &Option<PixelRect>| {
-        let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0 };
+        let object = ExactObject { mesh: item.model, pose: item.pose, label_base: 0, solidity: item.mesh.solidity };
         let image = match settings.scanner {
             Some(_) => render_exact(settings.sensor, &[object])?,
             None => {
