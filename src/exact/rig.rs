@@ -6,7 +6,10 @@
 //! nothing lies between them: along its direction for a directional witness (a vertical cast
 //! in a frame that turns that direction onto +z, as the scanner's camera is tested), or on the
 //! open segment to its centre for a pinhole one (a ray cast in the reference frame). Surfaces
-//! within the tie distance of p do not hide it (src/exact/mod.rs).
+//! within the tie distance of p do not hide it (src/exact/mod.rs). A directional witness's
+//! caster leaves out a solid's triangles facing away from it, as the scanner's casters do; the
+//! reference view's triangles serve every pinhole view at once, whose rays each turn a
+//! different side of a triangle away, and keep them all.
 
 use super::ray_caster::RayCaster;
 use super::{
@@ -62,7 +65,7 @@ pub fn render_rig(
             WitnessGeometry::Directional(direction) => {
                 let frame = directional_frame(direction);
                 WitnessTest::Directional {
-                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame, false))),
+                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame, true))),
                     frame,
                 }
             }
