@@ -48,6 +48,30 @@ vec3 outside_edges(vec3 a, vec3 b, vec3 c, vec3 p, bool central) {
          / max(vec3(edge_span(a, b, central), edge_span(b, c, central), edge_span(c, a, central)), vec3(1e-30));
 }
 
+// Whether p lies within `tolerance` of the box around triangle (a, b, c) as the witness sees it.
+// Within the tolerance of each edge's line is not within it of the triangle: beyond a sharp
+// corner the two lines meeting there part slowly, and a point far beyond a sliver's tip (an
+// aspect ratio of 10⁴: 10⁴ times the tolerance beyond) lies within the tolerance of both. A
+// point within it of the lines and of the box lies within a small multiple of it of the
+// triangle. Rays from the origin are compared in the image plane z = 1, where a distance δ at
+// p spans at most δ (p.z + max(|p.x|, |p.y|)) / p.z²; a triangle with a corner at or behind
+// the witness's centre, or a point there, has no box there and passes.
+bool within_box(vec3 a, vec3 b, vec3 c, vec3 p, float tolerance, bool central) {
+    vec2 q = p.xy;
+    if (central) {
+        if (min(min(a.z, b.z), min(c.z, p.z)) <= 0.0) {
+            return true;
+        }
+        q /= p.z;
+        a.xy /= a.z;
+        b.xy /= b.z;
+        c.xy /= c.z;
+        tolerance *= (p.z + max(abs(p.x), abs(p.y))) / (p.z * p.z);
+    }
+    vec2 lo = min(min(a.xy, b.xy), c.xy) - tolerance, hi = max(max(a.xy, b.xy), c.xy) + tolerance;
+    return all(greaterThanEqual(q, lo)) && all(lessThanEqual(q, hi));
+}
+
 float l1_length(vec2 v) {
     return abs(v.x) + abs(v.y);
 }
@@ -73,7 +97,7 @@ uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central) {
     for (int step = 0; step < MAX_WALK_STEPS; step++) {
         vec3 outside = outside_edges(a, b, c, p, central);
         float farthest = max(outside.x, max(outside.y, outside.z));
-        if (farthest <= tolerance) {
+        if (farthest <= tolerance && within_box(a, b, c, p, tolerance, central)) {
             return t;
         }
         uint exit = outside.x == farthest ? 0u : (outside.y == farthest ? 1u : 2u);
