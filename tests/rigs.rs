@@ -292,6 +292,74 @@ fn depth_mode_walks_a_dense_ball_to_its_self_shadow_as_the_reference_casts_it() 
     }
 }
 
+/// A box cut into aspect-10⁴ slivers, its top toward the camera, under a projector 40° to
+/// the side and two lamps 70° from the camera's axis (so each sees side faces beside the top),
+/// in mode `depth`: labels and witness bits against the box's geometry (a slab test, no
+/// renderer: tests/common/sliver_box.rs), where a witness sees a point exactly when the point's
+/// face turns toward it (the box alone, every point in the projector's view). No interior
+/// pixel is wrong. Before the walk asked for a point to lie within a triangle's box as well as
+/// within its edges' lines, a projector's sliver seen beside the top shadowed a point of it
+/// (occluder_walk.glsl, `within_box`: rays from a centre).
+#[test]
+fn slivers_of_aspect_ten_thousand_are_seen_by_each_witness_as_their_faces_turn() {
+    use common::sliver_box::{box_face_hit, sliver_box};
+    let k = Intrinsics { width: 320, height: 240, fx: 250.0, fy: 250.0, cx: 160.0, cy: 120.0 };
+    let projector_pose = DMat4::from_translation(DVec3::new(4.0, 0.3, 0.0)) * DMat4::from_rotation_y(-0.7);
+    let lamps = [DVec3::new(-0.94, 0.05, -0.34).normalize(), DVec3::new(0.05, 0.94, -0.34).normalize()];
+    let mut witnesses = vec![Witness {
+        name: "projector".into(),
+        geometry: WitnessGeometry::Pinhole {
+            pose: projector_pose,
+            intrinsics: Intrinsics { width: 800, height: 600, cx: 400.0, cy: 300.0, ..k },
+        },
+    }];
+    for (i, &lamp) in lamps.iter().enumerate() {
+        let geometry = WitnessGeometry::Directional(Direction::Vector(lamp));
+        witnesses.push(Witness { name: format!("lamp {i}"), geometry });
+    }
+    let sensor =
+        Sensor { reference: View::Pinhole(Pinhole { intrinsics: k, near: 0.0, far: f64::INFINITY }), witnesses };
+    let (mesh, normals) = sliver_box(10_000);
+    let pose = facing_camera(DVec3::new(0.0, 0.0, 4.0)) * DMat4::from_rotation_z(0.05);
+    let mut rig = scene(sensor, ShadowMode::Depth, &[]);
+    rig.objects.push(rangesynth::scene::SceneObject {
+        model_ref: "sliver box".into(),
+        mesh: std::sync::Arc::new(mesh),
+        pose,
+        reflectivity: None,
+    });
+    let out = render(&rig);
+    assert_eq!(out.raster, Some(rangesynth::render::Raster::Graphics), "drawn on the GPU");
+    let projector_centre = projector_pose.transform_point3(DVec3::ZERO);
+    let (w, h) = (k.width as usize, k.height as usize);
+    // (label, witness bits) at each pixel, by the geometry.
+    let expected: Vec<(u32, u32)> = (0..w * h)
+        .map(|i| {
+            let ray = DVec3::new(((i % w) as f64 - k.cx) / k.fx, ((i / w) as f64 - k.cy) / k.fy, 1.0);
+            let Some((face, t)) = box_face_hit(pose, DVec3::ZERO, ray) else { return (0, 0) };
+            let (p, n) = (t * ray, pose.transform_vector3(normals[face]));
+            let towards = [(projector_centre - p).normalize(), lamps[0], lamps[1]];
+            let bits = (0..3).filter(|&b| n.dot(towards[b]) <= 0.0).fold(0, |bits, b| bits | 1 << b);
+            (face as u32 + 1, bits)
+        })
+        .collect();
+    let interior = |i: usize| {
+        let (c, r) = ((i % w) as i64, (i / w) as i64);
+        (-1..=1).all(|dr| {
+            (-1..=1).all(|dc| {
+                let (c, r) = (c + dc, r + dr);
+                c < 0 || r < 0 || c >= w as i64 || r >= h as i64 || expected[r as usize * w + c as usize] == expected[i]
+            })
+        })
+    };
+    let wrong: Vec<usize> = (0..w * h).filter(|&i| (out.label_unshadowed[i], out.witness[i]) != expected[i]).collect();
+    let wrong_interior = wrong.iter().filter(|&&i| interior(i)).count();
+    eprintln!("{} pixels differ from the box's geometry, {wrong_interior} interior", wrong.len());
+    assert_eq!(wrong_interior, 0, "{} pixels differ, {wrong_interior} interior", wrong.len());
+    // The camera sees the top, which every witness lights; the false shadows fell on it.
+    assert!(expected.iter().filter(|&&(label, _)| label == 1).count() > 5_000, "the top fills much of the view");
+}
+
 /// Mode `depth` against the brute-force reference on random rigs: a tilted table, one to four
 /// models (boxes, steps, cylinders, balls of 2,208 and 25,280 triangles) of random size and
 /// pose, one to three witnesses (pinhole ones of random pose and intrinsics, some behind the

@@ -17,6 +17,7 @@ mod common;
 
 use common::compare::{compare_labels, near_label_change, LabelDiff};
 use common::reference::reference_render;
+use common::sliver_box::{box_face_hit, sliver_box};
 use common::*;
 use glam::{DMat4, DVec3};
 use rangesynth::mesh::Mesh;
@@ -24,45 +25,6 @@ use rangesynth::scene::SceneObject;
 use rangesynth::shadow::{ShadowMode, ShadowSettings};
 use rangesynth::Scene;
 use std::sync::Arc;
-
-/// The unit cube of `builtin:box` with each face cut into `strips` strips along one side, so
-/// every triangle is a sliver of aspect ratio about `strips`. Surfaces are its six faces, in
-/// builtin:box's order; returns the mesh and each face's outward normal.
-fn sliver_box(strips: u32) -> (Mesh, Vec<DVec3>) {
-    let (lo, hi) = (DVec3::new(-0.5, -0.5, 0.0), DVec3::new(0.5, 0.5, 1.0));
-    let corner = |x: usize, y: usize, z: usize| DVec3::new([lo.x, hi.x][x], [lo.y, hi.y][y], [lo.z, hi.z][z]);
-    // Faces as (name, counter-clockwise corners seen from outside, normal).
-    let faces = [
-        ("top", [corner(0, 0, 1), corner(1, 0, 1), corner(1, 1, 1), corner(0, 1, 1)], DVec3::Z),
-        ("bottom", [corner(0, 0, 0), corner(0, 1, 0), corner(1, 1, 0), corner(1, 0, 0)], -DVec3::Z),
-        ("+x", [corner(1, 0, 0), corner(1, 1, 0), corner(1, 1, 1), corner(1, 0, 1)], DVec3::X),
-        ("-x", [corner(0, 0, 0), corner(0, 0, 1), corner(0, 1, 1), corner(0, 1, 0)], -DVec3::X),
-        ("+y", [corner(0, 1, 0), corner(0, 1, 1), corner(1, 1, 1), corner(1, 1, 0)], DVec3::Y),
-        ("-y", [corner(0, 0, 0), corner(1, 0, 0), corner(1, 0, 1), corner(0, 0, 1)], -DVec3::Y),
-    ];
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    let mut surfaces = Vec::new();
-    for (s, (_, [a, b, c, d], _)) in faces.iter().enumerate() {
-        let vertex = |p: DVec3, positions: &mut Vec<[f64; 3]>| {
-            positions.push(p.to_array());
-            positions.len() as u32 - 1
-        };
-        for k in 0..strips {
-            let t = |k: u32| f64::from(k) / f64::from(strips);
-            let p0 = vertex(a.lerp(*b, t(k)), &mut positions);
-            let p1 = vertex(a.lerp(*b, t(k + 1)), &mut positions);
-            let q1 = vertex(d.lerp(*c, t(k + 1)), &mut positions);
-            let q0 = vertex(d.lerp(*c, t(k)), &mut positions);
-            triangles.extend([[p0, p1, q1], [p0, q1, q0]]);
-            surfaces.extend([s as u32 + 1; 2]);
-        }
-    }
-    let names = faces.iter().map(|f| f.0.to_string()).collect();
-    let mesh =
-        Mesh::new(format!("sliver box ({strips} strips a face)"), positions, triangles, surfaces, names).unwrap();
-    (mesh, faces.iter().map(|f| f.2).collect())
-}
 
 // Caps (measured plus a quarter, at least 2: the module doc).
 const CAP_SLIVER_1: usize = 2; // measured 0
@@ -128,41 +90,13 @@ fn sliver_triangles_shadow_like_their_faces() {
     }
 }
 
-/// The face of `sliver_box` (its surface index, 0-based) that a ray down −z through (x, y)
-/// of the range frame enters first, the box posed by `pose`: the slab method in the box's
-/// frame, where it spans [−½, ½]² × [0, 1]. A geometric oracle, as independent of the
-/// tessellation as of the renderer.
-fn box_face_hit(pose: DMat4, x: f64, y: f64) -> Option<usize> {
-    let to_box = pose.inverse();
-    let origin = to_box.transform_point3(DVec3::new(x, y, 10.0));
-    let direction = to_box.transform_vector3(-DVec3::Z);
-    let (lo, hi) = (DVec3::new(-0.5, -0.5, 0.0), DVec3::new(0.5, 0.5, 1.0));
-    let (mut near, mut far, mut face) = (f64::NEG_INFINITY, f64::INFINITY, None);
-    // Faces in sliver_box's order: top, bottom, +x, −x, +y, −y.
-    for (axis, (low_face, high_face)) in [(2, (1, 0)), (0, (3, 2)), (1, (5, 4))] {
-        let (o, d) = (origin[axis], direction[axis]);
-        if d.abs() < 1e-12 {
-            if o < lo[axis] || o > hi[axis] {
-                return None;
-            }
-            continue;
-        }
-        let (t_lo, t_hi) = ((lo[axis] - o) / d, (hi[axis] - o) / d);
-        let (entry, entry_face) = if t_lo < t_hi { (t_lo, low_face) } else { (t_hi, high_face) };
-        if entry > near {
-            (near, face) = (entry, Some(entry_face));
-        }
-        far = far.min(t_lo.max(t_hi));
-    }
-    (near <= far).then_some(face).flatten()
-}
-
 /// Slivers of aspect 10⁴ in depth mode against the box's geometry: each face is lit exactly
 /// when it faces the camera. Beyond a sliver's sharp tip, the lines of its two long edges
 /// part by 10⁻⁴ of the distance, so a point on the top face several pixels beyond the tip of a
 /// side face's sliver lay within the walk's tolerance of both, and the side face's plane
 /// shadowed it (2 and 1 interior pixels in these two views, before the walk also asked for the
-/// point to lie within the triangle's box: shaders/stages/occluder_walk.glsl, `within_box`).
+/// point to lie within the triangle's box: shaders/stages/occluder_walk.glsl, `within_box`). The box's faces come from a slab test
+/// (tests/common/sliver_box.rs), as independent of the tessellation as of the renderer.
 #[test]
 fn slivers_of_aspect_ten_thousand_shadow_like_their_faces() {
     let (mesh, normals) = sliver_box(10_000);
@@ -188,7 +122,7 @@ fn slivers_of_aspect_ten_thousand_shadow_like_their_faces() {
         let hits: Vec<u32> = (0..w * h)
             .map(|i| {
                 let (x, y) = s.pixel_centre((i % w) as u32, (i / w) as u32);
-                box_face_hit(pose, x, y).map_or(0, |face| face as u32 + 1)
+                box_face_hit(pose, DVec3::new(x, y, 10.0), -DVec3::Z).map_or(0, |(face, _)| face as u32 + 1)
             })
             .collect();
         let facing: Vec<bool> = normals.iter().map(|n| pose.transform_vector3(*n).dot(d_cam) > 0.0).collect();

@@ -9,6 +9,7 @@ pub mod compare;
 pub mod reference;
 pub mod rig_reference;
 pub mod scorer;
+pub mod sliver_box;
 
 use glam::DMat4;
 pub use rangesynth::effects::Effects;
