@@ -91,6 +91,82 @@ fn exact_mode_agrees_with_the_independent_reference() {
     eprintln!("{ties} pixel centres on edges or vertices, where the plane is a matter of rule");
 }
 
+/// A scene's objects as exact mode casts them.
+fn exact_objects(scene: &Scene) -> Vec<rangesynth::exact::ExactObject<'_>> {
+    let bases = scene.label_bases().unwrap();
+    let objects = scene.objects.iter().zip(bases);
+    objects
+        .map(|(o, label_base)| rangesynth::exact::ExactObject {
+            mesh: &o.mesh,
+            pose: o.pose,
+            label_base,
+            solidity: o.mesh.solidity(),
+        })
+        .collect()
+}
+
+/// Exact mode leaves a solid's triangles facing away from a caster's rays out of it
+/// (src/exact/mod.rs, `posed_triangles`): the images are those of the same meshes cast whole,
+/// bit for bit (labels, shadowed labels, z, gradients, witness bits), on the conformance
+/// scenes at three θ, on a box wound inside out (its normals pointing in), and under a rig
+/// of a camera looking down and two lamps (directional witnesses, whose casters cull too).
+#[test]
+fn culling_a_solids_back_faces_changes_no_bit_of_exact_mode() {
+    use rangesynth::exact::{render_exact, ExactImage, ExactObject};
+    use rangesynth::mesh::{Mesh, Solidity};
+    use rangesynth::sensor::{Direction, Sensor, Witness, WitnessGeometry};
+    let inside_out = {
+        let cube = builtin_mesh("builtin:box").unwrap();
+        let positions = (0..cube.positions.len() as u32).map(|v| cube.vertex(v).to_array()).collect();
+        let triangles = cube.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        Mesh::new(
+            "inside-out box".to_string(),
+            positions,
+            triangles,
+            cube.triangle_surfaces.clone(),
+            cube.surface_names.clone(),
+        )
+        .unwrap()
+    };
+    assert_eq!(inside_out.solidity(), Solidity::Inward);
+    let both = |case: &str, sensor: &Sensor, objects: Vec<ExactObject>| {
+        let bits = |image: &ExactImage| {
+            let z: Vec<u64> = image.z.iter().map(|z| z.to_bits()).collect();
+            let gradient: Vec<[u64; 2]> = image.gradient.iter().map(|g| g.map(f64::to_bits)).collect();
+            (image.label.clone(), image.shadowed.clone(), z, gradient, image.witness.clone())
+        };
+        let culled = render_exact(sensor, &objects).unwrap();
+        let whole: Vec<ExactObject> = objects.iter().map(|&o| ExactObject { solidity: Solidity::Open, ..o }).collect();
+        assert!(culled.label.iter().any(|&l| l != 0), "{case}: in view");
+        assert!(bits(&culled) == bits(&render_exact(sensor, &whole).unwrap()), "{case}: culled differs from whole");
+    };
+    let mut solids = 0;
+    for theta in [45.0, -30.0, 80.0] {
+        for (name, scene) in conformance_scenes(theta, ShadowMode::Exact) {
+            let objects = exact_objects(&scene);
+            solids += objects.iter().filter(|o| o.solidity != Solidity::Open).count();
+            both(&format!("{name}, θ = {theta}"), &scene.sensor, objects);
+        }
+    }
+    assert!(solids > 20, "the scenes hold solids: {solids}");
+    let pose = DMat4::from_rotation_x(0.3) * DMat4::from_rotation_z(0.5);
+    let s = centred_sensor(SIZE, SIZE, 2.5 / f64::from(SIZE), [0.0, 0.0], 45.0);
+    both(
+        "inside-out box",
+        &s.into(),
+        vec![ExactObject { mesh: &inside_out, pose, label_base: 0, solidity: Solidity::Inward }],
+    );
+    let lamps = [DVec3::new(0.6, 0.2, 0.77), DVec3::new(-0.3, -0.7, 0.65)].map(|d| Direction::Vector(d.normalize()));
+    let mut rig: Sensor = centred_sensor(SIZE, SIZE, 5.0 / f64::from(SIZE), [0.0, 0.0], 0.0).into();
+    rig.witnesses = lamps
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| Witness { name: format!("lamp {i}"), geometry: WitnessGeometry::Directional(d) })
+        .collect();
+    let (_, table) = conformance_scenes(0.0, ShadowMode::Exact).pop().unwrap();
+    both("cluttered table under two lamps", &rig, exact_objects(&table));
+}
+
 #[test]
 fn on_a_convex_body_exactly_the_facets_facing_the_camera_are_lit() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);

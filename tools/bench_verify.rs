@@ -629,8 +629,8 @@ fn first_hypothesis() -> anyhow::Result<()> {
 }
 
 /// Milliseconds from starting this program as a [`first_hypothesis`] process with its
-/// pipeline cache in `cache_dir` to its first line (its teardown, which writes the cache, not
-/// counted).
+/// pipeline cache in `cache_dir` to its first line (with an empty cache, that includes
+/// writing it as the pipelines are built; its teardown is not counted).
 fn time_to_first_hypothesis(cache_dir: &Path) -> anyhow::Result<f64> {
     use std::io::BufRead;
     let start = Instant::now();

@@ -230,18 +230,7 @@ impl GpuContext {
         let timestamp_period = (families[queue_family as usize].timestamp_valid_bits > 0)
             .then_some(f64::from(properties.limits.timestamp_period));
         let uuid = device_uuid(&instance, physical_device, &properties);
-        let pipeline_cache =
-            match PipelineCache::open(&device, &properties, &uuid, options.pipeline_cache_dir.as_deref()) {
-                Ok(cache) => cache,
-                Err(e) => {
-                    // SAFETY: nothing else was created from the device.
-                    unsafe { device.destroy_device(None) };
-                    drop(debug);
-                    // SAFETY: nothing else was created from the instance.
-                    unsafe { instance.destroy_instance(None) };
-                    return Err(e);
-                }
-            };
+        let pipeline_cache = PipelineCache::open(&device, &properties, &uuid, options.pipeline_cache_dir.as_deref());
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),

@@ -15,9 +15,10 @@
 //!
 //! It never fails a run. A file that is missing, corrupt (short, a wrong magic, length or
 //! CRC), stale (another build of rangesynth, another driver), larger than
-//! [`MAX_PIPELINE_CACHE_BYTES`] or not a regular file is ignored, and the pipelines are
-//! built as without one; a cache that cannot be written (no home, a read-only or missing
-//! directory, a device or directory at the file's path) is left as it is. What happened is in
+//! [`MAX_PIPELINE_CACHE_BYTES`] or not a regular file (which is not even opened) is ignored,
+//! and the pipelines are built as without one; a cache that cannot be written (no home, a
+//! read-only or missing directory, a device or directory at the file's path) is left as it
+//! is; a driver that makes no cache builds the pipelines without one. What happened is in
 //! [`PipelineCacheReport`], which the command line prints when it is not what a user would
 //! expect. Writes go through a temporary file renamed over the old one (src/io/atomic.rs), so
 //! processes sharing the cache each leave it whole; the last to write wins.
@@ -47,7 +48,13 @@ const DRIVER_HEADER_BYTES: usize = 4 + 4 + 4 + 4 + vk::UUID_SIZE;
 /// `$XDG_CACHE_HOME/rangesynth` (an absolute path, as the XDG specification requires), else
 /// `$HOME/.cache/rangesynth`; none where none of them is set.
 pub fn default_cache_dir() -> Option<PathBuf> {
-    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
+    cache_dir_from(|name| std::env::var_os(name))
+}
+
+/// [`default_cache_dir`] with the environment read through `env` (an empty value counts as
+/// none).
+fn cache_dir_from(env: impl Fn(&str) -> Option<std::ffi::OsString>) -> Option<PathBuf> {
+    let var = |name: &str| env(name).filter(|v| !v.is_empty()).map(PathBuf::from);
     var(CACHE_DIR_ENV)
         .or_else(|| var("XDG_CACHE_HOME").filter(|p| p.is_absolute()).map(|p| p.join("rangesynth")))
         .or_else(|| var("HOME").map(|home| home.join(".cache").join("rangesynth")))
@@ -103,7 +110,7 @@ impl PipelineCache {
         properties: &vk::PhysicalDeviceProperties,
         device_uuid: &str,
         dir: Option<&Path>,
-    ) -> crate::error::Result<Self> {
+    ) -> Self {
         let identity = DriverIdentity {
             vendor: properties.vendor_id,
             device: properties.device_id,
@@ -128,24 +135,24 @@ impl PipelineCache {
             // SAFETY: valid device; `data` passed every check on its header and CRC.
             unsafe { device.create_pipeline_cache(&info, None) }
         };
+        // Pipelines are built without a cache (a null handle) where the driver makes none.
         let raw = match create(&data) {
             Ok(raw) => raw,
-            Err(e) if !data.is_empty() => {
-                load = CacheLoad::Ignored(format!("the driver refused its data ({e})"));
-                create(&[]).map_err(|e| crate::error::Error::vulkan("creating an empty pipeline cache", e))?
+            Err(e) => {
+                load = CacheLoad::Ignored(format!("the driver did not take it ({e})"));
+                create(&[]).unwrap_or(vk::PipelineCache::null())
             }
-            Err(e) => return Err(crate::error::Error::vulkan("creating a pipeline cache", e)),
         };
         let saved_crc = matches!(load, CacheLoad::Loaded { .. }).then(|| crc32fast::hash(&data));
         let report = PipelineCacheReport { path, load, last_save: None };
-        Ok(Self { raw, build_key, state: Mutex::new(SaveState { report, saved_crc }) })
+        Self { raw, build_key, state: Mutex::new(SaveState { report, saved_crc }) }
     }
 
     /// Writes the driver's data to the cache file where it changed since it was last read or
     /// written. A failure is recorded in the report, never returned.
     pub(crate) fn save(&self, device: &ash::Device) {
         let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
-        let Some(path) = state.report.path.clone() else { return };
+        let Some(path) = state.report.path.clone().filter(|_| self.raw != vk::PipelineCache::null()) else { return };
         // SAFETY: valid device and cache; the driver synchronizes the cache internally.
         let data = match unsafe { device.get_pipeline_cache_data(self.raw) } {
             Ok(data) => data,
@@ -172,7 +179,7 @@ impl PipelineCache {
     /// # Safety
     /// No pipeline is being created from it, and it is not used again.
     pub(crate) unsafe fn destroy(&self, device: &ash::Device) {
-        // SAFETY: forwarded from the caller.
+        // SAFETY: forwarded from the caller; destroying a null handle does nothing.
         unsafe { device.destroy_pipeline_cache(self.raw, None) };
     }
 }
@@ -201,16 +208,26 @@ fn driver_header(identity: &DriverIdentity) -> Vec<u8> {
 
 /// The cache file's bytes; none where there is no file, and why not where it is not read.
 fn read_cache_file(path: &Path) -> Result<Option<Vec<u8>>, String> {
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    // Opening a FIFO for reading would wait for a writer; the opened handle is checked below.
-    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
-    let file = match options.open(path) {
-        Ok(file) => file,
+    // Not opened unless it is a regular file: opening a device can act (a tape rewinds).
+    match std::fs::metadata(path) {
+        Ok(metadata) if !metadata.is_file() => {
+            return Err(format!("it is {}, not a regular file", file_kind(metadata.file_type())))
+        }
+        Ok(_) => {}
         // Nothing there, or a file where a directory on its path would be (a write fails then).
         Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
             return Ok(None)
         }
+        Err(e) => return Err(format!("it could not be examined ({e})")),
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    // What was checked may be swapped for a FIFO before the open, which would then wait for a
+    // writer: the open does not wait, and the opened handle is checked again.
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = match options.open(path) {
+        Ok(file) => file,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(format!("it could not be opened ({e})")),
     };
     let metadata = file.metadata().map_err(|e| format!("it could not be examined ({e})"))?;
@@ -276,4 +293,28 @@ fn write_cache_file(path: &Path, data: &[u8], build_key: u32, crc: u32) -> Resul
         file.write_all(&header).and_then(|()| file.write_all(data)).map_err(|e| crate::error::Error::io(path, e))
     })
     .map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cache_directory_is_the_first_of_its_variables_that_is_set() {
+        let dir = |vars: &[(&str, &str)]| {
+            let vars: Vec<(String, String)> = vars.iter().map(|&(k, v)| (k.into(), v.into())).collect();
+            cache_dir_from(|name| vars.iter().find(|(k, _)| k == name).map(|(_, v)| v.into()))
+        };
+        let all = [(CACHE_DIR_ENV, "/c"), ("XDG_CACHE_HOME", "/x"), ("HOME", "/h")];
+        assert_eq!(dir(&all), Some(PathBuf::from("/c")));
+        assert_eq!(dir(&all[1..]), Some(PathBuf::from("/x/rangesynth")));
+        assert_eq!(dir(&all[2..]), Some(PathBuf::from("/h/.cache/rangesynth")));
+        // Empty counts as unset; a relative XDG_CACHE_HOME is ignored, as its specification says.
+        assert_eq!(
+            dir(&[(CACHE_DIR_ENV, ""), ("XDG_CACHE_HOME", "x"), ("HOME", "/h")]),
+            Some(PathBuf::from("/h/.cache/rangesynth"))
+        );
+        // No home: no cache, and nothing is read or written.
+        assert_eq!(dir(&[]), None);
+    }
 }

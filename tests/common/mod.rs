@@ -47,7 +47,10 @@ pub static VERIFIER: LazyLock<Verifier> = LazyLock::new(|| {
 /// (the device's default unless it is set: tools/test.sh runs the verification suite again
 /// with the compute rasterizer covering four). Panics (fails the test) without a device.
 pub fn test_renderer(max_vulkan_version: Option<u32>) -> Renderer {
-    let options = ContextOptions { validation: true, max_vulkan_version, ..ContextOptions::from_env() };
+    // No persistent pipeline cache: what other runs left must not touch the suite's results
+    // (tests/pipeline_cache.rs tests the cache, each test in a directory of its own).
+    let options =
+        ContextOptions { validation: true, max_vulkan_version, pipeline_cache_dir: None, ..ContextOptions::from_env() };
     let renderer = Renderer::new(&options)
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan device with validation layers: {e}"));
     let name = renderer.context().device_name().to_string();
