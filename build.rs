@@ -1,9 +1,10 @@
 //! Compiles the GLSL in `shaders/` to SPIR-V (shaderc, Vulkan 1.2 / SPIR-V 1.5) into
 //! OUT_DIR, from the one list of shaders here, and writes `shader_list.rs` (a constant of
-//! embedded SPIR-V each; and `shader_set_key.rs`, a CRC-32 of them all) and `shader_layout.rs` (what
-//! reflection finds in them: struct layouts, specialization ids and bindings by name), both
-//! included by `src/gpu/shaders.rs`. The compiler's log is the build error. The shaders'
-//! `#include "contract.glsl"` is generated here from src/shader_contract.rs.
+//! embedded SPIR-V each), `shader_set_key.rs` (a CRC-32 of them all, which keys the pipeline
+//! cache: src/gpu/pipeline_cache.rs) and `shader_layout.rs` (what reflection finds in them:
+//! struct layouts, specialization ids and bindings by name), all included under src/gpu/.
+//! The compiler's log is the build error. The shaders' `#include "contract.glsl"` is
+//! generated here from src/shader_contract.rs.
 
 use std::path::{Path, PathBuf};
 

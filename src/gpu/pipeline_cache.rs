@@ -33,7 +33,7 @@ use std::sync::Mutex;
 pub const CACHE_DIR_ENV: &str = "RANGESYNTH_CACHE_DIR";
 
 /// The largest cache file read or written: a driver's data for the product's few dozen
-/// pipelines is far smaller (lavapipe's: about a megabyte), so a larger file is not ours.
+/// pipelines is far smaller, so a larger file is not ours.
 pub const MAX_PIPELINE_CACHE_BYTES: u64 = 256 << 20;
 
 const MAGIC: &[u8; 8] = b"RSPIPES\0";
@@ -138,10 +138,11 @@ impl PipelineCache {
         // Pipelines are built without a cache (a null handle) where the driver makes none.
         let raw = match create(&data) {
             Ok(raw) => raw,
-            Err(e) => {
+            Err(e) if !data.is_empty() => {
                 load = CacheLoad::Ignored(format!("the driver did not take it ({e})"));
                 create(&[]).unwrap_or(vk::PipelineCache::null())
             }
+            Err(_) => vk::PipelineCache::null(),
         };
         let saved_crc = matches!(load, CacheLoad::Loaded { .. }).then(|| crc32fast::hash(&data));
         let report = PipelineCacheReport { path, load, last_save: None };
