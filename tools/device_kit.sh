@@ -8,12 +8,13 @@
 #                              with DEVICE_KIT_BASELINE=REV, the benchmark at REV too
 #                              (bench_verify_baseline), for an A/B on one machine
 #   tools/device_kit.sh run    there, with target/device-kit carried: unpacks the packages the
-#                              machine lacks, runs the rasterizers' benchmark, then every suite
-#                              with the graphics pipeline and again with the compute
-#                              rasterizer, validation on, on the GPU; five files (the device,
-#                              the benchmark, a log a rasterizer, a summary; with a baseline,
-#                              its benchmark's log too, bench-baseline.log) under $OUT (or
-#                              target/device-kit/out). Exits 0 when every suite passed.
+#                              machine lacks, runs the rasterizers' benchmark and the cold
+#                              start, then every suite with the graphics pipeline and again
+#                              with the compute rasterizer, validation on, on the GPU; five
+#                              files (the device, the benchmark, a log a rasterizer, a
+#                              summary; with a baseline, its benchmark's log too,
+#                              bench-baseline.log) under $OUT (or target/device-kit/out).
+#                              Exits 0 when every suite passed.
 #   tools/device_kit.sh suite NAME [ARGS]
 #                              there: one of the kit's binaries (a suite as in `suites` below,
 #                              with libtest's filters and options, or bench_verify), on the
@@ -26,7 +27,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kit=target/device-kit
-suites=(conformance stability analytic compute_raster exact verify effects portability)
+suites=(conformance stability analytic compute_raster exact verify effects portability pipeline_cache)
 # The Vulkan loader, the validation layers, and libglvnd: NVIDIA's Vulkan driver is
 # libGLX_nvidia.so.0, which needs libglvnd's dispatch library.
 debs=(libvulkan1 vulkan-validationlayers libglvnd0 libglx0 libgl1 libegl1 libopengl0 libgles2)
@@ -129,6 +130,10 @@ run() {
                 echo "$bench: exit $? (124: stopped at DEVICE_KIT_BENCH_SECONDS)" >> "$log"
         done
     done
+    # Process start to first verified hypothesis, with an empty pipeline cache and a warm one
+    # (a GPU's cache holds the driver's compiled code; lavapipe's holds none).
+    timeout 120 "$kit/bin/bench_verify" --cold-start >> "$out/bench.log" 2>&1 ||
+        echo "bench_verify --cold-start: exit $?" >> "$out/bench.log"
     # Much as tools/test.sh runs them: every suite with the graphics pipeline, then all but
     # compute_raster (which compares the two itself) with the compute rasterizer, which on a
     # GPU covers four hypotheses a dispatch, in runs of 16 slots, three chunks in flight. One log
