@@ -108,13 +108,15 @@ fn exact_objects(scene: &Scene) -> Vec<rangesynth::exact::ExactObject<'_>> {
 /// Exact mode leaves a solid's triangles facing away from a caster's rays out of it
 /// (src/exact/mod.rs, `posed_triangles`): the images are those of the same meshes cast whole,
 /// bit for bit (labels, shadowed labels, z, gradients, witness bits), on the conformance
-/// scenes at three θ, on a box wound inside out (its normals pointing in), and under a rig
-/// of a camera looking down and two lamps (directional witnesses, whose casters cull too).
+/// scenes at three θ, on a box wound inside out (its normals pointing in), under a rig of a
+/// camera looking down and two lamps (directional witnesses, whose casters cull too), and
+/// under pinhole rigs whose views must keep a solid whole: a near limit cutting it open, a
+/// projector inside it.
 #[test]
 fn culling_a_solids_back_faces_changes_no_bit_of_exact_mode() {
     use rangesynth::exact::{render_exact, ExactImage, ExactObject};
     use rangesynth::mesh::{Mesh, Solidity};
-    use rangesynth::sensor::{Direction, Sensor, Witness, WitnessGeometry};
+    use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
     let inside_out = {
         let cube = builtin_mesh("builtin:box").unwrap();
         let positions = (0..cube.positions.len() as u32).map(|v| cube.vertex(v).to_array()).collect();
@@ -165,6 +167,29 @@ fn culling_a_solids_back_faces_changes_no_bit_of_exact_mode() {
         .collect();
     let (_, table) = conformance_scenes(0.0, ShadowMode::Exact).pop().unwrap();
     both("cluttered table under two lamps", &rig, exact_objects(&table));
+    // A pinhole camera 6 units above the table, looking down at it, and a pinhole projector:
+    // beside it; with the camera's near limit cutting the models (whose insides it then sees);
+    // inside the box (which it sees from within).
+    let flip = DMat4::from_translation(DVec3::new(0.0, 0.0, 6.0)) * DMat4::from_rotation_x(std::f64::consts::PI);
+    let on_table: Vec<ExactObject> =
+        exact_objects(&table).into_iter().map(|o| ExactObject { pose: flip * o.pose, ..o }).collect();
+    let inside_box = flip.transform_point3(DVec3::new(-1.1, 1.0, 0.5));
+    let k = Intrinsics { width: 96, height: 72, fx: 60.0, fy: 60.0, cx: 47.5, cy: 35.5 };
+    for (case, near, projector) in [
+        ("a camera and a projector beside it", 0.0, DVec3::new(0.4, 0.1, 0.0)),
+        ("a near limit through the models", 5.5, DVec3::new(0.4, 0.1, 0.0)),
+        ("a projector inside the box", 0.0, inside_box),
+    ] {
+        let geometry = WitnessGeometry::Pinhole {
+            pose: DMat4::from_translation(projector),
+            intrinsics: Intrinsics { width: 400, height: 400, cx: 199.5, cy: 199.5, ..k },
+        };
+        let sensor = Sensor {
+            reference: View::Pinhole(Pinhole { intrinsics: k, near, far: f64::INFINITY }),
+            witnesses: vec![Witness { name: "projector".into(), geometry }],
+        };
+        both(case, &sensor, on_table.clone());
+    }
 }
 
 #[test]

@@ -139,24 +139,48 @@ fn height_over(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
     w.iter().all(|&w| w >= 0.0).then(|| w[0] * c[0].z + w[1] * c[1].z + w[2] * c[2].z)
 }
 
-/// Every object's triangles in `frame`, where rays run down −z. With `cull`, a solid's
-/// triangles that face away from +z are left out (src/mesh/solid.rs): a ray down −z meets
-/// the solid first through one that faces +z, or at the silhouette, where one that faces +z
-/// meets it at the same height. (`frame` is rigid, so it keeps a triangle's winding.)
-fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: bool) -> Vec<Triangle> {
+/// Which of a solid's triangles a caster leaves out (src/mesh/solid.rs): those facing away
+/// from where its rays come from, which a ray meets only where one facing them meets it too (at
+/// the silhouette, at the same point). `frame` is rigid, so it keeps a triangle's winding.
+#[derive(Clone, Copy)]
+enum Cull {
+    /// Every triangle is kept.
+    Nothing,
+    /// Rays run down −z: those facing away from +z.
+    AwayFromZ,
+    /// Rays run from or toward `centre`: those facing away from it, of solids that do not hold
+    /// the centre (from inside, a solid's far side is what a ray meets) and lie wholly beyond
+    /// `near` in z where one is given (a near limit cuts a solid open).
+    AwayFrom { centre: DVec3, near: Option<f64> },
+}
+
+/// Every object's triangles in `frame`, less those `cull` leaves out of solids.
+fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Triangle> {
     let mut out = Vec::new();
     for object in objects {
         let m = frame * object.pose;
         let mesh = object.mesh;
-        let away = match (cull, object.solidity) {
-            (false, _) | (_, Solidity::Open) => 0.0,
-            (true, Solidity::Outward) => -1.0,
-            (true, Solidity::Inward) => 1.0,
+        let away = match object.solidity {
+            Solidity::Open => 0.0,
+            Solidity::Outward => -1.0,
+            Solidity::Inward => 1.0,
+        };
+        let (away, from) = match cull {
+            Cull::Nothing => (0.0, None),
+            Cull::AwayFromZ => (away, None),
+            Cull::AwayFrom { centre, near } => {
+                let (c, r) = mesh.bounding_sphere();
+                let c = m.transform_point3(c);
+                let clear = c.distance(centre) > r && near.is_none_or(|near| c.z - r > near);
+                (if clear { away } else { 0.0 }, Some(centre))
+            }
         };
         for (triangle, &surface) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
             let corners = triangle.map(|v| m.transform_point3(mesh.vertex(v)));
             let [a, b, c] = corners;
-            if away * (b - a).cross(c - a).z > 0.0 {
+            let normal = (b - a).cross(c - a);
+            let facing = from.map_or(normal.z, |centre| normal.dot(centre - a));
+            if away * facing > 0.0 {
                 continue;
             }
             out.push(Triangle { corners, label: object.label_base + surface });
@@ -226,8 +250,8 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
     // The two casters are built side by side: for a dense model at a small image, building
     // them is most of the work.
     let (range, camera) = rayon::join(
-        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, true)),
-        || VerticalCaster::new(posed_triangles(objects, to_camera, true)),
+        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, Cull::AwayFromZ)),
+        || VerticalCaster::new(posed_triangles(objects, to_camera, Cull::AwayFromZ)),
     );
     let largest = |caster: &VerticalCaster| {
         caster.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()))

@@ -6,27 +6,34 @@
 //! nothing lies between them: along its direction for a directional witness (a vertical cast
 //! in a frame that turns that direction onto +z, as the scanner's camera is tested), or on the
 //! open segment to its centre for a pinhole one (a ray cast in the reference frame). Surfaces
-//! within the tie distance of p do not hide it (src/exact/mod.rs). A directional witness's
-//! caster leaves out a solid's triangles facing away from it, as the scanner's casters do; the
-//! reference view's triangles serve every pinhole view at once, whose rays each turn a
-//! different side of a triangle away, and keep them all.
+//! within the tie distance of p do not hide it (src/exact/mod.rs). Each view has a caster of its
+//! own, which leaves out a solid's triangles facing away from where its rays come from (the
+//! reference view's centre or direction, a witness's): a segment from p crosses a solid that
+//! does not hold the witness's centre through a face turned toward it.
 
 use super::ray_caster::RayCaster;
 use super::{
-    cast_image, posed_triangles, ExactImage, ExactObject, ExactPixel, Triangle, VerticalCaster, FACING_TOLERANCE,
+    cast_image, posed_triangles, Cull, ExactImage, ExactObject, ExactPixel, Triangle, VerticalCaster, FACING_TOLERANCE,
 };
 use crate::error::{Error, Result};
 use crate::sensor::{Direction, PixelRect, Sensor, View, WitnessGeometry};
 use crate::shader_contract::TIE_RELATIVE;
 use glam::{DMat4, DQuat, DVec2, DVec3};
+use rayon::prelude::*;
 
 /// How a witness is tested.
 enum WitnessTest {
     /// Parallel rays: the scene in a frame where they run down −z from +z.
     Directional { frame: DMat4, caster: Box<VerticalCaster> },
-    /// A centre: segments to it in the reference frame, and its field of view
-    /// (`Witness::in_view`).
-    Pinhole,
+    /// A centre: segments to it in the reference frame, against the triangles that do not
+    /// face away from it, and its field of view (`Witness::in_view`).
+    Pinhole(Box<RayCaster>),
+}
+
+/// What casts the reference view's rays: down −z (orthographic), or from its centre.
+enum ReferenceCaster {
+    Vertical(VerticalCaster),
+    Rays(RayCaster),
 }
 
 /// The frame in which rays arriving from `direction` run down −z: the scanner's `R_y(−θ)`
@@ -48,44 +55,56 @@ pub fn render_rig(
     region: PixelRect,
 ) -> Result<ExactImage> {
     sensor.validate()?;
-    let triangles = posed_triangles(objects, DMat4::IDENTITY, false);
-    let scale = triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    let all = posed_triangles(objects, DMat4::IDENTITY, Cull::Nothing);
+    let scale = all.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
     if !scale.is_finite() {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
     }
+    drop(all);
     let tie = TIE_RELATIVE * scale;
     let witnesses: &[_] = if test_witnesses { &sensor.witnesses } else { &[] };
-    let pinhole_witness = witnesses.iter().any(|w| matches!(w.geometry, WitnessGeometry::Pinhole { .. }));
-    let pinhole_reference = matches!(sensor.reference, View::Pinhole(_));
-    let rays = (pinhole_reference || pinhole_witness).then(|| RayCaster::new(triangles.clone(), tie));
-    let vertical = (!pinhole_reference).then(|| VerticalCaster::new(triangles));
-    let tests: Vec<WitnessTest> = witnesses
-        .iter()
-        .map(|w| match w.geometry {
-            WitnessGeometry::Directional(direction) => {
-                let frame = directional_frame(direction);
-                WitnessTest::Directional {
-                    caster: Box::new(VerticalCaster::new(posed_triangles(objects, frame, true))),
-                    frame,
+    // Each view's caster, built side by side, without the triangles of solids that face away
+    // from its rays.
+    let reference = || match sensor.reference {
+        View::Orthographic(_) => {
+            ReferenceCaster::Vertical(VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, Cull::AwayFromZ)))
+        }
+        View::Pinhole(p) => {
+            let cull = Cull::AwayFrom { centre: DVec3::ZERO, near: Some(p.near) };
+            ReferenceCaster::Rays(RayCaster::new(posed_triangles(objects, DMat4::IDENTITY, cull), tie))
+        }
+    };
+    let tests = || -> Vec<WitnessTest> {
+        witnesses
+            .par_iter()
+            .map(|w| match w.geometry {
+                WitnessGeometry::Directional(direction) => {
+                    let frame = directional_frame(direction);
+                    let caster = VerticalCaster::new(posed_triangles(objects, frame, Cull::AwayFromZ));
+                    WitnessTest::Directional { caster: Box::new(caster), frame }
                 }
-            }
-            WitnessGeometry::Pinhole { .. } => WitnessTest::Pinhole,
-        })
-        .collect();
+                WitnessGeometry::Pinhole { pose, .. } => {
+                    let cull = Cull::AwayFrom { centre: pose.w_axis.truncate(), near: None };
+                    WitnessTest::Pinhole(Box::new(RayCaster::new(posed_triangles(objects, DMat4::IDENTITY, cull), tie)))
+                }
+            })
+            .collect()
+    };
+    let (reference, tests) = rayon::join(reference, tests);
     // What the reference ray of pixel (col, row) meets first: its point, depth and triangle.
     let first_hit = |col: u32, row: u32| -> Option<(DVec3, f64, &Triangle)> {
-        match (&sensor.reference, &vertical, &rays) {
-            (View::Orthographic(o), Some(vertical), _) => {
+        match (&sensor.reference, &reference) {
+            (View::Orthographic(o), ReferenceCaster::Vertical(vertical)) => {
                 let (x, y) = o.pixel_centre(col, row);
                 vertical.front(DVec2::new(x, y), tie).map(|(z, t)| (DVec3::new(x, y, z), z, t))
             }
-            (View::Pinhole(p), _, Some(rays)) => {
+            (View::Pinhole(p), ReferenceCaster::Rays(rays)) => {
                 let d = p.intrinsics.ray(col, row);
                 // A point on the plane of the view's centre (Z = 0) is not in front of it.
                 let near = p.near.max(f64::MIN_POSITIVE);
                 rays.front(DVec3::ZERO, d, (near, p.far), tie).map(|(z, t)| (z * d, z, t))
             }
-            _ => unreachable!("the reference view's caster is built above"),
+            _ => unreachable!("the reference view's caster is built for its kind above"),
         }
     };
     // The witnesses that do not see p (bits), whose surface has unit normal `lit` on the side
@@ -100,10 +119,8 @@ pub fn render_rig(
                         let q = frame.transform_point3(p);
                         !caster.hits(q.truncate()).any(|(above, _, _)| above > q.z + tie)
                     }
-                    WitnessTest::Pinhole => {
-                        let in_view = witness.in_view(p);
-                        let rays = rays.as_ref().expect("built for pinhole witnesses");
-                        in_view && !rays.hits(p, toward * distance, 1.0).any(|(t, _, _)| t * distance > tie)
+                    WitnessTest::Pinhole(rays) => {
+                        witness.in_view(p) && !rays.hits(p, toward * distance, 1.0).any(|(t, _, _)| t * distance > tie)
                     }
                 };
             if !seen {
