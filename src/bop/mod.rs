@@ -150,6 +150,10 @@ pub struct BopScorer<'a> {
     ledger: &'a Ledger,
     scenes: HashMap<u32, Arc<SceneFiles>>,
     models: HashMap<u32, Arc<Mesh>>,
+    /// Whether each loaded model bounds a solid, which exact casting culls by
+    /// (src/exact/mod.rs), found once a model: keyed by the model's address, which names one
+    /// model for as long as the scorer lives, as it keeps every model it loads.
+    solidities: HashMap<usize, Solidity>,
     image: Option<ImageData>,
 }
 
@@ -189,6 +193,7 @@ impl<'a> BopScorer<'a> {
             ledger,
             scenes: HashMap::new(),
             models: HashMap::new(),
+            solidities: HashMap::new(),
             image: None,
         })
     }
@@ -212,6 +217,7 @@ impl<'a> BopScorer<'a> {
         let whole = SurfaceChoice { rule: Some(SurfaceRule::Whole), ..SurfaceChoice::default() };
         let mesh = Arc::new(load_model_as(&reference, std::path::Path::new("."), self.ledger, whole, 1.0)?);
         self.models.insert(obj_id, mesh.clone());
+        self.solidities.insert(Arc::as_ptr(&mesh) as usize, mesh.solidity());
         Ok(mesh)
     }
 
@@ -294,7 +300,8 @@ impl<'a> BopScorer<'a> {
                 let (centre, radius) = mesh.bounding_sphere();
                 let footprint = sensor.reference.footprint(pose.transform_point3(centre), radius, FOOTPRINT_MARGIN);
                 let footprint = footprint.unwrap_or(PixelRect::EMPTY);
-                let object = ExactObject { mesh, pose: *pose, label_base: 0, solidity: Solidity::Open };
+                let solidity = self.solidities.get(&(Arc::as_ptr(mesh) as usize)).copied().unwrap_or(Solidity::Open);
+                let object = ExactObject { mesh, pose: *pose, label_base: 0, solidity };
                 let image = render_rig(sensor, &[object], self.settings.shadow.mode, footprint).map_err(about)?;
                 Ok(Rendering::cast(image))
             })
