@@ -106,8 +106,9 @@ fn exact_objects(scene: &Scene) -> Vec<rangesynth::exact::ExactObject<'_>> {
 }
 
 /// Exact mode leaves a solid's triangles facing away from a caster's rays out of it
-/// (src/exact/mod.rs, `posed_triangles`): the images are those of the same meshes cast whole,
-/// bit for bit (labels, shadowed labels, z, gradients, witness bits), on the conformance
+/// (src/exact/mod.rs, `posed_triangles`): the images are those of the same meshes cast whole
+/// (but for a ray within the tie distance of a silhouette edge, which these scenes' pixel
+/// centres avoid), bit for bit (labels, shadowed labels, z, gradients, witness bits), on the conformance
 /// scenes at three θ, on a box wound inside out (its normals pointing in), under a rig of a
 /// camera looking down and two lamps (directional witnesses, whose casters cull too), and
 /// under pinhole rigs whose views must keep a solid whole: a near limit cutting it open, a

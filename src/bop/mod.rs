@@ -152,7 +152,8 @@ pub struct BopScorer<'a> {
     models: HashMap<u32, Arc<Mesh>>,
     /// Whether each loaded model bounds a solid, which exact casting culls by
     /// (src/exact/mod.rs), found once a model: keyed by the model's address, which names one
-    /// model for as long as the scorer lives, as it keeps every model it loads.
+    /// model for as long as the scorer lives, as `models` keeps every model it loads (were it
+    /// to drop one, this must drop its entry too).
     solidities: HashMap<usize, Solidity>,
     image: Option<ImageData>,
 }
@@ -217,7 +218,10 @@ impl<'a> BopScorer<'a> {
         let whole = SurfaceChoice { rule: Some(SurfaceRule::Whole), ..SurfaceChoice::default() };
         let mesh = Arc::new(load_model_as(&reference, std::path::Path::new("."), self.ledger, whole, 1.0)?);
         self.models.insert(obj_id, mesh.clone());
-        self.solidities.insert(Arc::as_ptr(&mesh) as usize, mesh.solidity());
+        // Only exact casting reads it (the GPU's upload finds it again).
+        if self.renderer.is_none() {
+            self.solidities.insert(Arc::as_ptr(&mesh) as usize, mesh.solidity());
+        }
         Ok(mesh)
     }
 

@@ -53,8 +53,8 @@ pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + {
 pub const BYTES_PER_TRIANGLE: u64 = 2 * CASTER_BYTES_PER_TRIANGLE;
 pub const BYTES_PER_PIXEL: u64 = 4 + 4 + 8 + 16 + 4;
 
-/// Casters exact mode builds for a sensor: one for the reference view's rays, one for the
-/// segments to pinhole witnesses, one for each directional witness (at most).
+/// Casters exact mode builds for a sensor, at most: the scanner's two, or under a rig one
+/// for the reference view's rays and one for each witness.
 pub fn casters(sensor: &Sensor) -> u64 {
     2 + sensor.witnesses.len() as u64
 }
@@ -140,8 +140,12 @@ fn height_over(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
 }
 
 /// Which of a solid's triangles a caster leaves out (src/mesh/solid.rs): those facing away
-/// from where its rays come from, which a ray meets only where one facing them meets it too (at
-/// the silhouette, at the same point). `frame` is rigid, so it keeps a triangle's winding.
+/// from where its rays come from. A ray entering the solid from there meets one facing it
+/// first; one leaving it toward there (a segment from a point to a witness) leaves through one
+/// facing it. The answers stay those of the whole mesh but where a ray passes within the tie
+/// distance of a silhouette edge: there a face turned away and one turned toward the view tie,
+/// and the one turned toward it now always wins (as it does on the GPU, which culls them too),
+/// where before the first in the mesh did. `frame` is rigid, so it keeps a triangle's winding.
 #[derive(Clone, Copy)]
 enum Cull {
     /// Every triangle is kept.
@@ -150,9 +154,15 @@ enum Cull {
     AwayFromZ,
     /// Rays run from or toward `centre`: those facing away from it, of solids that do not hold
     /// the centre (from inside, a solid's far side is what a ray meets) and lie wholly beyond
-    /// `near` in z where one is given (a near limit cuts a solid open).
+    /// `near` in z where one is given (a near limit cuts a solid open). Both by a margin
+    /// ([`SPHERE_MARGIN`]), so that a centre on a solid's surface keeps it whole.
     AwayFrom { centre: DVec3, near: Option<f64> },
 }
+
+/// How much larger than its bounding sphere a solid counts for [`Cull::AwayFrom`], relative
+/// to the sphere's radius and its centre's distance from the origin: more than a pose's
+/// departure from rigid ([`crate::pose::RIGIDITY_TOLERANCE`]) and the f64 rounding of posing.
+const SPHERE_MARGIN: f64 = 1e-5;
 
 /// Every object's triangles in `frame`, less those `cull` leaves out of solids.
 fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Triangle> {
@@ -171,6 +181,7 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Tri
             Cull::AwayFrom { centre, near } => {
                 let (c, r) = mesh.bounding_sphere();
                 let c = m.transform_point3(c);
+                let r = r + SPHERE_MARGIN * (r + c.length());
                 let clear = c.distance(centre) > r && near.is_none_or(|near| c.z - r > near);
                 (if clear { away } else { 0.0 }, Some(centre))
             }
