@@ -148,8 +148,6 @@ fn height_over(c: &[DVec3; 3], p: DVec2) -> Option<f64> {
 /// where before the first in the mesh did. `frame` is rigid, so it keeps a triangle's winding.
 #[derive(Clone, Copy)]
 enum Cull {
-    /// Every triangle is kept.
-    Nothing,
     /// Rays run down −z: those facing away from +z.
     AwayFromZ,
     /// Rays run from or toward `centre`: those facing away from it, of solids that do not hold
@@ -164,9 +162,12 @@ enum Cull {
 /// departure from rigid ([`crate::pose::RIGIDITY_TOLERANCE`]) and the f64 rounding of posing.
 const SPHERE_MARGIN: f64 = 1e-5;
 
-/// Every object's triangles in `frame`, less those `cull` leaves out of solids.
-fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Triangle> {
+/// Every object's triangles in `frame`, less those `cull` leaves out of solids, and the
+/// largest |coordinate| of every triangle's corners, those left out included (at least 1):
+/// the scene's scale, which the tie distance is relative to, whatever a caster keeps.
+fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> (Vec<Triangle>, f64) {
     let mut out = Vec::new();
+    let mut largest = 1.0f64;
     for object in objects {
         let m = frame * object.pose;
         let mesh = object.mesh;
@@ -176,7 +177,6 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Tri
             Solidity::Inward => 1.0,
         };
         let (away, from) = match cull {
-            Cull::Nothing => (0.0, None),
             Cull::AwayFromZ => (away, None),
             Cull::AwayFrom { centre, near } => {
                 let (c, r) = mesh.bounding_sphere();
@@ -188,6 +188,7 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Tri
         };
         for (triangle, &surface) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
             let corners = triangle.map(|v| m.transform_point3(mesh.vertex(v)));
+            largest = corners.iter().fold(largest, |l, c| l.max(c.abs().max_element()));
             let [a, b, c] = corners;
             let normal = (b - a).cross(c - a);
             let facing = from.map_or(normal.z, |centre| normal.dot(centre - a));
@@ -197,7 +198,7 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> Vec<Tri
             out.push(Triangle { corners, label: object.label_base + surface });
         }
     }
-    out
+    (out, largest)
 }
 
 fn scene_objects(scene: &Scene) -> Result<Vec<ExactObject<'_>>> {
@@ -260,16 +261,13 @@ fn render_scanner(sensor: &Scanner, objects: &[ExactObject]) -> Result<ExactImag
     let to_camera = sensor.to_shadow_frame();
     // The two casters are built side by side: for a dense model at a small image, building
     // them is most of the work.
-    let (range, camera) = rayon::join(
-        || VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, Cull::AwayFromZ)),
-        || VerticalCaster::new(posed_triangles(objects, to_camera, Cull::AwayFromZ)),
-    );
-    let largest = |caster: &VerticalCaster| {
-        caster.triangles.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()))
+    let caster = |frame| {
+        let (triangles, largest) = posed_triangles(objects, frame, Cull::AwayFromZ);
+        (VerticalCaster::new(triangles), largest)
     };
+    let ((range, scale), (camera, camera_largest)) = rayon::join(|| caster(DMat4::IDENTITY), || caster(to_camera));
     // The camera's frame too: turning corners near f64's largest values can take them beyond.
-    let scale = largest(&range);
-    if !(scale.is_finite() && largest(&camera).is_finite()) {
+    if !(scale.is_finite() && camera_largest.is_finite()) {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
     }
     let tie = TIE_RELATIVE * scale;

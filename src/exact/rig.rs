@@ -55,24 +55,21 @@ pub fn render_rig(
     region: PixelRect,
 ) -> Result<ExactImage> {
     sensor.validate()?;
-    let all = posed_triangles(objects, DMat4::IDENTITY, Cull::Nothing);
-    let scale = all.iter().flat_map(|t| t.corners).fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    // Each view's caster, built side by side, without the triangles of solids that face away
+    // from its rays. The reference view's are posed first: their scale gives the tie distance.
+    let reference_cull = match sensor.reference {
+        View::Orthographic(_) => Cull::AwayFromZ,
+        View::Pinhole(p) => Cull::AwayFrom { centre: DVec3::ZERO, near: Some(p.near) },
+    };
+    let (reference_triangles, scale) = posed_triangles(objects, DMat4::IDENTITY, reference_cull);
     if !scale.is_finite() {
         return Err(Error::Scene("an object is posed too far away for exact ray casting".into()));
     }
-    drop(all);
     let tie = TIE_RELATIVE * scale;
     let witnesses: &[_] = if test_witnesses { &sensor.witnesses } else { &[] };
-    // Each view's caster, built side by side, without the triangles of solids that face away
-    // from its rays.
-    let reference = || match sensor.reference {
-        View::Orthographic(_) => {
-            ReferenceCaster::Vertical(VerticalCaster::new(posed_triangles(objects, DMat4::IDENTITY, Cull::AwayFromZ)))
-        }
-        View::Pinhole(p) => {
-            let cull = Cull::AwayFrom { centre: DVec3::ZERO, near: Some(p.near) };
-            ReferenceCaster::Rays(RayCaster::new(posed_triangles(objects, DMat4::IDENTITY, cull), tie))
-        }
+    let reference = move || match sensor.reference {
+        View::Orthographic(_) => ReferenceCaster::Vertical(VerticalCaster::new(reference_triangles)),
+        View::Pinhole(_) => ReferenceCaster::Rays(RayCaster::new(reference_triangles, tie)),
     };
     let tests = || -> Vec<WitnessTest> {
         witnesses
@@ -80,12 +77,15 @@ pub fn render_rig(
             .map(|w| match w.geometry {
                 WitnessGeometry::Directional(direction) => {
                     let frame = directional_frame(direction);
-                    let caster = VerticalCaster::new(posed_triangles(objects, frame, Cull::AwayFromZ));
+                    let caster = VerticalCaster::new(posed_triangles(objects, frame, Cull::AwayFromZ).0);
                     WitnessTest::Directional { caster: Box::new(caster), frame }
                 }
                 WitnessGeometry::Pinhole { pose, .. } => {
                     let cull = Cull::AwayFrom { centre: pose.w_axis.truncate(), near: None };
-                    WitnessTest::Pinhole(Box::new(RayCaster::new(posed_triangles(objects, DMat4::IDENTITY, cull), tie)))
+                    WitnessTest::Pinhole(Box::new(RayCaster::new(
+                        posed_triangles(objects, DMat4::IDENTITY, cull).0,
+                        tie,
+                    )))
                 }
             })
             .collect()
