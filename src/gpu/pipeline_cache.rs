@@ -23,9 +23,10 @@
 //! expect. Writes go through a temporary file renamed over the old one (src/io/atomic.rs), so
 //! processes sharing the cache each leave it whole; the last to write wins.
 
-use crate::io::{file_kind, write_atomically};
+use crate::io::{file_kind, read_input_file, write_atomically};
+use crate::limits::{Ledger, MemoryBudget};
 use ash::vk;
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -212,38 +213,21 @@ fn read_cache_file(path: &Path) -> Result<Option<Vec<u8>>, String> {
     // Not opened unless it is a regular file: opening a device can act (a tape rewinds).
     match std::fs::metadata(path) {
         Ok(metadata) if !metadata.is_file() => {
-            return Err(format!("it is {}, not a regular file", file_kind(metadata.file_type())))
+            Err(format!("it is {}, not a regular file", file_kind(metadata.file_type())))
         }
-        Ok(_) => {}
+        Ok(metadata) if metadata.len() > MAX_PIPELINE_CACHE_BYTES => {
+            Err(format!("it is larger than {MAX_PIPELINE_CACHE_BYTES} bytes"))
+        }
+        // Read as any input is, within a budget of that size (a file swapped or grown since
+        // is refused there).
+        Ok(_) => {
+            let budget = Ledger::new(MemoryBudget::new(MAX_PIPELINE_CACHE_BYTES));
+            read_input_file(path, "pipeline cache", &budget).map(Some).map_err(|e| e.to_string())
+        }
         // Nothing there, or a file where a directory on its path would be (a write fails then).
-        Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
-            return Ok(None)
-        }
-        Err(e) => return Err(format!("it could not be examined ({e})")),
+        Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => Ok(None),
+        Err(e) => Err(format!("it could not be examined ({e})")),
     }
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    // What was checked may be swapped for a FIFO before the open, which would then wait for a
-    // writer: the open does not wait, and the opened handle is checked again.
-    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
-    let file = match options.open(path) {
-        Ok(file) => file,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(format!("it could not be opened ({e})")),
-    };
-    let metadata = file.metadata().map_err(|e| format!("it could not be examined ({e})"))?;
-    if !metadata.is_file() {
-        return Err(format!("it is {}, not a regular file", file_kind(metadata.file_type())));
-    }
-    if metadata.len() > MAX_PIPELINE_CACHE_BYTES {
-        return Err(format!("it is larger than {MAX_PIPELINE_CACHE_BYTES} bytes"));
-    }
-    let mut bytes = Vec::with_capacity(metadata.len() as usize);
-    // A file that grows while it is read stops one byte past the limit, and fails the length check.
-    file.take(MAX_PIPELINE_CACHE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("it could not be read ({e})"))?;
-    Ok(Some(bytes))
 }
 
 /// The driver's data in a cache file's bytes, where the file is whole, of this build and of
