@@ -274,7 +274,7 @@ fn depth_mode_walks_a_dense_ball_to_its_self_shadow_as_the_reference_casts_it() 
         object.mesh = std::sync::Arc::new((*object.mesh).clone().scaled(scale, &Default::default()).unwrap());
     }
     let out = render(&rig);
-    assert_eq!(out.raster, Some(rangesynth::render::Raster::Graphics), "drawn on the GPU");
+    assert_eq!(out.raster, Some(common::gpu_raster()), "drawn on the GPU");
     let truth = rig_reference(&rig);
     let (wrong, wrong_interior) = differences(&out, &truth, true, 1e-6);
     eprintln!("{wrong} pixels differ from the reference, {wrong_interior} interior");
@@ -329,7 +329,7 @@ fn slivers_of_aspect_ten_thousand_are_seen_by_each_witness_as_their_faces_turn()
         reflectivity: None,
     });
     let out = render(&rig);
-    assert_eq!(out.raster, Some(rangesynth::render::Raster::Graphics), "drawn on the GPU");
+    assert_eq!(out.raster, Some(common::gpu_raster()), "drawn on the GPU");
     let projector_centre = projector_pose.transform_point3(DVec3::ZERO);
     let (w, h) = (k.width as usize, k.height as usize);
     // (label, witness bits) at each pixel, by the geometry.
@@ -546,8 +546,7 @@ fn bad_rigs_are_refused_with_the_key_named() {
 }
 
 /// Mode `label` reads the witnesses' label images at a pinhole reference view's points: an
-/// orthographic reference view other than the scanner's, and the compute rasterizer, which
-/// draws orthographic views alone, are refused by name.
+/// orthographic reference view other than the scanner's is refused by name.
 #[test]
 fn what_the_label_test_cannot_read_is_refused_by_name() {
     let light =
@@ -558,13 +557,6 @@ fn what_the_label_test_cannot_read_is_refused_by_name() {
     rig.sensor = Sensor { reference: View::Orthographic(view), witnesses: vec![light] };
     let e = common::renderer().render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("[shadow] mode = \"label\"") && e.contains("orthographic reference view"), "{e}");
-    let mut rig = box_on_plane(vec![]);
-    rig.shadow.mode = ShadowMode::Label;
-    let compute = rangesynth::Renderer::with_context(common::renderer().context().clone())
-        .unwrap()
-        .with_raster(rangesynth::render::Raster::Compute);
-    let e = compute.render(&rig).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("compute rasterizer") && e.contains("--raster graphics"), "{e}");
 }
 
 /// Every example rig in rigs/ renders from the command line, and its range image records the
@@ -919,7 +911,7 @@ fn verify_under_a_pinhole_rig_scores_the_true_pose_one_and_matches_the_cpu_score
             // Modes `none`, `label` and `depth` are drawn on the GPU, `exact` cast on the CPU;
             // a hypothesis out of view is drawn by neither.
             let drawn = mode != ShadowMode::Exact && h.id != "behind";
-            assert_eq!(v.raster, drawn.then_some(rangesynth::render::Raster::Graphics), "{name}");
+            assert_eq!(v.raster, drawn.then_some(common::gpu_raster()), "{name}");
         }
         let score = |id: &str| results.iter().find(|v| v.id == id).map(|v| v.scores.s).unwrap();
         assert_eq!(score("true"), 1.0, "{mode:?}");

@@ -13,13 +13,15 @@ fi
 export VK_DRIVER_FILES="$icd" VK_ICD_FILENAMES="$icd" # the second for older loaders
 export RANGESYNTH_EXPECT_DEVICE=llvmpipe
 cargo test --locked "$@"
-# The compute rasterizer through the conformance, stability, analytic and exact-mode suites
-# as well (the graphics pipeline ran them above; the exact suite's `columns` and
-# `neighbourhood` cases rasterize), and through the verification, effects and portability
+# The compute rasterizer through the conformance, stability, analytic, exact-mode and rig
+# suites as well (the graphics pipeline ran them above; the exact suite's `columns` and
+# `neighbourhood` cases rasterize; the rig suite's against its brute-force reference), and
+# through the verification, effects and portability
 # suites as a GPU verifies: four hypotheses a coverage dispatch, batches of 16 slots and three
 # chunks in flight (lavapipe's defaults are one, 4 and one); only on a full run.
 if [ $# -eq 0 ]; then
-  RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic --test exact
+  RANGESYNTH_TEST_RASTER=compute cargo test --locked --test conformance --test stability --test analytic --test exact \
+    --test rigs
   RANGESYNTH_TEST_RASTER=compute RANGESYNTH_TEST_HYPOTHESES_PER_DISPATCH=4 RANGESYNTH_TEST_SLOTS=16 \
     RANGESYNTH_TEST_CHUNKS_IN_FLIGHT=3 cargo test --locked --test verify --test effects --test portability
 fi

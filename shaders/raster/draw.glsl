@@ -215,6 +215,21 @@ RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
     return RangePixel(triangle_label(d, t), z, gradient);
 }
 
+// pinhole_tie_depth of a triangle whose unit normal in the view's frame is n, in a view of
+// these intrinsics and constant term s / far of its depths: the one definition for the
+// graphics path's ties pass (raster.frag) and the compute rasterizer's (raster.comp).
+float pinhole_tie_depth_of(vec4 intrinsics, float s_over_far, vec3 n, vec2 pixel, float depth) {
+    vec3 ray = pinhole_ray(intrinsics, pixel);
+    float across = abs(n.x * ray.x + n.y * ray.y + n.z * ray.z);
+    vec2 steepest = TIE_STEEPEST / intrinsics.xy;
+    vec2 slope = abs(n.xy) / (intrinsics.xy * across);
+    slope = mix(steepest, slope, lessThan(slope, steepest));
+    float largest = max(1.0, max(abs(ray.x), abs(ray.y)));
+    // s / Z itself: the depth less its constant term s / far.
+    precise float tie = (depth + s_over_far) * (TIE_RELATIVE * largest + TIE_SLOPE * (slope.x + slope.y));
+    return tie;
+}
+
 // tie_depth's allowance for a pinhole view, at a fragment of depth `depth` of triangle t
 // through pixel (c, r): the same two roundings, relative to the depth s / Z, which moves by
 // δZ / Z of itself. Poses round by TIE_RELATIVE of the view's largest coordinate, Z times the
@@ -222,14 +237,5 @@ RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
 // change over 1/256 pixel, n_x / (f_x · n · ray) of itself a column (TIE_SLOPE, capped at a
 // face 89° from the ray: TIE_STEEPEST / f).
 float pinhole_tie_depth(DrawData d, uint t, vec2 pixel, float depth) {
-    vec3 n = triangle_normal(d, t);
-    vec3 ray = pinhole_ray(d.grid, pixel);
-    float across = abs(n.x * ray.x + n.y * ray.y + n.z * ray.z);
-    vec2 steepest = TIE_STEEPEST / d.grid.xy;
-    vec2 slope = abs(n.xy) / (d.grid.xy * across);
-    slope = mix(steepest, slope, lessThan(slope, steepest));
-    float largest = max(1.0, max(abs(ray.x), abs(ray.y)));
-    // s / Z itself: the depth less its constant term s / far.
-    precise float tie = (depth + d.z_range.y) * (TIE_RELATIVE * largest + TIE_SLOPE * (slope.x + slope.y));
-    return tie;
+    return pinhole_tie_depth_of(d.grid, d.z_range.y, triangle_normal(d, t), pixel, depth);
 }

@@ -33,6 +33,19 @@
 // plane) is no more than the nearest's, keep the larger tagged triangle with an atomicMax:
 // the last drawn.
 //
+// PINHOLE: the variants for a rig's pinhole views (src/render/raster/compute/rig.rs), one view
+// a dispatch (VIEW_COUNT 1, the view as the range view of every member: the draws sharing its
+// words, as in a view of several draws). Corners go to window coordinates as raster.vert's
+// pinhole_clip_position and the viewport transform put them (x and y times 1 / w, as lavapipe
+// divides). The depth s / Z − s / far of a triangle's plane is affine in the pixel's column
+// and row too (1 / Z at a pixel is (n · ray) / (n · a), and the ray's x and y are affine in
+// them), so it steps as an orthographic view's does; the nearest has the greatest, keyed by
+// its flipped bits. A solid's triangles are culled as the graphics pipeline culls them, by the
+// sign of their snapped corners' area (a pinhole view has no one direction to test a normal
+// against), and the ties passes allow pinhole_tie_depth (draw.glsl) at each pixel. No draw
+// reaching the near plane comes here (src/render/pinhole/job.rs): no corner lies behind the
+// view's centre.
+//
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches, so the small triangles' pass holds no 64-bit path of its own.
 #ifdef TIES
@@ -131,9 +144,17 @@ layout(constant_id = 5) const uint TILES = 1u;
 // viewport transform compute them (its scale the viewport's half side, its offset the
 // viewport's centre: src/render/raster/draw.rs, `ViewportFrame`).
 vec3 window(DrawData d, vec3 v) {
+#ifdef PINHOLE
+    precise vec4 clip = pinhole_clip_position(d, v);
+    precise float inverse_w = 1.0 / clip.w;
+    precise vec2 w = clip.xy * inverse_w * d.viewport_half_side + d.viewport_centre;
+    precise float depth = clip.z * inverse_w;
+    return vec3(w, depth);
+#else
     precise vec3 clip = clip_position(d, v);
     precise vec2 w = clip.xy * d.viewport_half_side + d.viewport_centre;
     return vec3(w, clip.z);
+#endif
 }
 
 // Window coordinates snapped to 1/256 pixel, in those units: whole numbers.
@@ -176,12 +197,21 @@ bool culled(int cull, DrawData d, vec3 model_normal) {
     return cull != 0 && float(cull) * rotate_to_view(d, model_normal).z < 0.0;
 }
 
+// PINHOLE: whether the graphics pipeline's cull mode drops a triangle, `area` twice the signed
+// area of its snapped corners (edge, raster_edges.glsl; framebuffer y down): a front face
+// (counter-clockwise) has a negative one, and `cull` 1 drops back faces, −1 front faces.
+bool culled_by_winding(int cull, EDGE_INT area) {
+    return (cull > 0 && area > 0) || (cull < 0 && area < 0);
+}
+
 // A triangle set up for coverage tests in one view of one member: its snapped corners, the
 // pixels of its bounding box within the view's area, and its plane's depth.
 struct Setup {
     uint member, view;      // whose words it keeps (keep_word)
     uint tag;               // its member's place, above bit MEMBER_SHIFT (Member)
-    float tie;              // TIES: its tie depth (tie_depth)
+    int cull;               // PINHOLE: its member's cull (Member; culled_by_winding)
+    float tie;              // TIES: its tie depth (tie_depth); PINHOLE: s / far (its depths'
+                            // constant term, for pinhole_tie_depth_of at each pixel)
     uint stride;            // the view's pixels a row
     float depth_first;      // the plane's depth (0..1) at the box's first pixel,
     vec2 depth_step;        // and its change a column right and a row down
@@ -192,21 +222,108 @@ struct Setup {
     ivec2 first, last;
 };
 
-Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) {
+// A triangle's corners and unit normal in a view's frame.
+struct ViewTriangle {
+    vec3 corner[3];
+    vec3 normal;
+};
+
+ViewTriangle to_view_triangle(DrawData d, MeshTriangle m) {
+    ViewTriangle v;
+    v.corner[0] = to_view(d, m.corner[0]);
+    v.corner[1] = to_view(d, m.corner[1]);
+    v.corner[2] = to_view(d, m.corner[2]);
+    v.normal = rotate_to_view(d, m.normal);
+    return v;
+}
+
+#ifdef PINHOLE
+// The part of a pinhole view's triangle that lies beyond its near plane, where the graphics
+// pipeline's clipper cuts it (depth 1, at Z = s / (1 + s / far): pinhole_clip_position): its
+// corners in `part`, in order, and how many: 3 (the whole triangle, or a corner of it), 4 (a
+// quadrilateral, two triangles fanned from part[0]) or fewer (none of it).
+float near_plane(DrawData d) {
+    return d.z_range.x / (1.0 + d.z_range.y);
+}
+
+int near_parts(DrawData d, ViewTriangle v, out vec3 part[4]) {
+    float near = near_plane(d);
+    int corners = 0;
+    for (int k = 0; k < 3; k++) {
+        vec3 a = v.corner[k], b = v.corner[k == 2 ? 0 : k + 1];
+        bool a_beyond = a.z >= near, b_beyond = b.z >= near;
+        if (a_beyond) {
+            part[corners++] = a;
+        }
+        if (a_beyond != b_beyond) {
+            float along = (near - a.z) / (b.z - a.z);
+            part[corners++] = vec3(mix(a.xy, b.xy, along), near);
+        }
+    }
+    return corners;
+}
+
+// How far point p (view frame) lies inside clipping plane k of a pinhole view, as the graphics
+// pipeline clips: 0 the near plane; 1–4 the viewport's sides (x ≤ w, −w ≤ x, y ≤ w, −w ≤ y in
+// clip coordinates: raster.vert's pinhole_clip_position).
+float inside_clip_plane(DrawData d, int k, vec3 p) {
+    if (k == 0) {
+        return p.z - near_plane(d);
+    }
+    vec4 clip = pinhole_clip_position(d, p);
+    float along = k < 3 ? clip.x : clip.y;
+    return (k & 1) == 1 ? clip.w - along : clip.w + along;
+}
+
+// The polygon of a pinhole view's triangle that the graphics pipeline's clipper keeps: within
+// the viewport (a far larger square than the view: src/render/raster/draw.rs, ViewportFrame)
+// and beyond the near plane, its corners in order in `polygon` (at most 8, a triangle cut by
+// five planes), and how many. For the large triangles' pass, whose parts of a triangle then
+// reach no farther than the viewport: the small triangles' pass queues any triangle a corner of
+// whose part beyond the near plane lies farther than it covers (coverage_of).
+int clipped_polygon(DrawData d, ViewTriangle v, out vec3 polygon[8]) {
+    polygon[0] = v.corner[0];
+    polygon[1] = v.corner[1];
+    polygon[2] = v.corner[2];
+    int corners = 3;
+    for (int k = 0; k < 5; k++) {
+        vec3 kept[8];
+        int count = 0;
+        for (int i = 0; i < corners; i++) {
+            vec3 a = polygon[i], b = polygon[i + 1 == corners ? 0 : i + 1];
+            float inside_a = inside_clip_plane(d, k, a), inside_b = inside_clip_plane(d, k, b);
+            if (inside_a >= 0.0) {
+                kept[count++] = a;
+            }
+            if ((inside_a >= 0.0) != (inside_b >= 0.0)) {
+                kept[count++] = mix(a, b, inside_a / (inside_a - inside_b));
+            }
+        }
+        polygon = kept;
+        corners = count;
+    }
+    return corners;
+}
+#endif
+
+// Sets up corners c0, c1, c2 (view frame) of triangle `plane`: the triangle itself, or
+// (PINHOLE) a part of it the near plane leaves, whose depths are its plane's.
+Setup set_up(uint member, uint v, DrawData d, Member constants, ViewTriangle plane, vec3 c0, vec3 c1, vec3 c2) {
     RasterView view = constants.views[v];
     Setup s;
     s.member = member;
     s.view = v;
     s.tag = constants.place << MEMBER_SHIFT;
+    s.cull = constants.cull;
     s.stride = view.stride;
-    vec3 corner = to_view(d, m.corner[0]), normal = rotate_to_view(d, m.normal);
+    vec3 corner = plane.corner[0], normal = plane.normal;
     s.z_keys = v == 0u && constants.z_keys != 0u;
     s.grid = d.grid;
     s.corner = corner;
     s.normal = normal;
-    precise vec3 v0 = window(d, corner);
-    precise vec3 v1 = window(d, to_view(d, m.corner[1]));
-    precise vec3 v2 = window(d, to_view(d, m.corner[2]));
+    precise vec3 v0 = window(d, c0);
+    precise vec3 v1 = window(d, c1);
+    precise vec3 v2 = window(d, c2);
     s.a = snap(v0.xy);
     s.b = snap(v1.xy);
     s.c = snap(v2.xy);
@@ -214,11 +331,23 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, MeshTriangle m) 
     vec2 lo = min(min(v0.xy, v1.xy), v2.xy), hi = max(max(v0.xy, v1.xy), v2.xy);
     s.first = max(ivec2(floor(lo - 0.5)), ivec2(view.area.xy));
     s.last = min(ivec2(ceil(hi - 0.5)), ivec2(view.area.xy + view.area.zw) - 1);
+#ifdef PINHOLE
+    // s (n · ray) / (n · a) − s / far, the ray's x and y affine in the pixel's column and row.
+    precise float across_corner = normal.x * corner.x + normal.y * corner.y + normal.z * corner.z;
+    vec3 ray = pinhole_ray(d.grid, vec2(s.first));
+    precise float across_ray = normal.x * ray.x + normal.y * ray.y + normal.z * ray.z;
+    precise float depth_first = d.z_range.x * across_ray / across_corner - d.z_range.y;
+    precise vec2 depth_step = d.z_range.x * (normal.xy / d.grid.xy) / across_corner;
+    s.depth_first = depth_first;
+    s.depth_step = depth_step;
+    s.tie = d.z_range.y;
+#else
     // In an orthographic view the plane's depth is affine in the pixel's column and row.
     s.depth_first = (d.z_range.y - plane_z(d.grid, corner, normal, vec2(s.first))) / (d.z_range.y - d.z_range.x);
     s.depth_step = depth_step(d, normal);
 #ifdef TIES
     s.tie = tie_depth(d, s.depth_step);
+#endif
 #endif
     return s;
 }
@@ -269,17 +398,29 @@ uint64_t read_shared_word(uint v, uint at) {
 void keep(uint t, Setup s, ivec2 pixel) {
     vec2 from_first = vec2(pixel - s.first);
     float depth = fma(from_first.x, s.depth_step.x, fma(from_first.y, s.depth_step.y, s.depth_first));
-    // Clipped as the graphics pipeline clips, and the depth clear value 1 is never less.
+    // Clipped as the graphics pipeline clips, and the depth clear value (PINHOLE: 0, the far
+    // plane, never greater; else 1, never less) never passes.
+#ifdef PINHOLE
+    if (!(depth > 0.0 && depth <= 1.0)) {
+        return;
+    }
+#else
     if (!(depth >= 0.0 && depth < 1.0)) {
         return;
     }
+#endif
     uint at = word_index(s.stride, pixel);
 #ifdef TIES
     // The nearest depth, which this pass leaves as it is, and the tagged triangle kept so far:
     // a keep only where this one is within the tie depth and would replace it (it is then
     // rare: most pixels hold one triangle within the tie depth, the nearest, already kept).
     uint64_t word = read_shared_word(s.view, at), tagged = uint64_t(s.tag | t);
+#ifdef PINHOLE
+    float tie = pinhole_tie_depth_of(s.grid, s.tie, s.normal, vec2(pixel), depth);
+    bool tied = min(depth + tie, 1.0) >= uintBitsToFloat(~uint(word >> 32));
+#else
     bool tied = max(depth - s.tie, 0.0) <= uintBitsToFloat(uint(word >> 32));
+#endif
     if (tied && tagged > (word & 0xfffffffful)) {
         keep_word(0u, s.view, at, (word & 0xffffffff00000000ul) | tagged);
     }
@@ -291,9 +432,14 @@ void keep(uint t, Setup s, ivec2 pixel) {
     // long a hypothesis, and its memory grows with each one, as if it compiled the shader again
     // at every dispatch. It can inline into a shader the values of a uniform block that decide
     // a branch, and this block is written before every dispatch.
+#ifdef PINHOLE
+    // The greatest depth is the nearest: a positive float's bits flipped order it first.
+    uint key = ~floatBitsToUint(depth);
+#else
     uint z = z_key(plane_z(s.grid, s.corner, s.normal, vec2(pixel)));
     uint depth_bits = floatBitsToUint(depth);
     uint key = s.z_keys ? z : depth_bits;
+#endif
     uint64_t word = (uint64_t(key) << 32) | uint64_t(s.tag | t);
     keep_word(s.member, s.view, at, word);
 #endif
@@ -310,6 +456,26 @@ void cover_row(uint t, Setup s, int row, i64vec3 e, i64vec3 right) {
     }
 }
 
+// Covers a queued triangle's box, its rows shared by the workgroup's invocations.
+void cover_large(uint t, Setup s) {
+    // Exact anywhere in the view: 64-bit edge functions, relative to the box.
+    i64vec2 origin = i64vec2(box_origin(s));
+    i64vec2 a = i64vec2(s.a) - origin, b = i64vec2(s.b) - origin, c = i64vec2(s.c) - origin;
+#ifdef PINHOLE
+    if (culled_by_winding(s.cull, edge(a, b, c))) {
+        return;
+    }
+#endif
+    Edges64 e = edges_of(a, b, c);
+    // A triangle of no area covers nothing (edges_of): no rows to walk.
+    if (e.right == i64vec3(0) && e.down == i64vec3(0)) {
+        return;
+    }
+    for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
+        cover_row(t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
+    }
+}
+
 void main() {
     // The workgroups stride over the queue, which may be longer than a dispatch's groups.
     for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
@@ -319,18 +485,17 @@ void main() {
         DrawData d = member_draw(member, v);
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
-        Setup s = set_up(member, v, d, members[member], read_triangle(d, t, normal, third_z));
-        // Exact anywhere in the view: 64-bit edge functions, relative to the box.
-        i64vec2 origin = i64vec2(box_origin(s));
-        Edges64 e = edges_of(i64vec2(s.a) - origin, i64vec2(s.b) - origin, i64vec2(s.c) - origin);
-        // A triangle of no area covers nothing (edges_of): no rows to walk.
-        if (e.right == i64vec3(0) && e.down == i64vec3(0)) {
-            continue;
+        ViewTriangle in_view = to_view_triangle(d, read_triangle(d, t, normal, third_z));
+#ifdef PINHOLE
+        // What the clipper keeps of it, fanned into triangles (clipped_polygon).
+        vec3 polygon[8];
+        int corners = clipped_polygon(d, in_view, polygon);
+        for (int k = 1; k + 1 < corners; k++) {
+            cover_large(t, set_up(member, v, d, members[member], in_view, polygon[0], polygon[k], polygon[k + 1]));
         }
-        // The workgroup's invocations share the box's rows.
-        for (int row = s.first.y + int(gl_LocalInvocationIndex); row <= s.last.y; row += int(gl_WorkGroupSize.x)) {
-            cover_row(t, s, row, e.first + e.down * int64_t(row - s.first.y), e.right);
-        }
+#else
+        cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));
+#endif
     }
 }
 #else
@@ -394,35 +559,101 @@ void cover_tiles(uint t, Setup s, Edges32 e) {
     }
 }
 
-// Covers a triangle's pixels in view v of a member, or queues it there for the large
-// triangles' pass.
-void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriangle m) {
-    Setup s = set_up(member, v, d, constants, m);
+// How the small triangles' pass covers a set-up triangle: not at all (its box misses the
+// view's area), here, or by the large triangles' pass (far, or with TILES 0 a box over 8
+// pixels). The ties pass finds the same triangles far or large as the pass before it (the
+// same precise arithmetic on the same inputs) and leaves them to the large triangles' ties
+// pass, which reads the queue that pass filled.
+const uint COVERED_NOWHERE = 0u, COVERED_HERE = 1u, COVERED_LARGE = 2u;
+uint coverage_of(Setup s) {
+#ifdef PINHOLE
+    // A corner far beyond the view (a model reaching near the view's centre, its corners far
+    // out in the image plane, or overflowing): the large triangles' pass clips it as the
+    // graphics pipeline does (clipped_polygon), and its box is found from what that leaves.
+    vec2 farthest = max(max(abs(s.a), abs(s.b)), abs(s.c));
+    if (!all(lessThan(farthest, vec2(256.0 * 16777216.0)))) {
+        return COVERED_LARGE;
+    }
+#endif
     ivec2 box = s.last - s.first + 1;
     if (box.x <= 0 || box.y <= 0) {
-        return;
+        return COVERED_NOWHERE;
     }
     // Relative to the box's first pixel centre, a corner's rounded difference below NEAR is
     // its exact one, where that centre is exact: a whole number below 2^24 (views under 65,536
     // pixels a side; beyond, the triangle is queued).
     vec2 origin = box_origin(s), a = s.a - origin, b = s.b - origin, c = s.c - origin;
     bool near = all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec2(NEAR))) && all(lessThan(origin, vec2(16777216.0)));
-    // (Clamped, which changes no near corner, so that a far one converts to an integer.)
-    Edges32 e = edges_of(ivec2(clamp(a, -NEAR, NEAR)), ivec2(clamp(b, -NEAR, NEAR)), ivec2(clamp(c, -NEAR, NEAR)));
-    if (near && all(lessThanEqual(box, ivec2(8)))) {
-        cover_tile(t, s, ivec2(0), e.first, e);
-    } else if (near && TILES != 0u) {
-        cover_tiles(t, s, e);
-    } else {
-        // Far, or (TILES 0) a box over 8 pixels: the large triangles' pass covers it. The ties
-        // pass finds the same triangles far or large as the pass before it (the same precise
-        // arithmetic on the same inputs) and leaves them to the large triangles' ties pass,
-        // which reads the queue that pass filled.
-#ifndef TIES
-        queue_large(t, s);
+    return near && (TILES != 0u || all(lessThanEqual(box, ivec2(8)))) ? COVERED_HERE : COVERED_LARGE;
+}
+
+// Covers a set-up triangle's pixels here (coverage_of: COVERED_HERE).
+void cover_here(uint t, Setup s) {
+    ivec2 box = s.last - s.first + 1;
+    vec2 origin = box_origin(s);
+    ivec2 a = ivec2(s.a - origin), b = ivec2(s.b - origin), c = ivec2(s.c - origin);
+#ifdef PINHOLE
+    if (culled_by_winding(s.cull, edge(a, b, c))) {
+        return;
+    }
 #endif
+    Edges32 e = edges_of(a, b, c);
+    if (all(lessThanEqual(box, ivec2(8)))) {
+        cover_tile(t, s, ivec2(0), e.first, e);
+    } else {
+        cover_tiles(t, s, e);
     }
 }
+
+#ifdef PINHOLE
+// Covers triangle t of a member's pinhole view (`v` its corners and normal there) where it
+// lies beyond the near plane: whole, or the one or two triangles the near plane leaves of it
+// (near_parts). Where any part is large, the triangle is queued, and the large triangles' pass
+// covers every part.
+void cover_pinhole(uint member, DrawData d, Member constants, uint t, ViewTriangle v) {
+    vec3 part[4];
+    int corners = near_parts(d, v, part);
+    if (corners < 3) {
+        return;
+    }
+    Setup first = set_up(member, 0u, d, constants, v, part[0], part[1], part[2]);
+    uint first_coverage = coverage_of(first);
+    Setup second = first;
+    uint second_coverage = COVERED_NOWHERE;
+    if (corners == 4) {
+        second = set_up(member, 0u, d, constants, v, part[0], part[2], part[3]);
+        second_coverage = coverage_of(second);
+    }
+    if (first_coverage == COVERED_LARGE || second_coverage == COVERED_LARGE) {
+#ifndef TIES
+        queue_large(t, first);
+#endif
+        return;
+    }
+    if (first_coverage == COVERED_HERE) {
+        cover_here(t, first);
+    }
+    if (second_coverage == COVERED_HERE) {
+        cover_here(t, second);
+    }
+}
+#else
+// Covers a triangle's pixels in view v of a member, or queues it there for the large
+// triangles' pass.
+void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriangle m) {
+    ViewTriangle in_view = to_view_triangle(d, m);
+    Setup s = set_up(member, v, d, constants, in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]);
+    uint coverage = coverage_of(s);
+    if (coverage == COVERED_HERE) {
+        cover_here(t, s);
+    }
+#ifndef TIES
+    else if (coverage == COVERED_LARGE) {
+        queue_large(t, s);
+    }
+#endif
+}
+#endif
 
 void main() {
     // A member a z slice of the workgroups.
@@ -447,9 +678,13 @@ void main() {
     if (t >= constants.triangles) {
         return;
     }
-    // The normal first: a triangle culled in every view needs no corners.
     float third_z;
     vec3 normal = mesh_normal_by_words(range_draw, t, third_z);
+#ifdef PINHOLE
+    // One view, whose cull mode is the winding's (cover_here).
+    cover_pinhole(member, range_draw, constants, t, to_view_triangle(range_draw, read_triangle(range_draw, t, normal, third_z)));
+#else
+    // The normal first: a triangle culled in every view needs no corners.
     bool in_range = !culled(constants.cull, range_draw, normal);
     bool in_shadow = VIEW_COUNT > 1u && !culled(constants.cull, shadow_draw, normal);
     if (!in_range && !in_shadow) {
@@ -462,5 +697,6 @@ void main() {
     if (in_shadow) {
         cover(member, 1u, shadow_draw, constants, t, m);
     }
+#endif
 }
 #endif

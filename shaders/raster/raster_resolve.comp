@@ -7,7 +7,9 @@
 // view's words as they are (shadow_mask.comp); and for both views of a view of several draws
 // (SEVERAL_DRAWS), whose shadow mask reads the attachments as the graphics path leaves them.
 //
-// SHADOW_VIEW: the shadow view's variant, writing its visibility attachment.
+// SHADOW_VIEW: the shadow view's variant, writing its visibility attachment (a rig's witness
+// bands' too). PINHOLE: a rig's pinhole reference view's, whose words hold depths (raster.comp),
+// writing what raster.frag's PINHOLE variant writes (pinhole_range_pixel, draw.glsl).
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "raster_compute.glsl"
 
@@ -58,9 +60,13 @@ void main() {
 #else
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
     if (word != EMPTY) {
+#ifdef PINHOLE
+        range = pinhole_range_pixel(d, t, vec2(pixel));
+#else
         // One draw's words hold the z (visibility_word.glsl); several draws', depths.
         range = SEVERAL_DRAWS != 0u ? range_pixel_by_words(d, t, vec2(pixel))
                                     : range_pixel_at_z(d, t, z_of_key(uint(word >> 32)), true);
+#endif
     }
     imageStore(label, pixel, uvec4(range.label));
     imageStore(z, pixel, vec4(range.z));

@@ -170,7 +170,9 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         _ if s.scanner().is_none() && out.raster.is_none() => {
             println!("raster: none (this rig's rays are cast on the CPU)")
         }
-        _ if s.scanner().is_none() => println!("raster: graphics (a rig's pinhole views)"),
+        _ if s.scanner().is_none() => {
+            println!("raster: {} (a rig's pinhole views)", out.raster.map_or("none", Raster::as_str))
+        }
         (_, Raster::Auto) => println!(
             "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
             out.raster.map_or("none", Raster::as_str),

@@ -2,7 +2,7 @@
 //! a BOP results file needs (src/bop/), many estimates of one image at once. Each model is a
 //! job within its footprint; as many jobs as the renderer keeps slots go in one submission.
 
-use super::pinhole::{draws_rig, Models, PinholeJob, WitnessSet};
+use super::pinhole::{draws_rig, rig_views, Models, PinholeJob, WitnessSet};
 use super::{rig_slot_bytes, Draw, GpuMesh, Job, Renderer, Sink, SinkKind, SlotShape, Views, FOOTPRINT_MARGIN};
 use crate::effects::Effects;
 use crate::error::{Error, Result};
@@ -59,7 +59,9 @@ impl Renderer {
         let witness_pixels = witnesses.as_ref().map_or(0, WitnessSet::pixels);
         let slots = models.len().min(MODELS_A_SUBMISSION);
         // Each slot and its read-back label and z; each model's returned image.
-        let per_slot = rig_slot_bytes((pixels, witness_pixels), &Effects::default()) + 8 * pixels;
+        let largest = models.iter().map(|(mesh, _)| mesh.triangles.len() as u64).max().unwrap_or(0);
+        let compute = self.may_compute().then(|| (largest, rig_views(witnesses.as_ref()).len() as u64));
+        let per_slot = rig_slot_bytes((pixels, witness_pixels), &Effects::default(), compute) + 8 * pixels;
         let returned = 12 * pixels * models.len() as u64;
         self.ledger.check(
             format_args!("drawing {} models alone in a {width}×{height} pinhole view", models.len()),
@@ -96,6 +98,14 @@ impl Renderer {
             })
             .collect::<Result<_>>()?;
         let views = Views::cast(width, height);
+        // Which models the compute rasterizer draws (raster/compute/rig.rs).
+        let computes: Vec<bool> = (0..models.len())
+            .map(|i| {
+                let area = footprints[i].unwrap_or(PixelRect::EMPTY);
+                self.computes_rig(&jobs[i], &draws[i], area, witnesses.as_ref())
+            })
+            .collect();
+        let max_triangles = (0..models.len()).filter(|&i| computes[i]).map(|i| meshes[i].index_count / 3).max();
         let shape = SlotShape {
             size: (width, height),
             shadow: None,
@@ -105,6 +115,7 @@ impl Renderer {
             several_draws: false,
             from_host: false,
             witnesses: witnesses.as_ref(),
+            rig_compute: max_triangles,
         };
         let slots: Vec<_> = (0..slots).map(|i| self.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
         let readbacks: Vec<(Buffer, Buffer)> = (0..slots.len())
@@ -116,7 +127,7 @@ impl Renderer {
             })
             .collect::<Result<_>>()?;
         let effects = Effects::default();
-        let passes = self.passes((sensor, None), *shadow, &effects, (false, true))?;
+        let passes = self.passes((sensor, None), *shadow, &effects, (max_triangles.is_some(), true))?;
         let mut drawn = Vec::with_capacity(models.len());
         for first in (0..models.len()).step_by(slots.len()) {
             let run: Vec<usize> = (first..models.len().min(first + slots.len())).collect();
@@ -129,7 +140,7 @@ impl Renderer {
                 reflectivity_offset: 0,
                 host_view: None,
                 pinhole: Some(&jobs[i]),
-                compute: false,
+                compute: computes[i],
             };
             // A model whose footprint misses the image is not drawn: it shows nothing.
             let recorded: Vec<(usize, Job)> = run

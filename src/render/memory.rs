@@ -5,7 +5,7 @@
 use crate::effects::Effects;
 use crate::exact;
 use crate::render::plan::Views;
-use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
+use crate::render::raster::compute::{large_queue_bytes, COVERAGE_MEMBERS, VISIBILITY_WORD_BYTES};
 use crate::render::stages::host_view::HostView;
 use crate::render::targets::ViewKind;
 
@@ -44,18 +44,32 @@ pub(crate) fn slot_bytes(
 }
 
 /// Bytes a render of a rig's pinhole views takes at its peak (pinhole/), rendering or writing
-/// its files after: its slot, with the witnesses' images of `witness_pixels` in place
-/// of a shadow view's and each pixel's witness bits, and what it returns on the host.
-pub(crate) fn rig_render_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
+/// its files after: its slot ([`rig_slot_bytes`]) and what it returns on the host.
+pub(crate) fn rig_render_bytes(
+    (pixels, witness_pixels): (u64, u64),
+    effects: &Effects,
+    compute: Option<(u64, u64)>,
+) -> u64 {
     let returned = RETURNED_BYTES + WITNESS_BITS_BYTES + if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
-    (rig_slot_bytes((pixels, witness_pixels), effects) + returned * pixels).max(WRITING_BYTES * pixels)
+    (rig_slot_bytes((pixels, witness_pixels), effects, compute) + returned * pixels).max(WRITING_BYTES * pixels)
 }
 
 /// GPU bytes one job's slot takes under a rig's pinhole views: [`slot_bytes`] with the
 /// witnesses' images of `witness_pixels` in place of a shadow view's, and each range
-/// pixel's witness bits.
-pub(crate) fn rig_slot_bytes((pixels, witness_pixels): (u64, u64), effects: &Effects) -> u64 {
-    slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels
+/// pixel's witness bits; and where the compute rasterizer draws its `views` views
+/// (raster/compute/rig.rs), `compute` = (the most triangles a draw has, `views`), their
+/// visibility words and each view's queue, with room for every triangle of as many draws as a
+/// view shares.
+pub(crate) fn rig_slot_bytes(
+    (pixels, witness_pixels): (u64, u64),
+    effects: &Effects,
+    compute: Option<(u64, u64)>,
+) -> u64 {
+    let compute_bytes = compute.map_or(0, |(triangles, views)| {
+        let queues = large_queue_bytes(triangles.saturating_mul(COVERAGE_MEMBERS as u64), views);
+        VISIBILITY_WORD_BYTES * (pixels + witness_pixels) + queues
+    });
+    slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels + compute_bytes
 }
 
 /// Bytes a render on the CPU alone takes (a rig other than the paper's scanner, by exact ray

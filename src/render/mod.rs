@@ -226,7 +226,8 @@ impl Renderer {
     /// Render targets for jobs of this shape (passes.rs).
     pub(crate) fn slot<'a>(&'a self, shape: &SlotShape<'a>, name: &str) -> Result<Slot<'a>> {
         let effect_pipelines = shape.effects.as_ref().map(|_| self.pipelines.effects()).transpose()?;
-        let raster_pipelines = shape.compute_raster.map(|_| self.pipelines.compute_raster()).transpose()?;
+        let computes = shape.compute_raster.is_some() || shape.rig_compute.is_some();
+        let raster_pipelines = computes.then(|| self.pipelines.compute_raster()).transpose()?;
         Slot::new(&self.ctx, &self.pipelines, effect_pipelines, raster_pipelines, &self.targets, shape, name)
     }
 
@@ -346,11 +347,11 @@ impl Renderer {
             }
             other => other,
         };
-        let compute = matches!(source, Source::Passes { compute: true });
+        let compute = matches!(source, Source::Passes { compute: true } | Source::Pinhole { compute: true, .. });
         let (cast, pinhole) = match source {
             Source::Passes { .. } => (None, None),
             Source::Cast(cast) => (Some(cast), None),
-            Source::Pinhole(job, witnesses) => (None, Some((job, witnesses))),
+            Source::Pinhole { job, witnesses, .. } => (None, Some((job, witnesses))),
         };
         let host_view =
             cast.as_ref().map(|cast| HostView::new(ctx, &cast.image, views.origin.z, "cast range view")).transpose()?;
@@ -377,6 +378,7 @@ impl Renderer {
                 Buffer::with_data(ctx, ash::vk::BufferUsageFlags::STORAGE_BUFFER, &table, "reflectivities")
             })
             .transpose()?;
+        let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
         let shape = SlotShape {
             size: (w, h),
             shadow: views.shadow.as_ref().zip(shadow_table.as_ref()).map(|(g, t)| (g.width, t)),
@@ -387,9 +389,9 @@ impl Renderer {
             several_draws: draws.len() > 1,
             from_host: host_view.is_some(),
             witnesses: pinhole.and_then(|(_, witnesses)| witnesses),
+            rig_compute: pinhole.filter(|_| compute).map(|_| largest),
         };
         let slot = self.slot(&shape, "render")?;
-        let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
         let coverage = slot
             .compute_views()
             .map(|views| match draws.len() {
@@ -460,7 +462,12 @@ impl Renderer {
             shadow: scene.shadow,
             effects: scene.effects,
             shadow_pass: views.shadow.is_some() || casts_shadows(scene, scanner),
-            raster: scanner.map(|_| if compute { Raster::Compute } else { Raster::Graphics }),
+            // The scanner's views, or a rig's pinhole views, were rasterized.
+            raster: (scanner.is_some() || pinhole.is_some()).then_some(if compute {
+                Raster::Compute
+            } else {
+                Raster::Graphics
+            }),
             label,
             label_unshadowed,
             z,
@@ -491,8 +498,7 @@ impl Renderer {
             check_rigid(&object.pose, &format!("object {} ({})", i + 1, object.model_ref))?;
         }
         if on_gpu {
-            let output = self.render_pinhole_rig(scene, &views)?;
-            return Ok(RenderOutput { raster: Some(Raster::Graphics), ..output });
+            return self.render_pinhole_rig(scene, &views);
         }
         let passes_bytes = if with_effects { slot_bytes((pixels, 0), &scene.effects, None, 1) } else { 0 };
         let cast_bytes = memory::exact_bytes(crate::exact::casters(sensor), triangles, pixels);
@@ -512,8 +518,9 @@ enum Source<'a> {
     Passes { compute: bool },
     /// Elsewhere, and copied in: rays cast on the CPU.
     Cast(Cast),
-    /// By a rig's pinhole views, and their witnesses' label test where the set is given.
-    Pinhole(&'a PinholeJob, Option<&'a WitnessSet>),
+    /// By a rig's pinhole views, and their witnesses' label test where the set is given, with
+    /// the compute rasterizer where `compute`.
+    Pinhole { job: &'a PinholeJob, witnesses: Option<&'a WitnessSet>, compute: bool },
 }
 
 /// A range image cast on the CPU, with the time it took on the wall clock.

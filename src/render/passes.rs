@@ -19,11 +19,12 @@
 use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::{Error, Result};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
+use crate::render::pinhole::rig_views;
 use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet};
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{
-    ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember,
+    ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember, RigCoverage, RigTargets,
 };
 use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
@@ -57,6 +58,9 @@ pub(crate) struct Slot<'a> {
     /// A rig's witnesses' images and their shadow test, in shadow modes `label` and `depth` under a
     /// pinhole reference view (src/render/pinhole/).
     witnesses: Option<WitnessSlot<'a>>,
+    /// The compute rasterizer's state for a rig's views, where it draws them
+    /// (raster/compute/rig.rs).
+    rig: Option<RigCoverage<'a>>,
 }
 
 /// What a slot holds for a rig's witnesses: the attachments of their images (the
@@ -92,6 +96,9 @@ pub(crate) struct SlotShape<'a> {
     /// A rig's witnesses, which jobs under a pinhole reference view test in modes `label` and
     /// `depth`.
     pub witnesses: Option<&'a WitnessSet>,
+    /// Where the compute rasterizer draws jobs' rig views, the most triangles a draw of them
+    /// has (raster/compute/rig.rs; `several_draws` where a job has more than one).
+    pub rig_compute: Option<u32>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -109,7 +116,7 @@ impl<'a> Slot<'a> {
         ctx: &Arc<GpuContext>,
         p: &Pipelines,
         effect_pipelines: Option<&EffectPipelines>,
-        raster_pipelines: Option<&ComputeRasterPipelines>,
+        raster_pipelines: Option<&'a ComputeRasterPipelines>,
         pool: &'a TargetPool,
         shape: &SlotShape<'a>,
         name: &str,
@@ -181,9 +188,29 @@ impl<'a> Slot<'a> {
             }
             _ => None,
         };
+        let rig = match (shape.rig_compute, raster_pipelines) {
+            (Some(max_triangles), Some(rp)) => {
+                let witness_targets = witnesses.as_ref().map(|w| w.targets.each_ref().map(|t| t.as_deref()));
+                let targets = RigTargets { reference: &range, witnesses: witness_targets.unwrap_or([None, None]) };
+                let views = rig_views(shape.witnesses);
+                Some(RigCoverage::new(ctx, rp, targets, &views, (max_triangles, shape.several_draws), name)?)
+            }
+            _ => None,
+        };
         let reflectivities = shape.effects.as_ref().and_then(|e| e.reflectivities);
         let shadow_table = shape.shadow.map(|(_, table)| table);
-        Ok(Self { range, shadow, masked, mask_bindings, shadow_table, effects, reflectivities, compute, witnesses })
+        Ok(Self {
+            range,
+            shadow,
+            masked,
+            mask_bindings,
+            shadow_table,
+            effects,
+            reflectivities,
+            compute,
+            witnesses,
+            rig,
+        })
     }
 
     /// The bits of the witnesses that lost each pixel, where a rig's shadow test ran
@@ -534,7 +561,8 @@ impl<'p> Passes<'p> {
     }
 
     /// A job's passes under a rig's pinhole reference view: the reference view and the
-    /// witnesses' images drawn, the shadow test, then the effects and the sink.
+    /// witnesses' images drawn (by the compute rasterizer where the job takes it:
+    /// raster/compute/rig.rs), the shadow test, then the effects and the sink.
     fn pinhole_steps<'s>(
         &'s self,
         slot: &'s Slot<'_>,
@@ -542,39 +570,17 @@ impl<'p> Passes<'p> {
         pinhole: &'s PinholeJob,
         sink: &Sink<'s>,
     ) -> Vec<Step<'s>> {
-        let p = self.pipelines;
         let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
         let witnesses = slot.witnesses.as_ref();
         let witness_targets = || witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
-        let prepare = attachment_writes(std::iter::once(&*slot.range).chain(witness_targets()));
-        let draw = move |ctx: &GpuContext, cmd| {
-            let half_side = ctx.viewport_half_side();
-            let reference = [pinhole.reference_band(job.area, half_side)];
-            record_bands(
-                ctx,
-                cmd,
-                (&pipelines.reference, p.raster_layout),
-                &slot.range,
-                job.area,
-                &reference,
-                job.draws,
-            );
-            // The pinhole witnesses' images in projection, the directional witnesses' as the
-            // scanner's shadow view is drawn.
-            let targets = witnesses.map(|w| &w.targets).into_iter().flatten();
-            for (attachment, targets) in WitnessAttachment::ALL.into_iter().zip(targets) {
-                let view_pipelines = match attachment {
-                    WitnessAttachment::Pinhole => &pipelines.witnesses,
-                    WitnessAttachment::Directional => &p.shadow,
-                };
-                let drawn = pinhole.witness_area(attachment);
-                if let Some(targets) = targets.as_deref().filter(|_| drawn.width > 0 && drawn.height > 0) {
-                    let bands = pinhole.witness_bands(attachment);
-                    record_bands(ctx, cmd, (view_pipelines, p.raster_layout), targets, drawn, &bands, job.draws);
-                }
+        let mut steps = match (&slot.rig, job.compute) {
+            (Some(rig), true) => {
+                let witness_targets = witnesses.map(|w| w.targets.each_ref().map(|t| t.as_deref()));
+                let targets = RigTargets { reference: &slot.range, witnesses: witness_targets.unwrap_or([None, None]) };
+                rig.steps(targets, &pinhole.compute_views(job.area), job.draws)
             }
+            _ => vec![self.pinhole_draw_step(slot, job, pinhole, pipelines)],
         };
-        let mut steps = vec![Step::new(prepare, Vec::new(), draw).timed("range")];
         let shadowed = match (witnesses, &slot.masked) {
             (Some(w), Some(masked)) => {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
@@ -589,6 +595,48 @@ impl<'p> Passes<'p> {
         };
         steps.extend(self.effects_and_sink(slot, job, shadowed, sink));
         steps
+    }
+
+    /// The graphics pipeline's drawing of a job's rig views: the reference view, the pinhole
+    /// witnesses' images in projection, the directional witnesses' as the scanner's shadow view
+    /// is drawn.
+    fn pinhole_draw_step<'s>(
+        &'s self,
+        slot: &'s Slot<'_>,
+        job: &'s Job<'_>,
+        pinhole: &'s PinholeJob,
+        pipelines: &'s PinholePipelines,
+    ) -> Step<'s> {
+        let p = self.pipelines;
+        let witnesses = slot.witnesses.as_ref();
+        let witness_targets = witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
+        let prepare = attachment_writes(std::iter::once(&*slot.range).chain(witness_targets));
+        let draw = move |ctx: &GpuContext, cmd| {
+            let half_side = ctx.viewport_half_side();
+            let reference = [pinhole.reference_band(job.area, half_side)];
+            record_bands(
+                ctx,
+                cmd,
+                (&pipelines.reference, p.raster_layout),
+                &slot.range,
+                job.area,
+                &reference,
+                job.draws,
+            );
+            let targets = witnesses.map(|w| &w.targets).into_iter().flatten();
+            for (attachment, targets) in WitnessAttachment::ALL.into_iter().zip(targets) {
+                let view_pipelines = match attachment {
+                    WitnessAttachment::Pinhole => &pipelines.witnesses,
+                    WitnessAttachment::Directional => &p.shadow,
+                };
+                let drawn = pinhole.witness_area(attachment);
+                if let Some(targets) = targets.as_deref().filter(|_| drawn.width > 0 && drawn.height > 0) {
+                    let bands = pinhole.witness_bands(attachment);
+                    record_bands(ctx, cmd, (view_pipelines, p.raster_layout), targets, drawn, &bands, job.draws);
+                }
+            }
+        };
+        Step::new(prepare, Vec::new(), draw).timed("range")
     }
 
     /// The named effects' passes and the sink, after the range view and (where any) the

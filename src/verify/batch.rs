@@ -204,8 +204,9 @@ pub(crate) fn count_batch(
         _ => None,
     };
     let half_side = ctx.viewport_half_side();
+    let witnesses = pinhole.as_ref().and_then(|(_, witnesses)| witnesses.as_ref());
     let pinhole_jobs: Vec<PinholeJob> = match &pinhole {
-        Some((reference, witnesses)) => items
+        Some((reference, _)) => items
             .iter()
             .zip(&draws)
             .zip(&footprints)
@@ -213,7 +214,7 @@ pub(crate) fn count_batch(
                 let spheres = [posed_sphere(item)];
                 let models = Models { draws, spheres: &spheres, name: &|_| "its model".to_string() };
                 let area = footprint.unwrap_or(PixelRect::EMPTY);
-                PinholeJob::new(ctx, reference, witnesses.as_ref(), models, area, half_side)
+                PinholeJob::new(ctx, reference, witnesses, models, area, half_side)
             })
             .collect::<Result<_>>()?,
         None => Vec::new(),
@@ -272,11 +273,13 @@ pub(crate) fn count_batch(
             });
             let footprint = u64::from(area.width) * u64::from(area.height);
             let triangles = u64::from(item.mesh.index_count / 3);
-            let compute = match settings.scanner {
-                Some(scanner) if host_views.is_empty() => {
+            let compute = match (settings.scanner, pinhole_jobs.get(index as usize)) {
+                (Some(scanner), _) if host_views.is_empty() => {
                     let reach = views.reach(scanner, (centre, radius));
                     renderer.computes(1, (triangles, triangles), (footprint, reach), slot_view_pixels)
                 }
+                // A rig's pinhole views (raster/compute/rig.rs).
+                (None, Some(job)) => renderer.computes_rig(job, draws, area, witnesses),
                 _ => false,
             };
             Some(Job {
@@ -302,6 +305,14 @@ pub(crate) fn count_batch(
         true => table(ViewKind::Range)?.flatten(),
         false => None,
     };
+    // The compute rasterizer covers consecutive slots' hypotheses in one dispatch, as many as
+    // the renderer asks for (and its queue of large triangles can bind: CoverageGroup).
+    let max_triangles = items
+        .iter()
+        .zip(&jobs)
+        .filter(|(_, job)| job.as_ref().is_some_and(|j| j.compute))
+        .map(|(i, _)| i.mesh.index_count / 3)
+        .max();
     let shape = SlotShape {
         size: (width, height),
         shadow: shadow_width.zip(shadow_table.as_ref()),
@@ -311,19 +322,12 @@ pub(crate) fn count_batch(
         compute_raster: range_table.as_ref(),
         several_draws: false,
         from_host: !host_views.is_empty(),
-        witnesses: pinhole.as_ref().and_then(|(_, witnesses)| witnesses.as_ref()),
+        witnesses,
+        rig_compute: max_triangles.filter(|_| pinhole.is_some()),
     };
     let slots: Vec<Slot> = (0..settings.slots.min(items.len()))
         .map(|i| renderer.slot(&shape, &format!("slot {i}")))
         .collect::<Result<_>>()?;
-    // The compute rasterizer covers consecutive slots' hypotheses in one dispatch, as many as
-    // the renderer asks for (and its queue of large triangles can bind: CoverageGroup).
-    let max_triangles = items
-        .iter()
-        .zip(&jobs)
-        .filter(|(_, job)| job.as_ref().is_some_and(|j| j.compute))
-        .map(|(i, _)| i.mesh.index_count / 3)
-        .max();
     let coverage_views: Vec<_> = slots.iter().filter_map(|slot| slot.compute_views()).collect();
     let coverage = match max_triangles {
         Some(triangles) if coverage_views.len() == slots.len() => {

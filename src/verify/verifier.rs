@@ -257,7 +257,7 @@ impl Verifier {
         settings.effects.for_sensor(&settings.sensor)?;
         settings.shadow.validate()?;
         // Refuses mode `label` on a rig whose witnesses it cannot read, and what the GPU cannot
-        // draw of a pinhole rig (the compute rasterizer, views or witness bands too large).
+        // draw of a pinhole rig (views or witness bands too large).
         // Where the GPU draws the rig: its witnesses' images' pixels (0 without any).
         let mut rig_witness_pixels = None;
         if scanner.is_none() && draws_rig(&settings.sensor, settings.shadow.mode)? {
@@ -322,7 +322,13 @@ impl Verifier {
                 slot_memory(&self.renderer, scanner, &settings.shadow, &settings.effects, posed, max_triangles)?
             }
             None => match rig_witness_pixels {
-                Some(witness_pixels) => rig_slot_bytes((pixels, witness_pixels), &settings.effects),
+                Some(witness_pixels) => {
+                    // The compute rasterizer's words and queues, for the reference view and
+                    // each witness's band (raster/compute/rig.rs).
+                    let views = 1 + if witness_pixels > 0 { settings.sensor.witnesses.len() as u64 } else { 0 };
+                    let compute = self.renderer.may_compute().then_some((max_triangles, views));
+                    rig_slot_bytes((pixels, witness_pixels), &settings.effects, compute)
+                }
                 None => slot_bytes((pixels, 0), &settings.effects, None, 1),
             },
         };

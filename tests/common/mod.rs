@@ -84,12 +84,24 @@ pub fn assert_no_validation_messages() {
     assert!(messages.is_empty(), "validation reported {} message(s):\n{}", messages.len(), messages.join("\n"));
 }
 
+/// The rasterizer the suite's renderer draws a view of one to four objects with, on the GPU:
+/// the compute rasterizer in a run with it (RANGESYNTH_TEST_RASTER), else the graphics
+/// pipeline.
+#[allow(dead_code)]
+pub fn gpu_raster() -> Raster {
+    match renderer().raster() {
+        Raster::Compute => Raster::Compute,
+        _ => Raster::Graphics,
+    }
+}
+
 pub fn render(scene: &Scene) -> RenderOutput {
     let out = renderer().render(scene).unwrap_or_else(|e| panic!("render failed: {e}"));
     assert_no_validation_messages();
-    // A suite run with the compute rasterizer renders every view of one to four objects with it.
+    // A suite run with the compute rasterizer renders every view of one to four objects with it
+    // (a rig's pinhole views too).
     let objects = (1..=rangesynth::render::COVERAGE_MEMBERS).contains(&scene.objects.len());
-    let on_gpu = scene.shadow.mode != rangesynth::shadow::ShadowMode::Exact && scene.sensor.scanner().is_some();
+    let on_gpu = scene.shadow.mode != rangesynth::shadow::ShadowMode::Exact && out.raster.is_some();
     if renderer().raster() == Raster::Compute && objects && on_gpu {
         assert_eq!(out.raster, Some(Raster::Compute), "the compute rasterizer rendered the view");
     }

@@ -9,6 +9,7 @@ use super::witness_set::{WitnessImage, WitnessSet};
 use super::Models;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, GpuContext};
+use crate::render::raster::compute::RigView;
 use crate::render::raster::draw::{cull_mode, Band, DrawConstants, PinholeDrawing, ViewportFrame};
 use crate::render::FOOTPRINT_MARGIN;
 use crate::sensor::{Intrinsics, Pinhole, PixelRect, View};
@@ -41,15 +42,22 @@ pub(crate) struct PinholeJob {
     /// the table's address (or the witness set's), so the job keeps them alive.
     _job_table: Option<(Buffer, Option<Buffer>)>,
     pub mask: WitnessMaskConstants,
+    /// How far, in pixels, the draws' corners may reach from the first pixel of a directional
+    /// witness's band (the compute rasterizer takes the job where it is within
+    /// `MAX_REACH_PIXELS`: Renderer::computes_rig; it clips a pinhole view's triangles to the
+    /// viewport, as the graphics pipeline does, so they reach no farther).
+    pub reach: f64,
 }
 
 /// A witness's band: its attachment, the pixels of it the job draws (where the models can
 /// cover it), the viewport it is drawn through, and each draw's constants and cull mode in it.
 struct WitnessDraws {
     attachment: WitnessAttachment,
+    band: PixelRect,
     area: PixelRect,
     viewport: ViewportFrame,
     draws: ViewDraws,
+    reach: f64,
 }
 
 impl PinholeJob {
@@ -84,7 +92,7 @@ impl PinholeJob {
                     let plan = directional::plan(w.from_reference, (image, w.band), reference, &models);
                     *constants = constants.with_grid(plan.band_grid);
                     directional = true;
-                    directional_witness(&plan, &models, viewport_half_side)?
+                    directional_witness(&plan, w.band, &models, viewport_half_side)?
                 }
             };
             witness_draws.push(drawn);
@@ -113,13 +121,37 @@ impl PinholeJob {
             .map(|table| (table, draw_tables));
         let table_buffer =
             job_table.as_ref().map(|(table, _)| table).or(witnesses.and_then(|set| set.shared_table.as_ref()));
+        let reference = view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?;
+        let reach = witness_draws.iter().map(|w| w.reach).fold(0.0, f64::max);
         Ok(Self {
             whole,
-            reference: view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?,
+            reference,
             witnesses: witness_draws,
             mask: WitnessMaskConstants::new(&k, area, (table_buffer, views.len())),
             _job_table: job_table,
+            reach,
         })
+    }
+
+    /// The job's views as the compute rasterizer draws them (raster/compute/rig.rs), in the
+    /// order of [`rig_views`](super::rig_views): the reference view over `area` (the job's),
+    /// then each witness's band, in file order, over the pixels of it the models can cover,
+    /// resolved over its rows of what the job draws of its attachment.
+    pub fn compute_views(&self, area: PixelRect) -> Vec<RigView<'_>> {
+        let reference = RigView { area, resolved: area, draws: &self.reference };
+        let witnesses = self.witnesses.iter().map(|w| {
+            let drawn = self.witness_area(w.attachment);
+            let first = drawn.row.max(w.band.row);
+            let end = (drawn.row + drawn.height).min(w.band.row + w.band.height);
+            let rows = PixelRect { row: first, height: end.saturating_sub(first), ..drawn };
+            RigView { area: w.area, resolved: rows, draws: &w.draws }
+        });
+        std::iter::once(reference).chain(witnesses).collect()
+    }
+
+    /// The reference view's width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.whole.width, self.whole.height)
     }
 
     /// The reference view, drawn over `area` (the job's).
@@ -172,12 +204,19 @@ fn pinhole_witness(
     let area = PixelRect { row: seen.row + band.row, ..seen };
     let viewport = ViewportFrame::around(band, viewport_half_side);
     let draws = view_draws(&drawing, models, viewport)?;
-    Ok(WitnessDraws { attachment: WitnessAttachment::Pinhole, area, viewport, draws })
+    // The compute rasterizer clips a pinhole view's triangles to its viewport: no reach to
+    // bound (raster.comp, clipped_polygon).
+    Ok(WitnessDraws { attachment: WitnessAttachment::Pinhole, band, area, viewport, draws, reach: 0.0 })
 }
 
 /// A directional witness's band for `models` as `plan` places it: each draw's constants on
 /// its grid and cull mode (a proper rotation: the scanner's shadow view's).
-fn directional_witness(plan: &DirectionalPlan, models: &Models, viewport_half_side: f32) -> Result<WitnessDraws> {
+fn directional_witness(
+    plan: &DirectionalPlan,
+    band: PixelRect,
+    models: &Models,
+    viewport_half_side: f32,
+) -> Result<WitnessDraws> {
     let viewport = ViewportFrame::new(&plan.grid, viewport_half_side);
     let draws = models
         .draws
@@ -191,7 +230,12 @@ fn directional_witness(plan: &DirectionalPlan, models: &Models, viewport_half_si
             Ok((constants, cull_mode(draw.mesh.solidity)))
         })
         .collect::<Result<_>>()?;
-    Ok(WitnessDraws { attachment: WitnessAttachment::Directional, area: plan.area, viewport, draws })
+    let reach = models
+        .spheres
+        .iter()
+        .map(|&(centre, radius)| plan.grid.reach(plan.from_reference.transform_point3(centre), radius))
+        .fold(0.0, f64::max);
+    Ok(WitnessDraws { attachment: WitnessAttachment::Directional, band, area: plan.area, viewport, draws, reach })
 }
 
 /// Model i's pose holds no f32 value in `view`.

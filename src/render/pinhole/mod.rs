@@ -23,14 +23,16 @@ pub(crate) use witness_mask::{WitnessAttachment, WitnessMaskBindings};
 pub(crate) use witness_set::{WitnessLayout, WitnessSet};
 
 use super::memory::rig_render_bytes;
-use super::raster::draw::Draw;
-use super::{GpuMesh, Raster, RenderOutput, Renderer, Source, Views};
+use super::raster::compute::RigTarget;
+use super::raster::draw::{Draw, Projection};
+use super::{GpuMesh, RenderOutput, Renderer, Source, Views};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::sensor::{Pinhole, Sensor, View};
+use crate::sensor::{Pinhole, PixelRect, Sensor, View};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
 use std::sync::Arc;
+use witness_set::WitnessImage;
 
 /// Whether the GPU draws a rig: a pinhole reference view in shadow modes `none`, `label` and
 /// `depth`. Mode `label` under an orthographic reference view other than the paper's scanner
@@ -47,6 +49,19 @@ pub(crate) fn draws_rig(sensor: &Sensor, mode: ShadowMode) -> Result<bool> {
         ShadowMode::Label => Ok(true),
         _ => Ok(false),
     }
+}
+
+/// A rig's views as the compute rasterizer draws them (raster/compute/rig.rs): the pinhole
+/// reference view, then each witness's band in `witnesses` (none without a shadow test on the
+/// GPU), each with the attachments it is resolved into and its projection.
+pub(crate) fn rig_views(witnesses: Option<&WitnessSet>) -> Vec<(RigTarget, Projection)> {
+    let bands = witnesses.into_iter().flat_map(|set| &set.views).map(|w| match w.image {
+        WitnessImage::Pinhole(_) => (RigTarget::Witnesses(WitnessAttachment::Pinhole as usize), Projection::Pinhole),
+        WitnessImage::Directional(_) => {
+            (RigTarget::Witnesses(WitnessAttachment::Directional as usize), Projection::Orthographic)
+        }
+    });
+    std::iter::once((RigTarget::Reference, Projection::Pinhole)).chain(bands).collect()
 }
 
 /// What a rig's views draw: the draws, their models' bounding spheres (reference frame), and
@@ -70,9 +85,11 @@ impl Renderer {
         let witnesses = WitnessSet::new(&self.ctx, &scene.sensor, &scene.shadow)?;
         let pixels = u64::from(views.range.width) * u64::from(views.range.height);
         let witness_pixels = witnesses.as_ref().map_or(0, WitnessSet::pixels);
+        let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
+        let compute = self.may_compute().then(|| (largest, rig_views(witnesses.as_ref()).len() as u64));
         self.ledger.check(
             format_args!("drawing a {}×{} pinhole view and its witnesses", views.range.width, views.range.height),
-            rig_render_bytes((pixels, witness_pixels), &scene.effects),
+            rig_render_bytes((pixels, witness_pixels), &scene.effects, compute),
         )?;
         let label_bases = scene.label_bases()?;
         // The lowest label last among ties (draw.rs).
@@ -98,20 +115,41 @@ impl Renderer {
         };
         let models = Models { draws: &draws, spheres: &spheres, name: &name };
         let half_side = self.ctx.viewport_half_side();
-        let job = PinholeJob::new(&self.ctx, &reference, witnesses.as_ref(), models, views.range.full(), half_side)?;
-        self.render_views(scene, None, views, &draws, Source::Pinhole(&job, witnesses.as_ref()))
+        let whole = views.range.full();
+        let job = PinholeJob::new(&self.ctx, &reference, witnesses.as_ref(), models, whole, half_side)?;
+        let compute = self.computes_rig(&job, &draws, whole, witnesses.as_ref());
+        let source = Source::Pinhole { job: &job, witnesses: witnesses.as_ref(), compute };
+        self.render_views(scene, None, views, &draws, source)
+    }
+
+    /// Whether the compute rasterizer draws `job`'s views (raster/compute/rig.rs), `draws`
+    /// over `footprint` of the reference view: as [`Renderer::computes`] decides for a view of
+    /// the same draws and pixels, whose words are the largest of the reference view's and the
+    /// `witnesses`' attachments', and whose reach is the job's (infinite where a draw reaches
+    /// a pinhole view's near plane: the graphics pipeline draws those).
+    pub(crate) fn computes_rig(
+        &self,
+        job: &PinholeJob,
+        draws: &[Draw],
+        footprint: PixelRect,
+        witnesses: Option<&WitnessSet>,
+    ) -> bool {
+        let triangles: u64 = draws.iter().map(|draw| u64::from(draw.mesh.index_count / 3)).sum();
+        let largest = draws.iter().map(|draw| u64::from(draw.mesh.index_count / 3)).max().unwrap_or(0);
+        let (width, height) = job.size();
+        let attachments = witnesses.into_iter().flat_map(|set| set.sizes);
+        let view_pixels = std::iter::once((width, height))
+            .chain(attachments)
+            .map(|(w, h)| u64::from(w) * u64::from(h))
+            .max()
+            .unwrap_or(0);
+        let footprint_pixels = u64::from(footprint.width) * u64::from(footprint.height);
+        self.computes(draws.len(), (triangles, largest), (footprint_pixels, job.reach), view_pixels)
     }
 
     /// Refuses what the GPU cannot draw of a pinhole reference view: a view larger than the
-    /// device's largest, or the compute rasterizer asked for.
+    /// device's largest.
     pub(crate) fn check_pinhole(&self, reference: &Pinhole) -> Result<()> {
-        if self.raster == Raster::Compute {
-            return Err(Error::Unsupported(
-                "the compute rasterizer draws the paper's scanner's orthographic views only; a pinhole \
-                 reference view is drawn by the graphics pipeline (--raster graphics or auto)"
-                    .into(),
-            ));
-        }
         let k = reference.intrinsics;
         let max_side = self.ctx.max_view_side();
         if k.width.max(k.height) > max_side {

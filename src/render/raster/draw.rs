@@ -14,6 +14,14 @@ use ash::vk;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
 
+/// How a view projects: the scanner's views are orthographic; a rig's pinhole views project
+/// (src/render/pinhole/). Both rasterizers draw either.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Projection {
+    Orthographic,
+    Pinhole,
+}
+
 /// One draw as the shaders see it (`DrawData` in `shaders/raster/draw.glsl`, std430): the raster
 /// shaders' push constants, and an entry of the shadow view's draw table, which the shadow
 /// mask reads to reach the triangles the shadow view stored per pixel.

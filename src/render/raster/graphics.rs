@@ -2,20 +2,12 @@
 //! rendering: three for each kind of view and projection (draw.rs, `ViewPipelines`), built by
 //! the renderer's pipelines (src/render/pipelines.rs) and a rig's (src/render/pinhole/).
 
-use super::draw::{DepthOrder, ViewPipelines};
+use super::draw::{DepthOrder, Projection, ViewPipelines};
 use crate::error::{Error, Result};
 use crate::gpu::shaders::{self, ShaderModule};
 use crate::gpu::{GpuContext, DEPTH_FORMAT};
 use crate::render::targets::ViewKind;
 use ash::vk;
-
-/// How a view projects: the scanner's views are orthographic; a rig's pinhole views project
-/// (src/render/pinhole/).
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum Projection {
-    Orthographic,
-    Pinhole,
-}
 
 /// The three raster pipelines of one kind of view (draw.rs, `ViewPipelines`).
 pub fn view_pipelines(

@@ -74,7 +74,7 @@ impl CoverageGroup {
         let member_bytes = large_queue_bytes(u64::from(max_triangles), views).max(1);
         let fitting = usize::try_from(ctx.max_storage_buffer_range() / member_bytes).unwrap_or(usize::MAX);
         let members = members.min(fitting).max(1);
-        let layout = pipelines.coverage(members)?.tiled.both.set_layout;
+        let layout = pipelines.coverage(members)?.tiled.range.set_layout;
         let runs = slots
             .chunks(members)
             .enumerate()
@@ -212,7 +212,7 @@ impl CoverageGroup {
             covered.iter().all(|(_, member)| fits_one_tile(member.draw.mesh.longest_edge, member.finest_pitch));
         let passes = |pipelines: &'s CoveragePipelines| -> Result<_> {
             let small = pipelines.small(one_tile)?;
-            let small = if both { &small.both } else { &small.range };
+            let small = small.covering(both);
             let cover =
                 move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
             let large = move |_: &GpuContext, cmd| {
@@ -252,21 +252,6 @@ impl CoverageRun {
         large_bytes: u64,
         run: usize,
     ) -> Result<Self> {
-        let large = Buffer::new(
-            ctx,
-            BufferDesc::gpu_storage(large_bytes.max(4)),
-            &format!("coverage run {run} large triangles"),
-        )?;
-        let args = BufferDesc {
-            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(16)
-        };
-        let large_args = Buffer::new(ctx, args, &format!("coverage run {run} large-triangle dispatch"))?;
-        let uniform = BufferDesc {
-            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            ..BufferDesc::gpu_storage(size_of::<CoverageUniforms>() as u64)
-        };
-        let uniforms = Buffer::new(ctx, uniform, &format!("coverage run {run} draws and members"))?;
         // Each member's words in each view; where a member or a view is missing, the run's
         // first range view's, never written.
         let member_words = |m: usize, shadow: bool| {
@@ -276,7 +261,33 @@ impl CoverageRun {
                 _ => &views.range.nearest,
             }
         };
-        matches_shader_bindings!([RASTER_COMP, RASTER_LARGE_COMP, RASTER_TIES_COMP, RASTER_LARGE_TIES_COMP] {
+        let words: [&Buffer; 2 * COVERAGE_MEMBERS] =
+            std::array::from_fn(|i| member_words(i % COVERAGE_MEMBERS, i >= COVERAGE_MEMBERS));
+        Self::binding(ctx, layout, words, large_bytes, &format!("coverage run {run}"))
+    }
+
+    /// The buffers and bindings of a run named `name` binding `words` (each member's range
+    /// view's, then each member's shadow view's), with a queue of `large_bytes`.
+    pub(super) fn binding(
+        ctx: &Arc<GpuContext>,
+        layout: vk::DescriptorSetLayout,
+        words: [&Buffer; 2 * COVERAGE_MEMBERS],
+        large_bytes: u64,
+        name: &str,
+    ) -> Result<Self> {
+        let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes.max(4)), &format!("{name} large triangles"))?;
+        let args = BufferDesc {
+            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..BufferDesc::gpu_storage(16)
+        };
+        let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
+        let uniform = BufferDesc {
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            ..BufferDesc::gpu_storage(size_of::<CoverageUniforms>() as u64)
+        };
+        let uniforms = Buffer::new(ctx, uniform, &format!("{name} draws and members"))?;
+        matches_shader_bindings!([RASTER_COMP, RASTER_LARGE_COMP, RASTER_TIES_COMP, RASTER_LARGE_TIES_COMP,
+            RASTER_PINHOLE_COMP, RASTER_PINHOLE_LARGE_COMP, RASTER_PINHOLE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_COMP] {
             Coverage,
             range_words0,
             range_words1,
@@ -289,10 +300,9 @@ impl CoverageRun {
             Large,
             LargeArgs,
         });
-        let mut buffers: Vec<&Buffer> = (0..COVERAGE_MEMBERS).map(|m| member_words(m, false)).collect();
-        buffers.extend((0..COVERAGE_MEMBERS).map(|m| member_words(m, true)));
+        let mut buffers: Vec<&Buffer> = words.to_vec();
         buffers.extend([&large, &large_args]);
-        let set = StorageSet::new(ctx, layout, &[], (&[&uniforms], &buffers), &format!("coverage run {run}"))?;
+        let set = StorageSet::new(ctx, layout, &[], (&[&uniforms], &buffers), name)?;
         Ok(Self { large, large_args, uniforms, set })
     }
 }

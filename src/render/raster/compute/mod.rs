@@ -58,10 +58,12 @@
 mod coverage;
 mod layout;
 mod pipelines;
+mod rig;
 mod views;
 
 pub(crate) use coverage::{CoverageGroup, CoverageMember};
 pub(crate) use layout::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 pub use layout::{COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, MAX_REACH_PIXELS};
 pub(crate) use pipelines::{device_supports, ComputeRasterPipelines};
+pub(crate) use rig::{RigCoverage, RigTarget, RigTargets, RigView};
 pub(crate) use views::{ComputeTarget, ComputeViews};

@@ -1,11 +1,13 @@
 //! The compute rasterizer's pipelines: coverage, specialized by how many jobs a dispatch
 //! covers and which views, with and without the tiles' code; the ties passes; the resolve
-//! passes; and whether a device can run them at all.
+//! passes; a rig's pinhole views' variants of them (rig.rs); and whether a device can run them
+//! at all.
 
 use super::layout::{RasterView, COVERAGE_MEMBERS, COVERAGE_STORAGE_BUFFERS, DEAL_BLOCK, DEAL_STRIPES, MAX_GROUPS};
 use crate::error::Result;
 use crate::gpu::{shaders, ComputePipeline, GpuContext, SetShape};
 use crate::render::built_once::built_once;
+use crate::render::raster::draw::Projection;
 use crate::render::stages::shadow_mask::{MaskPipelines, MaskVariant};
 use crate::render::targets::ViewKind;
 use std::sync::{Arc, OnceLock};
@@ -28,12 +30,14 @@ pub(super) struct CoveragePipelines {
     pub(super) ctx: Arc<GpuContext>,
     pub(super) members: u32,
     pub(super) kind: Coverage,
+    pub(super) projection: Projection,
 }
 
-/// The small triangles' coverage of the range view alone, and of both views.
+/// The small triangles' coverage of the range view alone, and of both views (orthographic
+/// views only: a rig covers its pinhole views one a dispatch).
 pub(super) struct SmallTriangles {
     pub(super) range: ComputePipeline,
-    pub(super) both: ComputePipeline,
+    pub(super) both: Option<ComputePipeline>,
 }
 
 /// Whether every triangle of a mesh whose longest edge is `longest_edge` (model units) has a
@@ -57,18 +61,23 @@ pub(super) enum Coverage {
 }
 
 impl CoveragePipelines {
-    pub(super) fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage) -> Result<Self> {
-        let large = match kind {
-            Coverage::Nearest => shaders::RASTER_LARGE_COMP,
-            Coverage::Ties => shaders::RASTER_LARGE_TIES_COMP,
+    pub(super) fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage, projection: Projection) -> Result<Self> {
+        use Projection::{Orthographic, Pinhole};
+        let (large, views) = match (kind, projection) {
+            (Coverage::Nearest, Orthographic) => (shaders::RASTER_LARGE_COMP, 2),
+            (Coverage::Ties, Orthographic) => (shaders::RASTER_LARGE_TIES_COMP, 2),
+            (Coverage::Nearest, Pinhole) => (shaders::RASTER_PINHOLE_LARGE_COMP, 1),
+            (Coverage::Ties, Pinhole) => (shaders::RASTER_PINHOLE_LARGE_TIES_COMP, 1),
         };
+        let name = format!("compute raster coverage ({}large triangles)", projection_name(projection));
         Ok(Self {
-            tiled: SmallTriangles::new(ctx, members, kind, true)?,
+            tiled: SmallTriangles::new(ctx, (members, kind, projection), true)?,
             one_tile: OnceLock::new(),
-            large: covering(ctx, (members, kind), large, (2, true), "compute raster coverage (large triangles)")?,
+            large: covering(ctx, (members, kind), large, (views, true), &name)?,
             ctx: ctx.clone(),
             members,
             kind,
+            projection,
         })
     }
 
@@ -77,24 +86,46 @@ impl CoveragePipelines {
         if !one_tile {
             return Ok(&self.tiled);
         }
-        built_once(&self.ctx, &self.one_tile, || SmallTriangles::new(&self.ctx, self.members, self.kind, false))
+        let shape = (self.members, self.kind, self.projection);
+        built_once(&self.ctx, &self.one_tile, || SmallTriangles::new(&self.ctx, shape, false))
+    }
+}
+
+/// How a pipeline's name tells a pinhole variant.
+fn projection_name(projection: Projection) -> &'static str {
+    match projection {
+        Projection::Orthographic => "",
+        Projection::Pinhole => "pinhole view, ",
     }
 }
 
 impl SmallTriangles {
-    pub(super) fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage, tiles: bool) -> Result<Self> {
-        let code = match kind {
-            Coverage::Nearest => shaders::RASTER_COMP,
-            Coverage::Ties => shaders::RASTER_TIES_COMP,
+    pub(super) fn new(
+        ctx: &Arc<GpuContext>,
+        (members, kind, projection): (u32, Coverage, Projection),
+        tiles: bool,
+    ) -> Result<Self> {
+        use Projection::{Orthographic, Pinhole};
+        let code = match (kind, projection) {
+            (Coverage::Nearest, Orthographic) => shaders::RASTER_COMP,
+            (Coverage::Ties, Orthographic) => shaders::RASTER_TIES_COMP,
+            (Coverage::Nearest, Pinhole) => shaders::RASTER_PINHOLE_COMP,
+            (Coverage::Ties, Pinhole) => shaders::RASTER_PINHOLE_TIES_COMP,
         };
         let name = |view: &str| {
             let tiles = if tiles { "" } else { ", one tile" };
-            format!("compute raster coverage ({view}{tiles})")
+            format!("compute raster coverage ({}{view}{tiles})", projection_name(projection))
         };
-        Ok(Self {
-            range: covering(ctx, (members, kind), code, (1, tiles), &name("range view"))?,
-            both: covering(ctx, (members, kind), code, (2, tiles), &name("both views"))?,
-        })
+        let both = match projection {
+            Orthographic => Some(covering(ctx, (members, kind), code, (2, tiles), &name("both views"))?),
+            Pinhole => None,
+        };
+        Ok(Self { range: covering(ctx, (members, kind), code, (1, tiles), &name("range view"))?, both })
+    }
+
+    /// The pipeline covering the range view, and where `both`, the shadow view too.
+    pub(super) fn covering(&self, both: bool) -> &ComputePipeline {
+        self.both.as_ref().filter(|_| both).unwrap_or(&self.range)
     }
 }
 
@@ -137,6 +168,11 @@ pub struct ComputeRasterPipelines {
     pub(super) single: CoveragePipelines,
     pub(super) grouped: OnceLock<CoveragePipelines>,
     pub(super) ties: OnceLock<CoveragePipelines>,
+    /// A rig's pinhole views' coverage and ties passes (its draws the members), and the
+    /// reference view's resolve, built on first use (rig.rs).
+    pub(super) pinhole: OnceLock<CoveragePipelines>,
+    pub(super) pinhole_ties: OnceLock<CoveragePipelines>,
+    pub(super) resolve_pinhole: OnceLock<ComputePipeline>,
     /// The range view's resolve where its words hold one draw, and where they hold several;
     /// the shadow view's where they hold several.
     pub(super) resolve: ComputePipeline,
@@ -158,9 +194,12 @@ impl ComputeRasterPipelines {
         };
         Ok(Self {
             ctx: ctx.clone(),
-            single: CoveragePipelines::new(ctx, 1, Coverage::Nearest)?,
+            single: CoveragePipelines::new(ctx, 1, Coverage::Nearest, Projection::Orthographic)?,
             grouped: OnceLock::new(),
             ties: OnceLock::new(),
+            pinhole: OnceLock::new(),
+            pinhole_ties: OnceLock::new(),
+            resolve_pinhole: OnceLock::new(),
             resolve: resolve(ViewKind::Range, shaders::RASTER_RESOLVE_COMP, false, "compute raster resolve")?,
             resolve_several: resolve(
                 ViewKind::Range,
@@ -194,7 +233,17 @@ impl ComputeRasterPipelines {
         cell: &'s OnceLock<CoveragePipelines>,
         kind: Coverage,
     ) -> Result<&'s CoveragePipelines> {
-        built_once(&self.ctx, cell, || CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind))
+        self.built_for(cell, (kind, Projection::Orthographic))
+    }
+
+    /// The grouped pipelines of `kind` for views of `projection`, in `cell`, built on first
+    /// use.
+    pub(super) fn built_for<'s>(
+        &self,
+        cell: &'s OnceLock<CoveragePipelines>,
+        (kind, projection): (Coverage, Projection),
+    ) -> Result<&'s CoveragePipelines> {
+        built_once(&self.ctx, cell, || CoveragePipelines::new(&self.ctx, COVERAGE_MEMBERS as u32, kind, projection))
     }
 }
 

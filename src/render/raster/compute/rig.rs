@@ -1,0 +1,350 @@
+//! A rig's views on the compute rasterizer (docs/compute-rasterizer.md, "Rigs"): the pinhole
+//! reference view and every witness's band, each covered by a dispatch of its own whose
+//! members are the job's draws, sharing the view's words as the draws of a scanner view of
+//! several objects do (with the ties passes where there are several), then resolved into the
+//! attachments the graphics pipeline draws: the reference view's, and the witnesses'
+//! visibility (label, draw, triangle). The witnesses' shadow test and every pass after it read
+//! them unchanged.
+//!
+//! A pinhole view's coverage is raster.comp's PINHOLE variant (window coordinates divided by
+//! w as lavapipe divides, depths larger nearer, cull by winding); a directional witness's band
+//! is orthographic, covered as a scanner's shadow view is. The words always hold depths (never
+//! z keys): the reference view's resolve works its depth and gradient out from the triangle
+//! (raster_resolve.comp, PINHOLE), as raster.frag does.
+
+use super::coverage::CoverageRun;
+use super::layout::{
+    cull_sign, large_queue_bytes, CoverageUniforms, MemberConstants, RasterView, COVERAGE_MEMBERS, DEAL_BLOCK,
+    DEAL_STRIPES, MAX_GROUPS, VISIBILITY_WORD_BYTES,
+};
+use super::pipelines::{ComputeRasterPipelines, Coverage, CoveragePipelines};
+use crate::error::Result;
+use crate::gpu::shaders::{self, matches_shader_bindings};
+use crate::gpu::{Access, Buffer, BufferDesc, ComputePipeline, GpuContext, SetShape, Step, StorageSet};
+use crate::render::built_once::built_once;
+use crate::render::raster::draw::{Draw, DrawConstants, Projection};
+use crate::render::targets::{ViewKind, ViewTargets};
+use crate::sensor::PixelRect;
+use crate::shader_contract::{COVERAGE_GROUP, EMPTY_HALF};
+use ash::vk;
+use std::sync::Arc;
+
+/// The attachments a rig's view is resolved into: the reference view's, or witness attachment
+/// k's (src/render/pinhole/, `WitnessAttachment`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum RigTarget {
+    Reference,
+    Witnesses(usize),
+}
+
+/// What a slot's rig views are resolved into: the reference view's attachments and each
+/// witness attachment's, where the rig has one.
+#[derive(Clone, Copy)]
+pub(crate) struct RigTargets<'t> {
+    pub reference: &'t ViewTargets,
+    pub witnesses: [Option<&'t ViewTargets>; 2],
+}
+
+impl<'t> RigTargets<'t> {
+    fn of(&self, target: RigTarget) -> Option<&'t ViewTargets> {
+        match target {
+            RigTarget::Reference => Some(self.reference),
+            RigTarget::Witnesses(k) => self.witnesses[k],
+        }
+    }
+}
+
+/// One view of a job, as its coverage and resolve see it: the pixels its draws can cover, the
+/// pixels it resolves (a witness's band's rows of what the job draws of its attachment: zeros
+/// where nothing covers them, as the graphics pipeline clears them), and each draw's constants
+/// and cull mode there.
+pub(crate) struct RigView<'a> {
+    pub area: PixelRect,
+    pub resolved: PixelRect,
+    pub draws: &'a [(DrawConstants, vk::CullModeFlags)],
+}
+
+/// What one view holds in a slot: where it is resolved, its coverage run (uniforms, queue,
+/// bindings), its draw table (the resolve reads it; each job writes it), its resolve's
+/// bindings, and its pipelines.
+struct ViewState<'p> {
+    target: RigTarget,
+    run: CoverageRun,
+    draw_table: Buffer,
+    resolve: StorageSet,
+    passes: ViewPasses<'p>,
+}
+
+/// A view's pipelines: its coverage's (small triangles, large), its ties passes' where the
+/// slot's jobs have several draws, and its resolve.
+struct ViewPasses<'p> {
+    nearest: (&'p ComputePipeline, &'p ComputePipeline),
+    ties: Option<(&'p ComputePipeline, &'p ComputePipeline)>,
+    resolve: &'p ComputePipeline,
+}
+
+/// A slot's state for a rig's views on the compute rasterizer: the words of the reference view
+/// and of each witness attachment, and each view's state, in the order of the job's views.
+pub(crate) struct RigCoverage<'p> {
+    words: [Option<(Buffer, u32)>; 3],
+    views: Vec<ViewState<'p>>,
+}
+
+/// Where a target's words are among [`RigCoverage`]'s.
+fn words_index(target: RigTarget) -> usize {
+    match target {
+        RigTarget::Reference => 0,
+        RigTarget::Witnesses(k) => 1 + k,
+    }
+}
+
+impl ComputeRasterPipelines {
+    /// The coverage pipelines of a rig's views of `projection` (`kind`: the nearest, or the
+    /// ties passes), built on first use.
+    fn rig_coverage(&self, projection: Projection, kind: Coverage) -> Result<&CoveragePipelines> {
+        let cell = match (projection, kind) {
+            (Projection::Orthographic, Coverage::Nearest) => &self.grouped,
+            (Projection::Orthographic, Coverage::Ties) => &self.ties,
+            (Projection::Pinhole, Coverage::Nearest) => &self.pinhole,
+            (Projection::Pinhole, Coverage::Ties) => &self.pinhole_ties,
+        };
+        self.built_for(cell, (kind, projection))
+    }
+
+    /// The resolve of a rig's pinhole reference view, built on first use.
+    fn resolve_pinhole(&self) -> Result<&ComputePipeline> {
+        built_once(&self.ctx, &self.resolve_pinhole, || {
+            let shape = SetShape::storage(ViewKind::Range.colour_attachments().len(), 2);
+            let several = (shaders::layout::spec::RASTER_RESOLVE_COMP::SEVERAL_DRAWS, 1);
+            let code = shaders::RASTER_RESOLVE_PINHOLE_COMP;
+            ComputePipeline::new(
+                &self.ctx,
+                shape,
+                size_of::<RasterView>(),
+                code,
+                &[several],
+                "compute raster resolve (pinhole view)",
+            )
+        })
+    }
+
+    /// The resolve pipeline of a view resolved into `target`.
+    fn rig_resolve(&self, target: RigTarget) -> Result<&ComputePipeline> {
+        match target {
+            RigTarget::Reference => self.resolve_pinhole(),
+            RigTarget::Witnesses(_) => Ok(&self.resolve_shadow),
+        }
+    }
+}
+
+impl<'p> RigCoverage<'p> {
+    /// A slot's state for views resolved into `views`' targets, each of its projection (the
+    /// reference view's first, then each witness's, in the order of a job's views), into
+    /// `targets`, for jobs of up to `max_triangles` a draw, and where `several_draws`, more
+    /// than one.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        pipelines: &'p ComputeRasterPipelines,
+        targets: RigTargets,
+        views: &[(RigTarget, Projection)],
+        (max_triangles, several_draws): (u32, bool),
+        name: &str,
+    ) -> Result<Self> {
+        let words_of = |target: RigTarget| -> Result<Option<(Buffer, u32)>> {
+            let Some(attachments) = targets.of(target) else {
+                return Ok(None);
+            };
+            let extent = attachments.depth.desc.extent;
+            let (width, height) = (extent.width, extent.height);
+            let bytes = u64::from(width) * u64::from(height) * VISIBILITY_WORD_BYTES;
+            let buffer =
+                Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} {target:?} visibility words"))?;
+            Ok(Some((buffer, width)))
+        };
+        let words =
+            [words_of(RigTarget::Reference)?, words_of(RigTarget::Witnesses(0))?, words_of(RigTarget::Witnesses(1))?];
+        let layout = pipelines.coverage(COVERAGE_MEMBERS)?.tiled.range.set_layout;
+        // Every draw's triangles may be queued, in the one view a dispatch covers.
+        let large_bytes = large_queue_bytes(u64::from(max_triangles), 1) * COVERAGE_MEMBERS as u64;
+        matches_shader_bindings!([RASTER_RESOLVE_PINHOLE_COMP] { label, z, dz_dx, dz_dy, DrawTable, Nearest });
+        matches_shader_bindings!([RASTER_RESOLVE_SHADOW_COMP] { visibility, DrawTable, Nearest });
+        let views = views
+            .iter()
+            .enumerate()
+            .map(|(i, &(target, projection))| {
+                let view_name = format!("{name} rig view {i}");
+                let missing = || crate::error::Error::Scene(format!("{view_name}: its attachments are missing"));
+                let (view_words, _) = words[words_index(target)].as_ref().ok_or_else(missing)?;
+                let attachments = targets.of(target).ok_or_else(missing)?;
+                let run =
+                    CoverageRun::binding(ctx, layout, [view_words; 2 * COVERAGE_MEMBERS], large_bytes, &view_name)?;
+                let table_bytes = (COVERAGE_MEMBERS * size_of::<DrawConstants>()) as u64;
+                let draw_table =
+                    Buffer::new(ctx, BufferDesc::gpu_storage(table_bytes), &format!("{view_name} draw table"))?;
+                let images: Vec<_> = attachments.colour.iter().collect();
+                let coverage = pipelines.rig_coverage(projection, Coverage::Nearest)?;
+                let ties = several_draws
+                    .then(|| pipelines.rig_coverage(projection, Coverage::Ties))
+                    .transpose()?
+                    .map(|ties| (&ties.tiled.range, &ties.large));
+                let passes = ViewPasses {
+                    nearest: (&coverage.tiled.range, &coverage.large),
+                    ties,
+                    resolve: pipelines.rig_resolve(target)?,
+                };
+                let buffers = [&draw_table, view_words];
+                let resolve = StorageSet::new(
+                    ctx,
+                    passes.resolve.set_layout,
+                    &images,
+                    (&[], &buffers),
+                    &format!("{view_name} resolve"),
+                )?;
+                Ok(ViewState { target, run, draw_table, resolve, passes })
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self { words, views })
+    }
+
+    /// A job's passes drawing `views` (in the order this state was made for) of `draws` into
+    /// `targets`: their words emptied and tables written, each view's coverage, its large
+    /// triangles', the ties passes where the job has several draws, and the resolves. The
+    /// last step holds the resolves, timed as `range`.
+    pub fn steps<'s>(&'s self, targets: RigTargets<'s>, views: &[RigView<'s>], draws: &'s [Draw<'s>]) -> Vec<Step<'s>> {
+        assert!((1..=COVERAGE_MEMBERS).contains(&draws.len()), "1 to {COVERAGE_MEMBERS} draws a rig view");
+        assert_eq!(views.len(), self.views.len(), "a job's views are those its slot was made for");
+        // Each target's rows that its views resolve, emptied whole.
+        let mut emptied = [PixelRect::EMPTY; 3];
+        for (state, view) in self.views.iter().zip(views) {
+            let rows = &mut emptied[words_index(state.target)];
+            *rows = rows.union(view.resolved);
+        }
+        let fills: Vec<(&'s Buffer, u64, u64)> = self
+            .words
+            .iter()
+            .zip(emptied)
+            .filter_map(|(words, rows)| {
+                let (buffer, stride) = words.as_ref()?;
+                let row_bytes = u64::from(*stride) * VISIBILITY_WORD_BYTES;
+                (rows.height > 0).then(|| (buffer, u64::from(rows.row) * row_bytes, u64::from(rows.height) * row_bytes))
+            })
+            .collect();
+        let words: Vec<&'s Buffer> = self.words.iter().flatten().map(|(buffer, _)| buffer).collect();
+        // Each view's uniform block and draw table, as this job draws it.
+        let mut written: Vec<(&'s ViewState, CoverageUniforms, Vec<DrawConstants>)> = Vec::new();
+        for (state, view) in self.views.iter().zip(views) {
+            let (_, stride) = self.words[words_index(state.target)].as_ref().expect("the state's words");
+            let mut uniforms = <CoverageUniforms as bytemuck::Zeroable>::zeroed();
+            let covered = RasterView { area: rect(view.area), draw: 0, stride: *stride, _pad: [0; 2] };
+            for (m, (draw, &(constants, cull))) in draws.iter().zip(view.draws).enumerate() {
+                let triangles = draw.mesh.index_count / 3;
+                uniforms.members[m] = MemberConstants {
+                    views: [covered, RasterView { area: [0; 4], ..covered }],
+                    triangles,
+                    cull: if cull == vk::CullModeFlags::NONE { 0 } else { cull_sign(draw.mesh.solidity) },
+                    dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
+                    place: m as u32,
+                    z_keys: 0,
+                    _pad: [0; 3],
+                };
+                uniforms.draws[m] = constants;
+            }
+            let table: Vec<DrawConstants> = view.draws.iter().map(|&(constants, _)| constants).collect();
+            written.push((state, uniforms, table));
+        }
+        let mut cleared: Vec<(&'s Buffer, Access)> = words.iter().map(|&b| (b, Access::TransferWrite)).collect();
+        for state in &self.views {
+            let buffers = [&state.run.large_args, &state.run.uniforms, &state.draw_table];
+            cleared.extend(buffers.map(|b| (b, Access::TransferWrite)));
+        }
+        let prepare = move |ctx: &GpuContext, cmd| {
+            let d = &ctx.device;
+            // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffers;
+            // the rows lie within the words, their bytes a multiple of 4; the updates fit the
+            // buffers (at most COVERAGE_MEMBERS draws a table).
+            unsafe {
+                for (buffer, offset, size) in fills {
+                    d.cmd_fill_buffer(cmd, buffer.raw, offset, size, EMPTY_HALF);
+                }
+                for (state, uniforms, table) in &written {
+                    d.cmd_update_buffer(cmd, state.run.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                    d.cmd_update_buffer(cmd, state.run.uniforms.raw, 0, bytemuck::bytes_of(uniforms));
+                    d.cmd_update_buffer(cmd, state.draw_table.raw, 0, bytemuck::cast_slice(table));
+                }
+            }
+        };
+        let uses = |queue: Access, args: Access| {
+            let mut uses: Vec<(&'s Buffer, Access)> = words.iter().map(|&b| (b, Access::ComputeWrite)).collect();
+            for state in &self.views {
+                uses.extend([(&state.run.large, queue), (&state.run.large_args, args)]);
+                uses.push((&state.run.uniforms, Access::UniformRead));
+            }
+            uses
+        };
+        // Each view's coverage pipelines, and how many workgroups its draws need.
+        let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
+        let groups = largest.div_ceil(COVERAGE_GROUP);
+        let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
+        let slices = draws.len() as u32;
+        let cover = move |_: &GpuContext, cmd| {
+            for state in &self.views {
+                state.run.set.dispatch_slices(cmd, state.passes.nearest.0, &[], coverage_groups, slices);
+            }
+        };
+        let large = move |_: &GpuContext, cmd| {
+            for state in &self.views {
+                state.run.set.dispatch_indirect(cmd, state.passes.nearest.1, &[], &state.run.large_args);
+            }
+        };
+        let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
+        let mut steps = vec![
+            Step::new(Vec::new(), cleared, prepare),
+            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover),
+            Step::new(Vec::new(), reading_queue(), large),
+        ];
+        if draws.len() > 1 {
+            // Both ties passes only raise the words' tagged triangles (their depths stay), so
+            // they need no barrier between them.
+            let record_ties = move |_: &GpuContext, cmd| {
+                for state in &self.views {
+                    let (small, large) = state.passes.ties.expect("a slot for jobs of several draws has ties passes");
+                    state.run.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
+                    state.run.set.dispatch_indirect(cmd, large, &[], &state.run.large_args);
+                }
+            };
+            steps.push(Step::new(Vec::new(), reading_queue(), record_ties));
+        }
+        let mut images: Vec<_> = Vec::new();
+        for target in [RigTarget::Reference, RigTarget::Witnesses(0), RigTarget::Witnesses(1)] {
+            if self.views.iter().any(|state| state.target == target) {
+                let attachments = targets.of(target).into_iter().flat_map(|t| &t.colour);
+                images.extend(attachments.map(|image| (image, Access::ComputeWrite)));
+            }
+        }
+        let mut reads: Vec<(&'s Buffer, Access)> = words.iter().map(|&b| (b, Access::ComputeRead)).collect();
+        reads.extend(self.views.iter().map(|state| (&state.draw_table, Access::ComputeRead)));
+        let resolves: Vec<(&'s ViewState, RasterView)> = self
+            .views
+            .iter()
+            .zip(views)
+            .map(|(state, view)| {
+                let stride = self.words[words_index(state.target)].as_ref().map_or(0, |(_, stride)| *stride);
+                (state, RasterView { area: rect(view.resolved), draw: 0, stride, _pad: [0; 2] })
+            })
+            .collect();
+        let resolve = move |_: &GpuContext, cmd| {
+            for (state, view) in &resolves {
+                let groups = [view.area[2], view.area[3]].map(|n| n.div_ceil(8));
+                if groups[0] > 0 && groups[1] > 0 {
+                    state.resolve.dispatch(cmd, state.passes.resolve, bytemuck::bytes_of(view), groups);
+                }
+            }
+        };
+        steps.push(Step::new(images, reads, resolve).timed("range"));
+        steps
+    }
+}
+
+fn rect(area: PixelRect) -> [u32; 4] {
+    [area.col, area.row, area.width, area.height]
+}
