@@ -65,7 +65,7 @@ fn main() -> anyhow::Result<()> {
     // First, before other tables leave freed memory resident.
     memory_by_batch(&[&verifier, &compute], &sensed, &scene, quick)?;
     if std::env::args().any(|a| a == "--rigs") {
-        return rig_costs(&verifier, &sensed, &scene);
+        return rig_costs([&verifier, &compute], &sensed, &scene);
     }
     if std::env::args().any(|a| a == "--rasters") {
         raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
@@ -108,7 +108,7 @@ fn main() -> anyhow::Result<()> {
     }
     effect_costs(&verifier, &sensed, &scene)?;
     cold_start()?;
-    rig_costs(&verifier, &sensed, &scene)?;
+    rig_costs([&verifier, &compute], &sensed, &scene)?;
     raster_costs(&[&verifier, &compute], &sensed, &scene, quick)?;
     filling_costs(&[&verifier, &compute], quick)
 }
@@ -506,8 +506,11 @@ fn hypotheses(model: &std::sync::Arc<rangesynth::verify::Model>, n: usize) -> Ve
 /// pixel covers the scanner's pitch at the model's depth (fx = 5 / 0.02) and a projector as far
 /// to its side as the model is deep (the 45° the scanner's θ gives), and also the camera with a
 /// lamp in the projector's direction (a directional witness, its image planned for each
-/// hypothesis); each hypothesis is the scanner's turned to face the camera 5 units away.
-fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
+/// hypothesis); each hypothesis is the scanner's turned to face the camera 5 units away. Each
+/// with the graphics pipeline and the compute rasterizer (`verifiers`), each against the
+/// scanner with the same rasterizer, and compute against graphics.
+fn rig_costs(verifiers: [&Verifier; 2], sensed: &SensedImage, scene: &Scene) -> anyhow::Result<()> {
+    let verifier = verifiers[0];
     use rangesynth::sensor::{Direction, Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
     let model = verifier.model("builtin:sphere:100", Path::new("."))?;
     let k = Intrinsics { width: 256, height: 256, fx: 250.0, fy: 250.0, cx: 127.5, cy: 127.5 };
@@ -543,13 +546,16 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
         ..scene.clone()
     };
     let rig_sensed = SensedImage::new(&RangeImage::from(&verifier.renderer().render(&rig_scene)?), &rig)?;
-    println!("a pinhole rig beside the scanner: sphere:100, 256², a batch of 64");
-    println!("{:<34} {:>8} {:>8}", "sensor, shadow mode", "hyp/s", "ratio");
-    let rate = |sensed: &SensedImage, settings: &VerifySettings, batch: &[Hypothesis]| -> anyhow::Result<f64> {
+    println!("a pinhole rig beside the scanner: sphere:100, 256², a batch of 64, with each rasterizer");
+    println!(
+        "{:<34} {:>13} {:>10} {:>13} {:>10} {:>9}",
+        "sensor, shadow mode", "graphics hyp/s", "vs scanner", "compute hyp/s", "vs scanner", "compute÷"
+    );
+    let rate = |verifier: &Verifier, sensed: &SensedImage, settings: &VerifySettings, batch: &[Hypothesis]| {
         verifier.verify(sensed, settings, &batch[..1], &mut |_| {})?;
         let start = Instant::now();
         verifier.verify(sensed, settings, batch, &mut |_| {})?;
-        Ok(batch.len() as f64 / start.elapsed().as_secs_f64())
+        anyhow::Ok(batch.len() as f64 / start.elapsed().as_secs_f64())
     };
     // Each mode's pair in turn, the scanner's rate the ratio's base: the fastest of three
     // runs each, taken by turns (this machine's runs vary by up to a third).
@@ -558,16 +564,33 @@ fn rig_costs(verifier: &Verifier, sensed: &SensedImage, scene: &Scene) -> anyhow
         &lamp_rig,
     )?;
     for mode in [ShadowMode::Depth, ShadowMode::Label] {
-        let (mut scanner, mut pinhole, mut lamp) = (0.0f64, 0.0f64, 0.0f64);
+        // [sensor][rasterizer]: the scanner, camera + projector, camera + lamp.
+        let mut rates = [[0.0f64; 2]; 3];
         for _ in 0..3 {
-            scanner = scanner.max(rate(sensed, &settings(scene.sensor.clone(), mode), &scanner_hypotheses)?);
-            pinhole = pinhole.max(rate(&rig_sensed, &settings(rig.clone(), mode), &rig_hypotheses)?);
-            lamp = lamp.max(rate(&lamp_sensed, &settings(lamp_rig.clone(), mode), &rig_hypotheses)?);
+            for (r, verifier) in verifiers.into_iter().enumerate() {
+                let runs = [
+                    (sensed, settings(scene.sensor.clone(), mode), &scanner_hypotheses),
+                    (&rig_sensed, settings(rig.clone(), mode), &rig_hypotheses),
+                    (&lamp_sensed, settings(lamp_rig.clone(), mode), &rig_hypotheses),
+                ];
+                for (k, (sensed, settings, batch)) in runs.iter().enumerate() {
+                    rates[k][r] = rates[k][r].max(rate(verifier, sensed, settings, batch)?);
+                }
+            }
         }
-        let name = |who: &str| format!("{who}, {}", mode.as_str());
-        println!("{:<34} {:>8.1} {:>7.2}×", name("the scanner"), scanner, 1.0);
-        println!("{:<34} {:>8.1} {:>7.2}×", name("camera + projector"), pinhole, pinhole / scanner);
-        println!("{:<34} {:>8.1} {:>7.2}×", name("camera + lamp"), lamp, lamp / scanner);
+        for (k, who) in ["the scanner", "camera + projector", "camera + lamp"].into_iter().enumerate() {
+            let [graphics, compute] = rates[k];
+            let [scanner_graphics, scanner_compute] = rates[0];
+            println!(
+                "{:<34} {:>13.1} {:>9.2}× {:>13.1} {:>9.2}× {:>8.2}×",
+                format!("{who}, {}", mode.as_str()),
+                graphics,
+                graphics / scanner_graphics,
+                compute,
+                compute / scanner_compute,
+                compute / graphics
+            );
+        }
     }
     Ok(())
 }

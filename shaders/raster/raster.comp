@@ -42,9 +42,11 @@
 // them), so it steps as an orthographic view's does; the nearest has the greatest, keyed by
 // its flipped bits. A solid's triangles are culled as the graphics pipeline culls them, by the
 // sign of their snapped corners' area (a pinhole view has no one direction to test a normal
-// against), and the ties passes allow pinhole_tie_depth (draw.glsl) at each pixel. No draw
-// reaching the near plane comes here (src/render/pinhole/job.rs): no corner lies behind the
-// view's centre.
+// against; one turned clearly away is skipped by its normal first: turned_away), and the ties
+// passes allow pinhole_tie_depth (draw.glsl) at each pixel. A triangle the near plane cuts, or
+// one reaching far beyond the view, goes to the large triangles' pass, which clips it to the
+// near plane and the viewport as the graphics pipeline's clipper does (clipped_polygon) and
+// covers what is left, fanned into triangles.
 //
 // A software rasterizer runs every instruction of a shader for every group of invocations,
 // whatever their branches, so the small triangles' pass holds no 64-bit path of its own.
@@ -204,6 +206,21 @@ bool culled_by_winding(int cull, EDGE_INT area) {
     return (cull > 0 && area > 0) || (cull < 0 && area < 0);
 }
 
+#ifdef PINHOLE
+// PINHOLE: whether a solid's triangle (its normal and a corner as the mesh stores them) faces
+// away from the view's centre by more than TURNED_AWAY (the sine of the angle between its
+// plane and the ray to its corner): so far from edge-on that its snapped corners wind as its
+// normal says, and the graphics pipeline culls it, unless it is a sliver narrower than about
+// 1/64 pixel across where snapping may turn its winding (rasterizers.md, "Same images"). The
+// small triangles' pass then skips it before reading its other corners, as the scanner's
+// views skip a triangle by its normal.
+const float TURNED_AWAY = 1.0 / 1024.0;
+bool turned_away(int cull, DrawData d, vec3 model_normal, vec3 model_corner) {
+    vec3 n = rotate_to_view(d, model_normal), a = to_view(d, model_corner);
+    return cull != 0 && float(cull) * dot(n, a) > TURNED_AWAY * length(a);
+}
+#endif
+
 // A triangle set up for coverage tests in one view of one member: its snapped corners, the
 // pixels of its bounding box within the view's area, and its plane's depth.
 struct Setup {
@@ -238,29 +255,10 @@ ViewTriangle to_view_triangle(DrawData d, MeshTriangle m) {
 }
 
 #ifdef PINHOLE
-// The part of a pinhole view's triangle that lies beyond its near plane, where the graphics
-// pipeline's clipper cuts it (depth 1, at Z = s / (1 + s / far): pinhole_clip_position): its
-// corners in `part`, in order, and how many: 3 (the whole triangle, or a corner of it), 4 (a
-// quadrilateral, two triangles fanned from part[0]) or fewer (none of it).
+// The depth (along the optical axis) of a pinhole view's near plane, where the graphics
+// pipeline's clipper cuts: depth 1, at Z = s / (1 + s / far) (pinhole_clip_position).
 float near_plane(DrawData d) {
     return d.z_range.x / (1.0 + d.z_range.y);
-}
-
-int near_parts(DrawData d, ViewTriangle v, out vec3 part[4]) {
-    float near = near_plane(d);
-    int corners = 0;
-    for (int k = 0; k < 3; k++) {
-        vec3 a = v.corner[k], b = v.corner[k == 2 ? 0 : k + 1];
-        bool a_beyond = a.z >= near, b_beyond = b.z >= near;
-        if (a_beyond) {
-            part[corners++] = a;
-        }
-        if (a_beyond != b_beyond) {
-            float along = (near - a.z) / (b.z - a.z);
-            part[corners++] = vec3(mix(a.xy, b.xy, along), near);
-        }
-    }
-    return corners;
 }
 
 // How far point p (view frame) lies inside clipping plane k of a pinhole view, as the graphics
@@ -279,8 +277,8 @@ float inside_clip_plane(DrawData d, int k, vec3 p) {
 // the viewport (a far larger square than the view: src/render/raster/draw.rs, ViewportFrame)
 // and beyond the near plane, its corners in order in `polygon` (at most 8, a triangle cut by
 // five planes), and how many. For the large triangles' pass, whose parts of a triangle then
-// reach no farther than the viewport: the small triangles' pass queues any triangle a corner of
-// whose part beyond the near plane lies farther than it covers (coverage_of).
+// reach no farther than the viewport: the small triangles' pass queues every triangle the near
+// plane cuts, and every one with a corner farther than it covers (cover_pinhole).
 int clipped_polygon(DrawData d, ViewTriangle v, out vec3 polygon[8]) {
     polygon[0] = v.corner[0];
     polygon[1] = v.corner[1];
@@ -307,7 +305,7 @@ int clipped_polygon(DrawData d, ViewTriangle v, out vec3 polygon[8]) {
 #endif
 
 // Sets up corners c0, c1, c2 (view frame) of triangle `plane`: the triangle itself, or
-// (PINHOLE) a part of it the near plane leaves, whose depths are its plane's.
+// (PINHOLE) a part of it the clipper keeps, whose depths are its plane's.
 Setup set_up(uint member, uint v, DrawData d, Member constants, ViewTriangle plane, vec3 c0, vec3 c1, vec3 c2) {
     RasterView view = constants.views[v];
     Setup s;
@@ -606,36 +604,23 @@ void cover_here(uint t, Setup s) {
 }
 
 #ifdef PINHOLE
-// Covers triangle t of a member's pinhole view (`v` its corners and normal there) where it
-// lies beyond the near plane: whole, or the one or two triangles the near plane leaves of it
-// (near_parts). Where any part is large, the triangle is queued, and the large triangles' pass
-// covers every part.
+// Covers triangle t of a member's pinhole view (`v` its corners and normal there), or queues
+// it for the large triangles' pass, which clips it as the graphics pipeline's clipper does
+// (clipped_polygon): where it is large or far, and where the near plane cuts it (rare: a model
+// reaching the view's centre, as a floor under a camera does).
 void cover_pinhole(uint member, DrawData d, Member constants, uint t, ViewTriangle v) {
-    vec3 part[4];
-    int corners = near_parts(d, v, part);
-    if (corners < 3) {
-        return;
+    Setup s = set_up(member, 0u, d, constants, v, v.corner[0], v.corner[1], v.corner[2]);
+    float near = near_plane(d);
+    bool cut = min(min(v.corner[0].z, v.corner[1].z), v.corner[2].z) < near;
+    uint coverage = cut ? COVERED_LARGE : coverage_of(s);
+    if (coverage == COVERED_HERE) {
+        cover_here(t, s);
     }
-    Setup first = set_up(member, 0u, d, constants, v, part[0], part[1], part[2]);
-    uint first_coverage = coverage_of(first);
-    Setup second = first;
-    uint second_coverage = COVERED_NOWHERE;
-    if (corners == 4) {
-        second = set_up(member, 0u, d, constants, v, part[0], part[2], part[3]);
-        second_coverage = coverage_of(second);
-    }
-    if (first_coverage == COVERED_LARGE || second_coverage == COVERED_LARGE) {
 #ifndef TIES
-        queue_large(t, first);
+    else if (coverage == COVERED_LARGE) {
+        queue_large(t, s);
+    }
 #endif
-        return;
-    }
-    if (first_coverage == COVERED_HERE) {
-        cover_here(t, first);
-    }
-    if (second_coverage == COVERED_HERE) {
-        cover_here(t, second);
-    }
 }
 #else
 // Covers a triangle's pixels in view v of a member, or queues it there for the large
@@ -681,7 +666,12 @@ void main() {
     float third_z;
     vec3 normal = mesh_normal_by_words(range_draw, t, third_z);
 #ifdef PINHOLE
-    // One view, whose cull mode is the winding's (cover_here).
+    // One view. A solid's triangle turned clearly away from the view's centre needs no more
+    // than its normal and a corner (turned_away); the others are culled, where at all, by the
+    // winding of their snapped corners (cover_here).
+    if (turned_away(constants.cull, range_draw, normal, mesh_corner_by_words(range_draw, t, 0u))) {
+        return;
+    }
     cover_pinhole(member, range_draw, constants, t, to_view_triangle(range_draw, read_triangle(range_draw, t, normal, third_z)));
 #else
     // The normal first: a triangle culled in every view needs no corners.

@@ -5,7 +5,7 @@
 use crate::effects::Effects;
 use crate::exact;
 use crate::render::plan::Views;
-use crate::render::raster::compute::{large_queue_bytes, COVERAGE_MEMBERS, VISIBILITY_WORD_BYTES};
+use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use crate::render::stages::host_view::HostView;
 use crate::render::targets::ViewKind;
 
@@ -57,16 +57,15 @@ pub(crate) fn rig_render_bytes(
 /// GPU bytes one job's slot takes under a rig's pinhole views: [`slot_bytes`] with the
 /// witnesses' images of `witness_pixels` in place of a shadow view's, and each range
 /// pixel's witness bits; and where the compute rasterizer draws its `views` views
-/// (raster/compute/rig.rs), `compute` = (the most triangles a draw has, `views`), their
-/// visibility words and each view's queue, with room for every triangle of as many draws as a
-/// view shares.
+/// (raster/compute/rig.rs), `compute` = (the triangles a view's queue has room for, `views`),
+/// their visibility words and queues.
 pub(crate) fn rig_slot_bytes(
     (pixels, witness_pixels): (u64, u64),
     effects: &Effects,
     compute: Option<(u64, u64)>,
 ) -> u64 {
     let compute_bytes = compute.map_or(0, |(triangles, views)| {
-        let queues = large_queue_bytes(triangles.saturating_mul(COVERAGE_MEMBERS as u64), views);
+        let queues = large_queue_bytes(triangles, views);
         VISIBILITY_WORD_BYTES * (pixels + witness_pixels) + queues
     });
     slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels + compute_bytes

@@ -163,9 +163,10 @@ impl<'p> RigCoverage<'p> {
         };
         let words =
             [words_of(RigTarget::Reference)?, words_of(RigTarget::Witnesses(0))?, words_of(RigTarget::Witnesses(1))?];
-        let layout = pipelines.coverage(COVERAGE_MEMBERS)?.tiled.range.set_layout;
-        // Every draw's triangles may be queued, in the one view a dispatch covers.
-        let large_bytes = large_queue_bytes(u64::from(max_triangles), 1) * COVERAGE_MEMBERS as u64;
+        // Every draw's triangles may be queued, in the one view a dispatch covers: room for as
+        // many draws as a job has (Renderer::computes checks that this much binds).
+        let draws = if several_draws { COVERAGE_MEMBERS as u64 } else { 1 };
+        let large_bytes = large_queue_bytes(u64::from(max_triangles) * draws, 1);
         matches_shader_bindings!([RASTER_RESOLVE_PINHOLE_COMP] { label, z, dz_dx, dz_dy, DrawTable, Nearest });
         matches_shader_bindings!([RASTER_RESOLVE_SHADOW_COMP] { visibility, DrawTable, Nearest });
         let views = views
@@ -176,13 +177,14 @@ impl<'p> RigCoverage<'p> {
                 let missing = || crate::error::Error::Scene(format!("{view_name}: its attachments are missing"));
                 let (view_words, _) = words[words_index(target)].as_ref().ok_or_else(missing)?;
                 let attachments = targets.of(target).ok_or_else(missing)?;
-                let run =
-                    CoverageRun::binding(ctx, layout, [view_words; 2 * COVERAGE_MEMBERS], large_bytes, &view_name)?;
                 let table_bytes = (COVERAGE_MEMBERS * size_of::<DrawConstants>()) as u64;
                 let draw_table =
                     Buffer::new(ctx, BufferDesc::gpu_storage(table_bytes), &format!("{view_name} draw table"))?;
                 let images: Vec<_> = attachments.colour.iter().collect();
                 let coverage = pipelines.rig_coverage(projection, Coverage::Nearest)?;
+                let layout = coverage.tiled.range.set_layout;
+                let run =
+                    CoverageRun::binding(ctx, layout, [view_words; 2 * COVERAGE_MEMBERS], large_bytes, &view_name)?;
                 let ties = several_draws
                     .then(|| pipelines.rig_coverage(projection, Coverage::Ties))
                     .transpose()?
@@ -208,8 +210,8 @@ impl<'p> RigCoverage<'p> {
 
     /// A job's passes drawing `views` (in the order this state was made for) of `draws` into
     /// `targets`: their words emptied and tables written, each view's coverage, its large
-    /// triangles', the ties passes where the job has several draws, and the resolves. The
-    /// last step holds the resolves, timed as `range`.
+    /// triangles', the ties passes where the job has several draws, and the resolves (timed as
+    /// `range`).
     pub fn steps<'s>(&'s self, targets: RigTargets<'s>, views: &[RigView<'s>], draws: &'s [Draw<'s>]) -> Vec<Step<'s>> {
         assert!((1..=COVERAGE_MEMBERS).contains(&draws.len()), "1 to {COVERAGE_MEMBERS} draws a rig view");
         assert_eq!(views.len(), self.views.len(), "a job's views are those its slot was made for");
@@ -298,9 +300,9 @@ impl<'p> RigCoverage<'p> {
         };
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
         let mut steps = vec![
-            Step::new(Vec::new(), cleared, prepare),
-            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover),
-            Step::new(Vec::new(), reading_queue(), large),
+            Step::new(Vec::new(), cleared, prepare).timed("coverage: set-up"),
+            Step::new(Vec::new(), uses(Access::ComputeWrite, Access::ComputeWrite), cover).timed("coverage"),
+            Step::new(Vec::new(), reading_queue(), large).timed("coverage: large triangles"),
         ];
         if draws.len() > 1 {
             // Both ties passes only raise the words' tagged triangles (their depths stay), so
@@ -312,7 +314,7 @@ impl<'p> RigCoverage<'p> {
                     state.run.set.dispatch_indirect(cmd, large, &[], &state.run.large_args);
                 }
             };
-            steps.push(Step::new(Vec::new(), reading_queue(), record_ties));
+            steps.push(Step::new(Vec::new(), reading_queue(), record_ties).timed("coverage: ties"));
         }
         let mut images: Vec<_> = Vec::new();
         for target in [RigTarget::Reference, RigTarget::Witnesses(0), RigTarget::Witnesses(1)] {
