@@ -33,9 +33,9 @@
 // plane) is no more than the nearest's, keep the larger tagged triangle with an atomicMax:
 // the last drawn.
 //
-// PINHOLE: the variants for a rig's pinhole views (src/render/raster/compute/rig.rs), one view
-// a dispatch (VIEW_COUNT 1, the view as the range view of every member: the draws sharing its
-// words, as in a view of several draws). Corners go to window coordinates as raster.vert's
+// PINHOLE: the variants for a rig's pinhole views (src/render/raster/compute/rig.rs), one or
+// two views a dispatch (the reference view, and a witness's band as the shadow view), each
+// view's words shared by the members, its draws, as in a view of several draws. Corners go to window coordinates as raster.vert's
 // pinhole_clip_position and the viewport transform put them (x and y times 1 / w, as lavapipe
 // divides). The depth s / Z − s / far of a triangle's plane is affine in the pixel's column
 // and row too (1 / Z at a pixel is (n · ray) / (n · a), and the ray's x and y are affine in
@@ -83,7 +83,9 @@ struct Member {
                          // its triangles there (above bit MEMBER_SHIFT); else 0
     uint z_keys;         // 1: its range view's words hold z keys (visibility_word.glsl): a
                          // view of one draw; 0: depths, for words shared by several draws
-    uint pad0, pad1, pad2;
+    int second_cull;     // PINHOLE: view 1's cull (a witness's band beside the reference view,
+                         // which may lie inside a solid the reference view culls); else `cull`
+    uint pad0, pad1;
 };
 layout(set = 0, binding = 0, std140) uniform Coverage {
     DrawData draws[2 * COVERAGE_MEMBERS];
@@ -312,7 +314,7 @@ Setup set_up(uint member, uint v, DrawData d, Member constants, ViewTriangle pla
     s.member = member;
     s.view = v;
     s.tag = constants.place << MEMBER_SHIFT;
-    s.cull = constants.cull;
+    s.cull = v == 0u ? constants.cull : constants.second_cull;
     s.stride = view.stride;
     vec3 corner = plane.corner[0], normal = plane.normal;
     s.z_keys = v == 0u && constants.z_keys != 0u;
@@ -604,12 +606,12 @@ void cover_here(uint t, Setup s) {
 }
 
 #ifdef PINHOLE
-// Covers triangle t of a member's pinhole view (`v` its corners and normal there), or queues
+// Covers triangle t of a member's pinhole view `view` (`v` its corners and normal there), or queues
 // it for the large triangles' pass, which clips it as the graphics pipeline's clipper does
 // (clipped_polygon): where it is large or far, and where the near plane cuts it (rare: a model
 // reaching the view's centre, as a floor under a camera does).
-void cover_pinhole(uint member, DrawData d, Member constants, uint t, ViewTriangle v) {
-    Setup s = set_up(member, 0u, d, constants, v, v.corner[0], v.corner[1], v.corner[2]);
+void cover_pinhole(uint member, uint view, DrawData d, Member constants, uint t, ViewTriangle v) {
+    Setup s = set_up(member, view, d, constants, v, v.corner[0], v.corner[1], v.corner[2]);
     float near = near_plane(d);
     bool cut = min(min(v.corner[0].z, v.corner[1].z), v.corner[2].z) < near;
     uint coverage = cut ? COVERED_LARGE : coverage_of(s);
@@ -666,13 +668,23 @@ void main() {
     float third_z;
     vec3 normal = mesh_normal_by_words(range_draw, t, third_z);
 #ifdef PINHOLE
-    // One view. A solid's triangle turned clearly away from the view's centre needs no more
-    // than its normal and a corner (turned_away); the others are culled, where at all, by the
-    // winding of their snapped corners (cover_here).
-    if (turned_away(constants.cull, range_draw, normal, mesh_corner_by_words(range_draw, t, 0u))) {
+    // One view, or two (VIEW_COUNT 2: a witness's band beside the reference view). A solid's
+    // triangle turned clearly away from a view's centre needs no more than its normal and a
+    // corner there (turned_away); the others are culled, where at all, by the winding of their
+    // snapped corners (cover_here).
+    vec3 first_corner = mesh_corner_by_words(range_draw, t, 0u);
+    bool in_range = !turned_away(constants.cull, range_draw, normal, first_corner);
+    bool in_shadow = VIEW_COUNT > 1u && !turned_away(constants.second_cull, shadow_draw, normal, first_corner);
+    if (!in_range && !in_shadow) {
         return;
     }
-    cover_pinhole(member, range_draw, constants, t, to_view_triangle(range_draw, read_triangle(range_draw, t, normal, third_z)));
+    MeshTriangle m = read_triangle(range_draw, t, normal, third_z);
+    if (in_range) {
+        cover_pinhole(member, 0u, range_draw, constants, t, to_view_triangle(range_draw, m));
+    }
+    if (in_shadow) {
+        cover_pinhole(member, 1u, shadow_draw, constants, t, to_view_triangle(shadow_draw, m));
+    }
 #else
     // The normal first: a triangle culled in every view needs no corners.
     bool in_range = !culled(constants.cull, range_draw, normal);

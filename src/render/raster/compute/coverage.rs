@@ -176,7 +176,8 @@ impl CoverageGroup {
                 dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
                 place: if self.shared_words { m as u32 } else { 0 },
                 z_keys: u32::from(!self.shared_words),
-                _pad: [0; 3],
+                second_cull: cull_sign(member.draw.mesh.solidity),
+                _pad: [0; 2],
             };
             for (slot, view) in [m, COVERAGE_MEMBERS + m].into_iter().zip(member.views.views()) {
                 uniforms.draws[slot] = view.draw_table.entries[member.index as usize];

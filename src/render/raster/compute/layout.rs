@@ -33,11 +33,14 @@ pub(super) struct MemberConstants {
     /// (shaders/raster/visibility_word.glsl), from which its resolve reads z; 0 where members share
     /// words, whose ties passes compare depths.
     pub(super) z_keys: u32,
-    pub(super) _pad: [u32; 3],
+    /// A rig's dispatch of two pinhole views: the second's cull (raster/compute/rig.rs); else
+    /// `cull`.
+    pub(super) second_cull: i32,
+    pub(super) _pad: [u32; 2],
 }
 
 matches_shader_struct!(RasterView, RasterView { area, draw, stride });
-matches_shader_struct!(MemberConstants, Member { views, triangles, cull, dealt_rows, place, z_keys });
+matches_shader_struct!(MemberConstants, Member { views, triangles, cull, dealt_rows, place, z_keys, second_cull });
 
 /// The coverage passes' uniform block; matches `Coverage` in shaders/raster/raster.comp (std140: the
 /// same offsets, as DrawData and Member keep them and their sizes are multiples of 16). Each

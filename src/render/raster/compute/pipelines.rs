@@ -33,11 +33,11 @@ pub(super) struct CoveragePipelines {
     pub(super) projection: Projection,
 }
 
-/// The small triangles' coverage of the range view alone, and of both views (orthographic
-/// views only: a rig covers its pinhole views one a dispatch).
+/// The small triangles' coverage of the range view alone, and of both views (a rig's: its
+/// reference view and a witness's band).
 pub(super) struct SmallTriangles {
     pub(super) range: ComputePipeline,
-    pub(super) both: Option<ComputePipeline>,
+    pub(super) both: ComputePipeline,
 }
 
 /// Whether every triangle of a mesh whose longest edge is `longest_edge` (model units) has a
@@ -63,17 +63,17 @@ pub(super) enum Coverage {
 impl CoveragePipelines {
     pub(super) fn new(ctx: &Arc<GpuContext>, members: u32, kind: Coverage, projection: Projection) -> Result<Self> {
         use Projection::{Orthographic, Pinhole};
-        let (large, views) = match (kind, projection) {
-            (Coverage::Nearest, Orthographic) => (shaders::RASTER_LARGE_COMP, 2),
-            (Coverage::Ties, Orthographic) => (shaders::RASTER_LARGE_TIES_COMP, 2),
-            (Coverage::Nearest, Pinhole) => (shaders::RASTER_PINHOLE_LARGE_COMP, 1),
-            (Coverage::Ties, Pinhole) => (shaders::RASTER_PINHOLE_LARGE_TIES_COMP, 1),
+        let large = match (kind, projection) {
+            (Coverage::Nearest, Orthographic) => shaders::RASTER_LARGE_COMP,
+            (Coverage::Ties, Orthographic) => shaders::RASTER_LARGE_TIES_COMP,
+            (Coverage::Nearest, Pinhole) => shaders::RASTER_PINHOLE_LARGE_COMP,
+            (Coverage::Ties, Pinhole) => shaders::RASTER_PINHOLE_LARGE_TIES_COMP,
         };
         let name = format!("compute raster coverage ({}large triangles)", projection_name(projection));
         Ok(Self {
             tiled: SmallTriangles::new(ctx, (members, kind, projection), true)?,
             one_tile: OnceLock::new(),
-            large: covering(ctx, (members, kind), large, (views, true), &name)?,
+            large: covering(ctx, (members, kind), large, (2, true), &name)?,
             ctx: ctx.clone(),
             members,
             kind,
@@ -116,16 +116,19 @@ impl SmallTriangles {
             let tiles = if tiles { "" } else { ", one tile" };
             format!("compute raster coverage ({}{view}{tiles})", projection_name(projection))
         };
-        let both = match projection {
-            Orthographic => Some(covering(ctx, (members, kind), code, (2, tiles), &name("both views"))?),
-            Pinhole => None,
-        };
-        Ok(Self { range: covering(ctx, (members, kind), code, (1, tiles), &name("range view"))?, both })
+        Ok(Self {
+            range: covering(ctx, (members, kind), code, (1, tiles), &name("range view"))?,
+            both: covering(ctx, (members, kind), code, (2, tiles), &name("both views"))?,
+        })
     }
 
     /// The pipeline covering the range view, and where `both`, the shadow view too.
     pub(super) fn covering(&self, both: bool) -> &ComputePipeline {
-        self.both.as_ref().filter(|_| both).unwrap_or(&self.range)
+        if both {
+            &self.both
+        } else {
+            &self.range
+        }
     }
 }
 

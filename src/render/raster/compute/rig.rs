@@ -1,16 +1,18 @@
-//! A rig's views on the compute rasterizer (docs/compute-rasterizer.md, "Rigs"): the pinhole
-//! reference view and every witness's band, each covered by a dispatch of its own whose
-//! members are the job's draws, sharing the view's words as the draws of a scanner view of
-//! several objects do (with the ties passes where there are several), then resolved into the
-//! attachments the graphics pipeline draws: the reference view's, and the witnesses'
-//! visibility (label, draw, triangle). The witnesses' shadow test and every pass after it read
-//! them unchanged.
+//! A rig's views on the compute rasterizer (docs/rasterizers.md, "How the compute rasterizer
+//! works"): the pinhole reference view and every witness's band, covered two of the same
+//! projection a dispatch (each triangle read once for both, as the scanner's range and shadow
+//! views are), the dispatch's members the job's draws, sharing each view's words as the draws
+//! of a scanner view of several objects do (with the ties passes where there are several);
+//! then resolved into the attachments the graphics pipeline draws: the reference view's, and
+//! the witnesses' visibility (label, draw, triangle). The witnesses' shadow test and every pass
+//! after it read them unchanged.
 //!
 //! A pinhole view's coverage is raster.comp's PINHOLE variant (window coordinates divided by
-//! w as lavapipe divides, depths larger nearer, cull by winding); a directional witness's band
-//! is orthographic, covered as a scanner's shadow view is. The words always hold depths (never
-//! z keys): the reference view's resolve works its depth and gradient out from the triangle
-//! (raster_resolve.comp, PINHOLE), as raster.frag does.
+//! w as lavapipe divides, depths larger nearer, cull by winding, clipping as the graphics
+//! pipeline's clipper); a directional witness's band is orthographic, covered as a scanner's
+//! shadow view is. The words always hold depths (never z keys): the reference view's resolve
+//! works its depth and gradient out from the triangle (raster_resolve.comp, PINHOLE), as
+//! raster.frag does.
 
 use super::coverage::CoverageRun;
 use super::layout::{
@@ -64,30 +66,33 @@ pub(crate) struct RigView<'a> {
     pub draws: &'a [(DrawConstants, vk::CullModeFlags)],
 }
 
-/// What one view holds in a slot: where it is resolved, its coverage run (uniforms, queue,
-/// bindings), its draw table (the resolve reads it; each job writes it), its resolve's
-/// bindings, and its pipelines.
+/// What one view holds in a slot: where it is resolved, its draw table (the resolve reads it;
+/// each job writes it), and its resolve's bindings and pipeline.
 struct ViewState<'p> {
     target: RigTarget,
-    run: CoverageRun,
     draw_table: Buffer,
     resolve: StorageSet,
-    passes: ViewPasses<'p>,
+    resolve_pipeline: &'p ComputePipeline,
 }
 
-/// A view's pipelines: its coverage's (small triangles, large), its ties passes' where the
-/// slot's jobs have several draws, and its resolve.
-struct ViewPasses<'p> {
+/// One coverage dispatch's views (one, or two of the same projection: the second as the
+/// shader's shadow view, so that each triangle is read once for both), its buffers and
+/// bindings, and its pipelines: coverage (small triangles, large) and, where the slot's jobs
+/// have several draws, the ties passes.
+struct RunState<'p> {
+    views: Vec<usize>,
+    run: CoverageRun,
     nearest: (&'p ComputePipeline, &'p ComputePipeline),
     ties: Option<(&'p ComputePipeline, &'p ComputePipeline)>,
-    resolve: &'p ComputePipeline,
 }
 
 /// A slot's state for a rig's views on the compute rasterizer: the words of the reference view
-/// and of each witness attachment, and each view's state, in the order of the job's views.
+/// and of each witness attachment, each view's state in the order of the job's views, and the
+/// coverage dispatches that cover them.
 pub(crate) struct RigCoverage<'p> {
     words: [Option<(Buffer, u32)>; 3],
     views: Vec<ViewState<'p>>,
+    runs: Vec<RunState<'p>>,
 }
 
 /// Where a target's words are among [`RigCoverage`]'s.
@@ -163,49 +168,62 @@ impl<'p> RigCoverage<'p> {
         };
         let words =
             [words_of(RigTarget::Reference)?, words_of(RigTarget::Witnesses(0))?, words_of(RigTarget::Witnesses(1))?];
-        // Every draw's triangles may be queued, in the one view a dispatch covers: room for as
-        // many draws as a job has (Renderer::computes checks that this much binds).
+        // Every draw's triangles may be queued in each view of a dispatch: room for as many
+        // draws as a job has (Renderer::computes checks that this much binds).
         let draws = if several_draws { COVERAGE_MEMBERS as u64 } else { 1 };
-        let large_bytes = large_queue_bytes(u64::from(max_triangles) * draws, 1);
+        let large_bytes = large_queue_bytes(u64::from(max_triangles) * draws, 2);
+        let missing =
+            |i: usize| crate::error::Error::Scene(format!("{name} rig view {i}: its attachments are missing"));
+        let view_words = |i: usize| -> Result<&Buffer> {
+            let (target, _) = views[i];
+            words[words_index(target)].as_ref().map(|(buffer, _)| buffer).ok_or_else(|| missing(i))
+        };
         matches_shader_bindings!([RASTER_RESOLVE_PINHOLE_COMP] { label, z, dz_dx, dz_dy, DrawTable, Nearest });
         matches_shader_bindings!([RASTER_RESOLVE_SHADOW_COMP] { visibility, DrawTable, Nearest });
-        let views = views
+        let view_states = views
             .iter()
             .enumerate()
-            .map(|(i, &(target, projection))| {
+            .map(|(i, &(target, _))| {
                 let view_name = format!("{name} rig view {i}");
-                let missing = || crate::error::Error::Scene(format!("{view_name}: its attachments are missing"));
-                let (view_words, _) = words[words_index(target)].as_ref().ok_or_else(missing)?;
-                let attachments = targets.of(target).ok_or_else(missing)?;
+                let attachments = targets.of(target).ok_or_else(|| missing(i))?;
                 let table_bytes = (COVERAGE_MEMBERS * size_of::<DrawConstants>()) as u64;
                 let draw_table =
                     Buffer::new(ctx, BufferDesc::gpu_storage(table_bytes), &format!("{view_name} draw table"))?;
                 let images: Vec<_> = attachments.colour.iter().collect();
+                let resolve_pipeline = pipelines.rig_resolve(target)?;
+                let buffers = [&draw_table, view_words(i)?];
+                let layout = resolve_pipeline.set_layout;
+                let resolve = StorageSet::new(ctx, layout, &images, (&[], &buffers), &format!("{view_name} resolve"))?;
+                Ok(ViewState { target, draw_table, resolve, resolve_pipeline })
+            })
+            .collect::<Result<_>>()?;
+        // The views of each projection in pairs, in order.
+        let mut paired: Vec<Vec<usize>> = Vec::new();
+        for projection in [Projection::Pinhole, Projection::Orthographic] {
+            let of_it: Vec<usize> = (0..views.len()).filter(|&i| views[i].1 == projection).collect();
+            paired.extend(of_it.chunks(2).map(<[usize]>::to_vec));
+        }
+        let runs = paired
+            .into_iter()
+            .enumerate()
+            .map(|(r, run_views)| {
+                let projection = views[run_views[0]].1;
+                let both = run_views.len() == 2;
                 let coverage = pipelines.rig_coverage(projection, Coverage::Nearest)?;
+                let first = view_words(run_views[0])?;
+                let second = if both { view_words(run_views[1])? } else { first };
+                let bound: [&Buffer; 2 * COVERAGE_MEMBERS] =
+                    std::array::from_fn(|k| if k < COVERAGE_MEMBERS { first } else { second });
                 let layout = coverage.tiled.range.set_layout;
-                let run =
-                    CoverageRun::binding(ctx, layout, [view_words; 2 * COVERAGE_MEMBERS], large_bytes, &view_name)?;
+                let run = CoverageRun::binding(ctx, layout, bound, large_bytes, &format!("{name} rig coverage {r}"))?;
                 let ties = several_draws
                     .then(|| pipelines.rig_coverage(projection, Coverage::Ties))
                     .transpose()?
-                    .map(|ties| (&ties.tiled.range, &ties.large));
-                let passes = ViewPasses {
-                    nearest: (&coverage.tiled.range, &coverage.large),
-                    ties,
-                    resolve: pipelines.rig_resolve(target)?,
-                };
-                let buffers = [&draw_table, view_words];
-                let resolve = StorageSet::new(
-                    ctx,
-                    passes.resolve.set_layout,
-                    &images,
-                    (&[], &buffers),
-                    &format!("{view_name} resolve"),
-                )?;
-                Ok(ViewState { target, run, draw_table, resolve, passes })
+                    .map(|ties| (ties.tiled.covering(both), &ties.large));
+                Ok(RunState { views: run_views, run, nearest: (coverage.tiled.covering(both), &coverage.large), ties })
             })
             .collect::<Result<_>>()?;
-        Ok(Self { words, views })
+        Ok(Self { words, views: view_states, runs })
     }
 
     /// A job's passes drawing `views` (in the order this state was made for) of `draws` into
@@ -232,32 +250,58 @@ impl<'p> RigCoverage<'p> {
             })
             .collect();
         let words: Vec<&'s Buffer> = self.words.iter().flatten().map(|(buffer, _)| buffer).collect();
-        // Each view's uniform block and draw table, as this job draws it.
-        let mut written: Vec<(&'s ViewState, CoverageUniforms, Vec<DrawConstants>)> = Vec::new();
-        for (state, view) in self.views.iter().zip(views) {
-            let (_, stride) = self.words[words_index(state.target)].as_ref().expect("the state's words");
+        let stride_of = |state: &ViewState| self.words[words_index(state.target)].as_ref().map_or(0, |(_, s)| *s);
+        // Each dispatch's uniform block (its first view as the range view, its second, where it
+        // has one, as the shadow view), and each view's draw table, as this job draws them.
+        let mut uniform_blocks: Vec<(&'s RunState, CoverageUniforms)> = Vec::with_capacity(self.runs.len());
+        for run in &self.runs {
             let mut uniforms = <CoverageUniforms as bytemuck::Zeroable>::zeroed();
-            let covered = RasterView { area: rect(view.area), draw: 0, stride: *stride, _pad: [0; 2] };
-            for (m, (draw, &(constants, cull))) in draws.iter().zip(view.draws).enumerate() {
+            let covered = |k: usize| {
+                let view = run.views.get(k).map(|&i| (&self.views[i], &views[i]));
+                view.map(|(state, view)| RasterView {
+                    area: rect(view.area),
+                    draw: 0,
+                    stride: stride_of(state),
+                    _pad: [0; 2],
+                })
+            };
+            let (first, second) = (covered(0).expect("a dispatch covers a view"), covered(1));
+            let cull_in = |k: usize, m: usize, draw: &Draw| {
+                let view = &views[run.views[k.min(run.views.len() - 1)]];
+                if view.draws[m].1 == vk::CullModeFlags::NONE {
+                    0
+                } else {
+                    cull_sign(draw.mesh.solidity)
+                }
+            };
+            for (m, draw) in draws.iter().enumerate() {
                 let triangles = draw.mesh.index_count / 3;
                 uniforms.members[m] = MemberConstants {
-                    views: [covered, RasterView { area: [0; 4], ..covered }],
+                    views: [first, second.unwrap_or(RasterView { area: [0; 4], ..first })],
                     triangles,
-                    cull: if cull == vk::CullModeFlags::NONE { 0 } else { cull_sign(draw.mesh.solidity) },
+                    cull: cull_in(0, m, draw),
                     dealt_rows: triangles.div_ceil(COVERAGE_GROUP) / DEAL_BLOCK / DEAL_STRIPES,
                     place: m as u32,
                     z_keys: 0,
-                    _pad: [0; 3],
+                    second_cull: cull_in(1, m, draw),
+                    _pad: [0; 2],
                 };
-                uniforms.draws[m] = constants;
+                for (k, &i) in run.views.iter().enumerate() {
+                    uniforms.draws[k * COVERAGE_MEMBERS + m] = views[i].draws[m].0;
+                }
             }
-            let table: Vec<DrawConstants> = view.draws.iter().map(|&(constants, _)| constants).collect();
-            written.push((state, uniforms, table));
+            uniform_blocks.push((run, uniforms));
         }
+        let tables: Vec<(&'s Buffer, Vec<DrawConstants>)> = self
+            .views
+            .iter()
+            .zip(views)
+            .map(|(state, view)| (&state.draw_table, view.draws.iter().map(|&(constants, _)| constants).collect()))
+            .collect();
         let mut cleared: Vec<(&'s Buffer, Access)> = words.iter().map(|&b| (b, Access::TransferWrite)).collect();
-        for state in &self.views {
-            let buffers = [&state.run.large_args, &state.run.uniforms, &state.draw_table];
-            cleared.extend(buffers.map(|b| (b, Access::TransferWrite)));
+        cleared.extend(self.views.iter().map(|state| (&state.draw_table, Access::TransferWrite)));
+        for run in &self.runs {
+            cleared.extend([&run.run.large_args, &run.run.uniforms].map(|b| (b, Access::TransferWrite)));
         }
         let prepare = move |ctx: &GpuContext, cmd| {
             let d = &ctx.device;
@@ -268,34 +312,36 @@ impl<'p> RigCoverage<'p> {
                 for (buffer, offset, size) in fills {
                     d.cmd_fill_buffer(cmd, buffer.raw, offset, size, EMPTY_HALF);
                 }
-                for (state, uniforms, table) in &written {
-                    d.cmd_update_buffer(cmd, state.run.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
-                    d.cmd_update_buffer(cmd, state.run.uniforms.raw, 0, bytemuck::bytes_of(uniforms));
-                    d.cmd_update_buffer(cmd, state.draw_table.raw, 0, bytemuck::cast_slice(table));
+                for (run, uniforms) in &uniform_blocks {
+                    d.cmd_update_buffer(cmd, run.run.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                    d.cmd_update_buffer(cmd, run.run.uniforms.raw, 0, bytemuck::bytes_of(uniforms));
+                }
+                for (table, entries) in &tables {
+                    d.cmd_update_buffer(cmd, table.raw, 0, bytemuck::cast_slice(entries));
                 }
             }
         };
         let uses = |queue: Access, args: Access| {
             let mut uses: Vec<(&'s Buffer, Access)> = words.iter().map(|&b| (b, Access::ComputeWrite)).collect();
-            for state in &self.views {
-                uses.extend([(&state.run.large, queue), (&state.run.large_args, args)]);
-                uses.push((&state.run.uniforms, Access::UniformRead));
+            for run in &self.runs {
+                uses.extend([(&run.run.large, queue), (&run.run.large_args, args)]);
+                uses.push((&run.run.uniforms, Access::UniformRead));
             }
             uses
         };
-        // Each view's coverage pipelines, and how many workgroups its draws need.
+        // How many workgroups the draws need.
         let largest = draws.iter().map(|draw| draw.mesh.index_count / 3).max().unwrap_or(0);
         let groups = largest.div_ceil(COVERAGE_GROUP);
         let coverage_groups = [groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS)];
         let slices = draws.len() as u32;
         let cover = move |_: &GpuContext, cmd| {
-            for state in &self.views {
-                state.run.set.dispatch_slices(cmd, state.passes.nearest.0, &[], coverage_groups, slices);
+            for run in &self.runs {
+                run.run.set.dispatch_slices(cmd, run.nearest.0, &[], coverage_groups, slices);
             }
         };
         let large = move |_: &GpuContext, cmd| {
-            for state in &self.views {
-                state.run.set.dispatch_indirect(cmd, state.passes.nearest.1, &[], &state.run.large_args);
+            for run in &self.runs {
+                run.run.set.dispatch_indirect(cmd, run.nearest.1, &[], &run.run.large_args);
             }
         };
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
@@ -308,10 +354,10 @@ impl<'p> RigCoverage<'p> {
             // Both ties passes only raise the words' tagged triangles (their depths stay), so
             // they need no barrier between them.
             let record_ties = move |_: &GpuContext, cmd| {
-                for state in &self.views {
-                    let (small, large) = state.passes.ties.expect("a slot for jobs of several draws has ties passes");
-                    state.run.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
-                    state.run.set.dispatch_indirect(cmd, large, &[], &state.run.large_args);
+                for run in &self.runs {
+                    let (small, large) = run.ties.expect("a slot for jobs of several draws has ties passes");
+                    run.run.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
+                    run.run.set.dispatch_indirect(cmd, large, &[], &run.run.large_args);
                 }
             };
             steps.push(Step::new(Vec::new(), reading_queue(), record_ties).timed("coverage: ties"));
@@ -330,15 +376,14 @@ impl<'p> RigCoverage<'p> {
             .iter()
             .zip(views)
             .map(|(state, view)| {
-                let stride = self.words[words_index(state.target)].as_ref().map_or(0, |(_, stride)| *stride);
-                (state, RasterView { area: rect(view.resolved), draw: 0, stride, _pad: [0; 2] })
+                (state, RasterView { area: rect(view.resolved), draw: 0, stride: stride_of(state), _pad: [0; 2] })
             })
             .collect();
         let resolve = move |_: &GpuContext, cmd| {
             for (state, view) in &resolves {
                 let groups = [view.area[2], view.area[3]].map(|n| n.div_ceil(8));
                 if groups[0] > 0 && groups[1] > 0 {
-                    state.resolve.dispatch(cmd, state.passes.resolve, bytemuck::bytes_of(view), groups);
+                    state.resolve.dispatch(cmd, state.resolve_pipeline, bytemuck::bytes_of(view), groups);
                 }
             }
         };
