@@ -53,10 +53,30 @@ impl Crossover {
     /// points: docs/performance-history.md.
     pub const GPU: Crossover = Crossover { min_triangles: 1_500, min_density: 0.0, sparse_below: 0.004 };
 
+    /// A CPU device's for a rig's views (src/render/raster/compute/rig.rs), where the compute
+    /// rasterizer also resolves every view into its attachments (the scanner's shadow mask does
+    /// that as it tests), so that a sparse model's many pixels cost it more: `bench_verify --
+    /// --rigs` (its model swapped) and `bench_bop` on lavapipe, compute against graphics in the
+    /// same run, slower at 0.0009 and 0.0025 triangles per footprint pixel (the box, 0.44–0.77×)
+    /// and at 0.0196 (cylinder:48, 0.77–0.89×), faster at 0.047 (sphere:16, 1.09–1.18×), 0.20
+    /// (sphere:32, 1.24–1.79×), 0.9 (a 3,990-triangle sphere at 640×480, 1.09–1.24×) and 2.06
+    /// (sphere:100, 1.75–4×): the bound lies near the geometric mean of the nearest two.
+    pub const CPU_RIG: Crossover = Crossover { min_triangles: 0, min_density: 0.03, sparse_below: 0.0 };
+
     /// The crossover measured for a CPU device (`is_cpu`) or a GPU.
     pub fn for_device(is_cpu: bool) -> Self {
         if is_cpu {
             Self::CPU
+        } else {
+            Self::GPU
+        }
+    }
+
+    /// The crossover for a rig's views on a CPU device (`is_cpu`) or a GPU (the scanner's
+    /// until rigs are measured on one).
+    pub fn for_rig(is_cpu: bool) -> Self {
+        if is_cpu {
+            Self::CPU_RIG
         } else {
             Self::GPU
         }
@@ -160,7 +180,18 @@ mod tests {
             (101_760, 65_536, true),    // sphere:320 filling 256²
             (101_760, 1_048_576, true), // sphere:320 filling 1024², 0.1: 12.24–13.16×
         ];
-        for (crossover, points) in [(Crossover::CPU, &cpu[..]), (Crossover::GPU, &gpu[..])] {
+        // A rig's views on a CPU device (lavapipe, 2026-11-28).
+        let cpu_rig = [
+            (12, 13_300, false),  // box, BOP's 640×480, 0.0009: 0.63–0.77×
+            (12, 4_761, false),   // box, 0.0025: 0.44–0.75×
+            (192, 9_801, false),  // cylinder:48, 0.0196: 0.77–0.89×
+            (224, 4_761, true),   // sphere:16, 0.047: 1.09–1.18×
+            (960, 4_761, true),   // sphere:32, 0.20: 1.24–1.79×
+            (3_990, 4_400, true), // BOP's sphere, 0.9: 1.09–1.24×
+            (9_800, 4_761, true), // sphere:100, 2.06: 1.75–4×
+        ];
+        let rules = [(Crossover::CPU, &cpu[..]), (Crossover::GPU, &gpu[..]), (Crossover::CPU_RIG, &cpu_rig[..])];
+        for (crossover, points) in rules {
             for &(triangles, pixels, faster) in points {
                 assert_eq!(
                     crossover.takes_compute(triangles, pixels),
@@ -171,6 +202,8 @@ mod tests {
         }
         assert_eq!(Crossover::for_device(true), Crossover::CPU);
         assert_eq!(Crossover::for_device(false), Crossover::GPU);
+        assert_eq!(Crossover::for_rig(true), Crossover::CPU_RIG);
+        assert_eq!(Crossover::for_rig(false), Crossover::GPU);
         assert_eq!(Crossover::CPU.to_string(), "at least 0.0001 triangles per footprint pixel");
         assert_eq!(Crossover::GPU.to_string(), "at least 1500 triangles, or under 0.004 triangles per footprint pixel");
     }

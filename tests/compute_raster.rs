@@ -570,3 +570,26 @@ fn both_rasterizers_draw_identical_rigs() {
         }
     }
 }
+
+/// `auto` under a rig follows the rigs' crossover (`Renderer::rig_crossover`): on a CPU device
+/// the graphics pipeline for the Kinect rig's box alone (12 triangles over some 14,000 pixels,
+/// which the scanner's rule would give the compute rasterizer), the compute rasterizer for a
+/// dense ball (a GPU takes its own rule, compute for both), the images the same either way.
+#[test]
+fn auto_under_a_rig_follows_the_rigs_crossover() {
+    let rigs = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
+    let mut boxed = Scene::from_file(&rigs.join("kinect-v1.toml"), &Default::default()).unwrap();
+    boxed.shadow.mode = ShadowMode::Label;
+    boxed.objects = vec![boxed.objects[1].clone()];
+    let mut ball = boxed.clone();
+    let dense = builtin_mesh("builtin:sphere:100").unwrap().scaled(0.1, &Default::default()).unwrap();
+    ball.objects[0].mesh = Arc::new(dense);
+    ball.objects[0].pose = DMat4::from_translation(DVec3::new(0.0, 0.0, 0.8));
+    let cpu = AUTO.renderer().context().is_cpu();
+    for (name, scene, on_cpu) in [("the box", &boxed, Raster::Graphics), ("a ball", &ball, Raster::Compute)] {
+        let auto = render_with(&AUTO, scene);
+        let expected = if cpu { on_cpu } else { Raster::Compute };
+        assert_eq!(auto.raster, Some(expected), "{name}");
+        assert_same_images(name, &render(scene), &auto);
+    }
+}

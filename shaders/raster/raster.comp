@@ -275,6 +275,18 @@ float inside_clip_plane(DrawData d, int k, vec3 p) {
     return (k & 1) == 1 ? clip.w - along : clip.w + along;
 }
 
+// Whether every corner of a pinhole view's triangle lies inside every clipping plane, so that
+// the clipper keeps it whole.
+bool unclipped(DrawData d, ViewTriangle v) {
+    bool inside = true;
+    for (int k = 0; k < 5; k++) {
+        for (int i = 0; i < 3; i++) {
+            inside = inside && inside_clip_plane(d, k, v.corner[i]) >= 0.0;
+        }
+    }
+    return inside;
+}
+
 // The polygon of a pinhole view's triangle that the graphics pipeline's clipper keeps: within
 // the viewport (a far larger square than the view: src/render/raster/draw.rs, ViewportFrame)
 // and beyond the near plane, its corners in order in `polygon` (at most 8, a triangle cut by
@@ -487,11 +499,17 @@ void main() {
         vec3 normal = mesh_normal_by_words(d, t, third_z);
         ViewTriangle in_view = to_view_triangle(d, read_triangle(d, t, normal, third_z));
 #ifdef PINHOLE
-        // What the clipper keeps of it, fanned into triangles (clipped_polygon).
-        vec3 polygon[8];
-        int corners = clipped_polygon(d, in_view, polygon);
-        for (int k = 1; k + 1 < corners; k++) {
-            cover_large(t, set_up(member, v, d, members[member], in_view, polygon[0], polygon[k], polygon[k + 1]));
+        // Whole where the clipper keeps it whole (the common case, and far cheaper on a
+        // software rasterizer than the polygon's arrays); else what the clipper keeps of it,
+        // fanned into triangles (clipped_polygon).
+        if (unclipped(d, in_view)) {
+            cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));
+        } else {
+            vec3 polygon[8];
+            int corners = clipped_polygon(d, in_view, polygon);
+            for (int k = 1; k + 1 < corners; k++) {
+                cover_large(t, set_up(member, v, d, members[member], in_view, polygon[0], polygon[k], polygon[k + 1]));
+            }
         }
 #else
         cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));

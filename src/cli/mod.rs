@@ -170,6 +170,11 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         _ if s.scanner().is_none() && out.raster.is_none() => {
             println!("raster: none (this rig's rays are cast on the CPU)")
         }
+        (_, Raster::Auto) if s.scanner().is_none() => println!(
+            "raster: {} (a rig's pinhole views; auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
+            out.raster.map_or("none", Raster::as_str),
+            renderer.rig_crossover()
+        ),
         _ if s.scanner().is_none() => {
             println!("raster: {} (a rig's pinhole views)", out.raster.map_or("none", Raster::as_str))
         }

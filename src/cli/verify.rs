@@ -276,7 +276,7 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     match renderer.raster() {
         Raster::Auto => println!(
             "raster: auto (compute for models of {}, where the device has it; else graphics): {}",
-            renderer.crossover(),
+            if s.scanner().is_some() { renderer.crossover() } else { renderer.rig_crossover() },
             rasterized(results)
         ),
         raster => println!("raster: {}: {}", raster.as_str(), rasterized(results)),

@@ -101,8 +101,8 @@ impl Renderer {
         // Which models the compute rasterizer draws (raster/compute/rig.rs).
         let computes: Vec<bool> = (0..models.len())
             .map(|i| {
-                let area = footprints[i].unwrap_or(PixelRect::EMPTY);
-                self.computes_rig(&jobs[i], &draws[i], area, witnesses.as_ref())
+                let pixels = footprints[i].map_or(0, |area| u64::from(area.width) * u64::from(area.height));
+                self.computes_rig(&jobs[i], &draws[i], pixels, witnesses.as_ref())
             })
             .collect();
         let max_triangles = (0..models.len()).filter(|&i| computes[i]).map(|i| meshes[i].index_count / 3).max();

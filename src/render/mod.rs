@@ -146,6 +146,18 @@ impl Renderer {
     pub(crate) fn computes(
         &self,
         draws: usize,
+        triangles: (u64, u64),
+        footprint: (u64, f64),
+        view_pixels: u64,
+    ) -> bool {
+        self.computes_past(self.crossover(), draws, triangles, footprint, view_pixels)
+    }
+
+    /// [`Renderer::computes`], `auto` taking the compute rasterizer past `crossover`.
+    pub(crate) fn computes_past(
+        &self,
+        crossover: Crossover,
+        draws: usize,
         (triangles, largest): (u64, u64),
         (footprint_pixels, reach_pixels): (u64, f64),
         view_pixels: u64,
@@ -156,12 +168,7 @@ impl Renderer {
         words_fit
             && queue_fits
             && reach_pixels <= MAX_REACH_PIXELS
-            && self.raster.computes(
-                (self.supports_compute_raster(), self.crossover()),
-                draws,
-                triangles,
-                footprint_pixels,
-            )
+            && self.raster.computes((self.supports_compute_raster(), crossover), draws, triangles, footprint_pixels)
     }
 
     /// Whether this renderer's device can run the compute rasterizer (raster/compute/).
@@ -172,6 +179,11 @@ impl Renderer {
     /// Where `auto` takes the compute rasterizer on this renderer's device.
     pub fn crossover(&self) -> Crossover {
         Crossover::for_device(self.ctx.is_cpu())
+    }
+
+    /// Where `auto` takes the compute rasterizer for a rig's views on this renderer's device.
+    pub fn rig_crossover(&self) -> Crossover {
+        Crossover::for_rig(self.ctx.is_cpu())
     }
 
     /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the

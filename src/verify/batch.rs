@@ -279,7 +279,7 @@ pub(crate) fn count_batch(
                     renderer.computes(1, (triangles, triangles), (footprint, reach), slot_view_pixels)
                 }
                 // A rig's pinhole views (raster/compute/rig.rs).
-                (None, Some(job)) => renderer.computes_rig(job, draws, area, witnesses),
+                (None, Some(job)) => renderer.computes_rig(job, draws, footprint, witnesses),
                 _ => false,
             };
             Some(Job {

@@ -25,10 +25,10 @@ pub(crate) use witness_set::{WitnessLayout, WitnessSet};
 use super::memory::rig_render_bytes;
 use super::raster::compute::{RigTarget, COVERAGE_MEMBERS};
 use super::raster::draw::{Draw, Projection};
-use super::{GpuMesh, RenderOutput, Renderer, Source, Views};
+use super::{GpuMesh, RenderOutput, Renderer, Source, Views, FOOTPRINT_MARGIN};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::sensor::{Pinhole, PixelRect, Sensor, View};
+use crate::sensor::{Pinhole, Sensor, View};
 use crate::shadow::ShadowMode;
 use glam::DVec3;
 use std::sync::Arc;
@@ -120,21 +120,28 @@ impl Renderer {
         let half_side = self.ctx.viewport_half_side();
         let whole = views.range.full();
         let job = PinholeJob::new(&self.ctx, &reference, witnesses.as_ref(), models, whole, half_side)?;
-        let compute = self.computes_rig(&job, &draws, whole, witnesses.as_ref());
+        // The compute rasterizer's choice reads the pixels the objects can cover.
+        let footprint: u64 = spheres
+            .iter()
+            .filter_map(|&(centre, radius)| scene.sensor.reference.footprint(centre, radius, FOOTPRINT_MARGIN))
+            .map(|area| u64::from(area.width) * u64::from(area.height))
+            .sum();
+        let compute = self.computes_rig(&job, &draws, footprint, witnesses.as_ref());
         let source = Source::Pinhole { job: &job, witnesses: witnesses.as_ref(), compute };
         self.render_views(scene, None, views, &draws, source)
     }
 
     /// Whether the compute rasterizer draws `job`'s views (raster/compute/rig.rs), `draws`
-    /// over `footprint` of the reference view: as [`Renderer::computes`] decides for a view of
+    /// over `footprint_pixels` of the reference view (their bounding spheres' pixels, with a
+    /// margin, together): as [`Renderer::computes`] decides for a view of
     /// the same draws and pixels, whose words are the largest of the reference view's and the
-    /// `witnesses`' attachments', and whose reach is the job's (infinite where a draw reaches
-    /// a pinhole view's near plane: the graphics pipeline draws those).
+    /// `witnesses`' attachments', and whose reach is the job's (its directional witnesses'),
+    /// `auto` following the rigs' crossover ([`Renderer::rig_crossover`]).
     pub(crate) fn computes_rig(
         &self,
         job: &PinholeJob,
         draws: &[Draw],
-        footprint: PixelRect,
+        footprint_pixels: u64,
         witnesses: Option<&WitnessSet>,
     ) -> bool {
         let triangles: u64 = draws.iter().map(|draw| u64::from(draw.mesh.index_count / 3)).sum();
@@ -146,8 +153,8 @@ impl Renderer {
             .map(|(w, h)| u64::from(w) * u64::from(h))
             .max()
             .unwrap_or(0);
-        let footprint_pixels = u64::from(footprint.width) * u64::from(footprint.height);
-        self.computes(draws.len(), (triangles, largest), (footprint_pixels, job.reach), view_pixels)
+        let crossover = self.rig_crossover();
+        self.computes_past(crossover, draws.len(), (triangles, largest), (footprint_pixels, job.reach), view_pixels)
     }
 
     /// Refuses what the GPU cannot draw of a pinhole reference view: a view larger than the
