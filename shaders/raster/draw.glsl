@@ -215,9 +215,9 @@ RangePixel pinhole_range_pixel(DrawData d, uint t, vec2 pixel) {
     return RangePixel(triangle_label(d, t), z, gradient);
 }
 
-// pinhole_tie_depth of a triangle whose unit normal in the view's frame is n, in a view of
-// these intrinsics and constant term s / far of its depths: the one definition for the
-// graphics path's ties pass (raster.frag) and the compute rasterizer's (raster.comp).
+// pinhole_tie_depth (below) of a triangle whose unit normal in the view's frame is n, in a
+// view of these intrinsics and constant term s / far of its depths: the one definition for
+// the graphics path's ties pass (raster.frag) and the compute rasterizer's (raster.comp).
 float pinhole_tie_depth_of(vec4 intrinsics, float s_over_far, vec3 n, vec2 pixel, float depth) {
     vec3 ray = pinhole_ray(intrinsics, pixel);
     float across = abs(n.x * ray.x + n.y * ray.y + n.z * ray.z);

@@ -35,9 +35,9 @@
 //
 // PINHOLE: the variants for a rig's pinhole views (src/render/raster/compute/rig.rs), one or
 // two views a dispatch (the reference view, and a witness's band as the shadow view), each
-// view's words shared by the members, its draws, as in a view of several draws. Corners go to window coordinates as raster.vert's
-// pinhole_clip_position and the viewport transform put them (x and y times 1 / w, as lavapipe
-// divides). The depth s / Z − s / far of a triangle's plane is affine in the pixel's column
+// view's words shared by the members, its draws, as in a view of several draws. Corners go
+// to window coordinates as raster.vert's pinhole_clip_position and the viewport transform put
+// them (x and y times 1 / w, as lavapipe divides). The depth s / Z − s / far of a triangle's plane is affine in the pixel's column
 // and row too (1 / Z at a pixel is (n · ray) / (n · a), and the ray's x and y are affine in
 // them), so it steps as an orthographic view's does; the nearest has the greatest, keyed by
 // its flipped bits. A solid's triangles are culled as the graphics pipeline culls them, by the

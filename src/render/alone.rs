@@ -115,7 +115,7 @@ impl Renderer {
             several_draws: false,
             from_host: false,
             witnesses: witnesses.as_ref(),
-            rig_compute: max_triangles,
+            rig_compute: max_triangles.map(|t| (t, 1)),
         };
         let slots: Vec<_> = (0..slots).map(|i| self.slot(&shape, &format!("slot {i}"))).collect::<Result<_>>()?;
         let readbacks: Vec<(Buffer, Buffer)> = (0..slots.len())

@@ -401,7 +401,7 @@ impl Renderer {
             several_draws: draws.len() > 1,
             from_host: host_view.is_some(),
             witnesses: pinhole.and_then(|(_, witnesses)| witnesses),
-            rig_compute: pinhole.filter(|_| compute).map(|_| largest),
+            rig_compute: pinhole.filter(|_| compute).map(|_| (largest, draws.len())),
         };
         let slot = self.slot(&shape, "render")?;
         let coverage = slot

@@ -96,9 +96,9 @@ pub(crate) struct SlotShape<'a> {
     /// A rig's witnesses, which jobs under a pinhole reference view test in modes `label` and
     /// `depth`.
     pub witnesses: Option<&'a WitnessSet>,
-    /// Where the compute rasterizer draws jobs' rig views, the most triangles a draw of them
-    /// has (raster/compute/rig.rs; `several_draws` where a job has more than one).
-    pub rig_compute: Option<u32>,
+    /// Where the compute rasterizer draws jobs' rig views (raster/compute/rig.rs), the most
+    /// triangles a draw of them has and the most draws a job has.
+    pub rig_compute: Option<(u32, usize)>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -193,7 +193,7 @@ impl<'a> Slot<'a> {
                 let witness_targets = witnesses.as_ref().map(|w| w.targets.each_ref().map(|t| t.as_deref()));
                 let targets = RigTargets { reference: &range, witnesses: witness_targets.unwrap_or([None, None]) };
                 let views = rig_views(shape.witnesses);
-                Some(RigCoverage::new(ctx, rp, targets, &views, (max_triangles, shape.several_draws), name)?)
+                Some(RigCoverage::new(ctx, rp, targets, &views, max_triangles, name)?)
             }
             _ => None,
         };

@@ -323,7 +323,7 @@ pub(crate) fn count_batch(
         several_draws: false,
         from_host: !host_views.is_empty(),
         witnesses,
-        rig_compute: max_triangles.filter(|_| pinhole.is_some()),
+        rig_compute: max_triangles.filter(|_| pinhole.is_some()).map(|t| (t, 1)),
     };
     let slots: Vec<Slot> = (0..settings.slots.min(items.len()))
         .map(|i| renderer.slot(&shape, &format!("slot {i}")))

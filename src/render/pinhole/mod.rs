@@ -85,10 +85,10 @@ impl Renderer {
         let witnesses = WitnessSet::new(&self.ctx, &scene.sensor, &scene.shadow)?;
         let pixels = u64::from(views.range.width) * u64::from(views.range.height);
         let witness_pixels = witnesses.as_ref().map_or(0, WitnessSet::pixels);
-        // A view's queue has room for every triangle of up to COVERAGE_MEMBERS draws of the
-        // largest (raster/compute/rig.rs).
+        // A view's queue has room for every triangle of every draw, up to COVERAGE_MEMBERS of
+        // them, the compute rasterizer's most (raster/compute/rig.rs).
         let largest = scene.objects.iter().map(|o| o.mesh.triangles.len() as u64).max().unwrap_or(0);
-        let queued = largest * if scene.objects.len() > 1 { COVERAGE_MEMBERS as u64 } else { 1 };
+        let queued = largest * scene.objects.len().min(COVERAGE_MEMBERS) as u64;
         let compute = self.may_compute().then(|| (queued, rig_views(witnesses.as_ref()).len() as u64));
         self.ledger.check(
             format_args!("drawing a {}×{} pinhole view and its witnesses", views.range.width, views.range.height),

@@ -145,14 +145,13 @@ impl ComputeRasterPipelines {
 impl<'p> RigCoverage<'p> {
     /// A slot's state for views resolved into `views`' targets, each of its projection (the
     /// reference view's first, then each witness's, in the order of a job's views), into
-    /// `targets`, for jobs of up to `max_triangles` a draw, and where `several_draws`, more
-    /// than one.
+    /// `targets`, for jobs of up to `max_draws` draws of up to `max_triangles` each.
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipelines: &'p ComputeRasterPipelines,
         targets: RigTargets,
         views: &[(RigTarget, Projection)],
-        (max_triangles, several_draws): (u32, bool),
+        (max_triangles, max_draws): (u32, usize),
         name: &str,
     ) -> Result<Self> {
         let words_of = |target: RigTarget| -> Result<Option<(Buffer, u32)>> {
@@ -168,10 +167,10 @@ impl<'p> RigCoverage<'p> {
         };
         let words =
             [words_of(RigTarget::Reference)?, words_of(RigTarget::Witnesses(0))?, words_of(RigTarget::Witnesses(1))?];
-        // Every draw's triangles may be queued in each view of a dispatch: room for as many
-        // draws as a job has (Renderer::computes checks that this much binds).
-        let draws = if several_draws { COVERAGE_MEMBERS as u64 } else { 1 };
-        let large_bytes = large_queue_bytes(u64::from(max_triangles) * draws, 2);
+        // Every draw's triangles may be queued in each view of a dispatch (Renderer::computes
+        // checks that this much binds for two views).
+        let queued = u64::from(max_triangles) * max_draws as u64;
+        let several_draws = max_draws > 1;
         let missing =
             |i: usize| crate::error::Error::Scene(format!("{name} rig view {i}: its attachments are missing"));
         let view_words = |i: usize| -> Result<&Buffer> {
@@ -215,6 +214,7 @@ impl<'p> RigCoverage<'p> {
                 let bound: [&Buffer; 2 * COVERAGE_MEMBERS] =
                     std::array::from_fn(|k| if k < COVERAGE_MEMBERS { first } else { second });
                 let layout = coverage.tiled.range.set_layout;
+                let large_bytes = large_queue_bytes(queued, run_views.len() as u64);
                 let run = CoverageRun::binding(ctx, layout, bound, large_bytes, &format!("{name} rig coverage {r}"))?;
                 let ties = several_draws
                     .then(|| pipelines.rig_coverage(projection, Coverage::Ties))
