@@ -531,7 +531,8 @@ fn describe_differences(name: &str, graphics: &RenderOutput, compute: &RenderOut
 /// as `assert_same_images` allows). The example rigs' scenes (a floor the near plane cuts, four
 /// objects sharing the views' words, lamps), the Kinect rig without a near limit (its floor
 /// reaching behind the camera and the projector: the compute rasterizer clips it to the
-/// viewport as the graphics pipeline does), and a camera inside a box.
+/// viewport as the graphics pipeline does) and with its near plane through a face, and a
+/// camera inside a box.
 #[test]
 fn both_rasterizers_draw_identical_rigs() {
     let rigs = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
@@ -546,6 +547,13 @@ fn both_rasterizers_draw_identical_rigs() {
         p.near = 0.0;
     }
     scenes.push(("kinect-v1 without a near limit".into(), unlimited.clone()));
+    // Its near plane through the cylinder's cap (at 0.9), a far plane beyond: a face lying in
+    // the near plane is kept or cut as the clipper keeps or cuts it.
+    let mut capped = unlimited.clone();
+    if let rangesynth::sensor::View::Pinhole(p) = &mut capped.sensor.reference {
+        (p.near, p.far) = (0.9, 1.5);
+    }
+    scenes.push(("kinect-v1, its near plane through the cylinder's cap".into(), capped));
     let mut inside = unlimited;
     let around = builtin_mesh("builtin:box").unwrap().scaled(3.0, &Default::default()).unwrap();
     inside.objects.truncate(3);

@@ -257,22 +257,16 @@ ViewTriangle to_view_triangle(DrawData d, MeshTriangle m) {
 }
 
 #ifdef PINHOLE
-// The depth (along the optical axis) of a pinhole view's near plane, where the graphics
-// pipeline's clipper cuts: depth 1, at Z = s / (1 + s / far) (pinhole_clip_position).
-float near_plane(DrawData d) {
-    return d.z_range.x / (1.0 + d.z_range.y);
-}
-
-// How far point p (view frame) lies inside clipping plane k of a pinhole view, as the graphics
-// pipeline clips: 0 the near plane; 1–4 the viewport's sides (x ≤ w, −w ≤ x, y ≤ w, −w ≤ y in
-// clip coordinates: raster.vert's pinhole_clip_position).
+// How far point p (view frame) lies inside clipping plane k of a pinhole view, in clip
+// coordinates as raster.vert's pinhole_clip_position gives them to the clipper: 0 the near
+// plane (z ≤ w), 1–4 the viewport's sides (x ≤ w, −w ≤ x, y ≤ w, −w ≤ y). The same f32
+// arithmetic, so that a corner on the near plane (a face lying in it) is kept or cut as the
+// graphics pipeline keeps or cuts it.
 float inside_clip_plane(DrawData d, int k, vec3 p) {
-    if (k == 0) {
-        return p.z - near_plane(d);
-    }
-    vec4 clip = pinhole_clip_position(d, p);
-    float along = k < 3 ? clip.x : clip.y;
-    return (k & 1) == 1 ? clip.w - along : clip.w + along;
+    precise vec4 clip = pinhole_clip_position(d, p);
+    float along = k == 0 ? clip.z : (k < 3 ? clip.x : clip.y);
+    precise float inside = k == 0 || (k & 1) == 1 ? clip.w - along : clip.w + along;
+    return inside;
 }
 
 // Whether every corner of a pinhole view's triangle lies inside every clipping plane, so that
@@ -411,9 +405,10 @@ void keep(uint t, Setup s, ivec2 pixel) {
     vec2 from_first = vec2(pixel - s.first);
     float depth = fma(from_first.x, s.depth_step.x, fma(from_first.y, s.depth_step.y, s.depth_first));
     // Clipped as the graphics pipeline clips, and the depth clear value (PINHOLE: 0, the far
-    // plane, never greater; else 1, never less) never passes.
+    // plane, never greater; else 1, never less) never passes. (A pinhole view's near plane
+    // clips its triangles, not its pixels: cover_pinhole, clipped_polygon.)
 #ifdef PINHOLE
-    if (!(depth > 0.0 && depth <= 1.0)) {
+    if (!(depth > 0.0)) {
         return;
     }
 #else
@@ -630,8 +625,9 @@ void cover_here(uint t, Setup s) {
 // reaching the view's centre, as a floor under a camera does).
 void cover_pinhole(uint member, uint view, DrawData d, Member constants, uint t, ViewTriangle v) {
     Setup s = set_up(member, view, d, constants, v, v.corner[0], v.corner[1], v.corner[2]);
-    float near = near_plane(d);
-    bool cut = min(min(v.corner[0].z, v.corner[1].z), v.corner[2].z) < near;
+    float nearest = min(min(inside_clip_plane(d, 0, v.corner[0]), inside_clip_plane(d, 0, v.corner[1])),
+                        inside_clip_plane(d, 0, v.corner[2]));
+    bool cut = !(nearest >= 0.0);
     uint coverage = cut ? COVERED_LARGE : coverage_of(s);
     if (coverage == COVERED_HERE) {
         cover_here(t, s);
