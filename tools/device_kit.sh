@@ -27,7 +27,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kit=target/device-kit
-suites=(conformance stability analytic compute_raster exact verify effects portability pipeline_cache)
+suites=(conformance stability analytic compute_raster exact verify effects portability pipeline_cache rigs)
 # The Vulkan loader, the validation layers, and libglvnd: NVIDIA's Vulkan driver is
 # libGLX_nvidia.so.0, which needs libglvnd's dispatch library.
 debs=(libvulkan1 vulkan-validationlayers libglvnd0 libglx0 libgl1 libegl1 libopengl0 libgles2)
@@ -134,6 +134,10 @@ run() {
     # (a GPU's cache holds the driver's compiled code; lavapipe's holds none).
     timeout 120 "$kit/bin/bench_verify" --cold-start >> "$out/bench.log" 2>&1 ||
         echo "bench_verify --cold-start: exit $?" >> "$out/bench.log"
+    # A pinhole rig beside the scanner, with each rasterizer (the rigs' GPU crossover is
+    # unmeasured: render::Crossover::for_rig).
+    timeout 180 "$kit/bin/bench_verify" --rigs >> "$out/bench.log" 2>&1 ||
+        echo "bench_verify --rigs: exit $?" >> "$out/bench.log"
     # Much as tools/test.sh runs them: every suite with the graphics pipeline, then all but
     # compute_raster (which compares the two itself) with the compute rasterizer, which on a
     # GPU covers four hypotheses a dispatch, in runs of 16 slots, three chunks in flight. One log
