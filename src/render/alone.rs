@@ -101,8 +101,12 @@ impl Renderer {
         // Which models the compute rasterizer draws (raster/compute/rig.rs).
         let computes: Vec<bool> = (0..models.len())
             .map(|i| {
-                let pixels = footprints[i].map_or(0, |area| u64::from(area.width) * u64::from(area.height));
-                self.computes_rig(&jobs[i], &draws[i], pixels, witnesses.as_ref())
+                self.computes_rig(
+                    &jobs[i],
+                    &draws[i],
+                    footprints[i].map_or(0, |area| area.pixels()),
+                    witnesses.as_ref(),
+                )
             })
             .collect();
         let max_triangles = (0..models.len()).filter(|&i| computes[i]).map(|i| meshes[i].index_count / 3).max();

@@ -320,7 +320,7 @@ impl Renderer {
         let footprint: u64 = spheres
             .iter()
             .filter_map(|&(centre, radius)| views.range.footprint(centre, radius, FOOTPRINT_MARGIN))
-            .map(|area| u64::from(area.width) * u64::from(area.height))
+            .map(|area| area.pixels())
             .sum();
         // Buffers of a word a range pixel hold the shadowed labels and the effects' outputs.
         if views.shadow.is_some() || exact_triangles.is_some() || !scene.effects.is_empty() {

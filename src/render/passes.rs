@@ -74,6 +74,13 @@ struct WitnessSlot<'a> {
     test: ShadowTest,
 }
 
+/// What a rig's views are resolved into: the reference view's attachments, and each witness
+/// attachment the slot holds.
+fn rig_targets<'t>(reference: &'t ViewTargets, witnesses: Option<&'t WitnessSlot>) -> RigTargets<'t> {
+    let witnesses = witnesses.map_or([None, None], |w| w.targets.each_ref().map(|t| t.as_deref()));
+    RigTargets { reference, witnesses }
+}
+
 /// What a slot must hold.
 pub(crate) struct SlotShape<'a> {
     /// Range view width and height (the shadow view has the same rows).
@@ -190,8 +197,7 @@ impl<'a> Slot<'a> {
         };
         let rig = match (shape.rig_compute, raster_pipelines) {
             (Some(max_triangles), Some(rp)) => {
-                let witness_targets = witnesses.as_ref().map(|w| w.targets.each_ref().map(|t| t.as_deref()));
-                let targets = RigTargets { reference: &range, witnesses: witness_targets.unwrap_or([None, None]) };
+                let targets = rig_targets(&range, witnesses.as_ref());
                 let views = rig_views(shape.witnesses);
                 Some(RigCoverage::new(ctx, rp, targets, &views, max_triangles, name)?)
             }
@@ -576,9 +582,7 @@ impl<'p> Passes<'p> {
         let witness_targets = || witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
         let mut steps = match (&slot.rig, job.compute) {
             (Some(rig), true) => {
-                let witness_targets = witnesses.map(|w| w.targets.each_ref().map(|t| t.as_deref()));
-                let targets = RigTargets { reference: &slot.range, witnesses: witness_targets.unwrap_or([None, None]) };
-                rig.steps(targets, &pinhole.compute_views(job.area), job.draws)
+                rig.steps(rig_targets(&slot.range, witnesses), &pinhole.compute_views(job.area), job.draws)
             }
             _ => vec![self.pinhole_draw_step(slot, job, pinhole, pipelines)],
         };

@@ -27,6 +27,11 @@ impl PixelRect {
     /// No pixels.
     pub const EMPTY: PixelRect = PixelRect { col: 0, row: 0, width: 0, height: 0 };
 
+    /// How many pixels it holds.
+    pub fn pixels(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
     /// Whether pixel (col, row) lies in the rectangle.
     pub fn contains(&self, col: u32, row: u32) -> bool {
         col.wrapping_sub(self.col) < self.width && row.wrapping_sub(self.row) < self.height

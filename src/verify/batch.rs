@@ -271,7 +271,7 @@ pub(crate) fn count_batch(
                 // Rows are the range view's (a rotation about y keeps y).
                 PixelRect { row: area.row, height: area.height, ..columns }
             });
-            let footprint = u64::from(area.width) * u64::from(area.height);
+            let footprint = area.pixels();
             let triangles = u64::from(item.mesh.index_count / 3);
             let compute = match (settings.scanner, pinhole_jobs.get(index as usize)) {
                 (Some(scanner), _) if host_views.is_empty() => {

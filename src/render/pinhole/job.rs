@@ -57,7 +57,6 @@ struct WitnessDraws {
     area: PixelRect,
     viewport: ViewportFrame,
     draws: ViewDraws,
-    reach: f64,
 }
 
 impl PinholeJob {
@@ -83,6 +82,9 @@ impl PinholeJob {
         let (views, mut table) = witnesses.map_or((&[][..], Vec::new()), |set| (&set.views[..], set.table.clone()));
         let mut witness_draws = Vec::with_capacity(views.len());
         let mut directional = false;
+        // The compute rasterizer clips a pinhole view's triangles to its viewport (raster.comp,
+        // clipped_polygon): only a directional witness's band has a reach to bound.
+        let mut reach: f64 = 0.0;
         for (w, constants) in views.iter().zip(&mut table) {
             let drawn = match w.image {
                 WitnessImage::Pinhole(intrinsics) => {
@@ -92,6 +94,10 @@ impl PinholeJob {
                     let plan = directional::plan(w.from_reference, (image, w.band), reference, &models);
                     *constants = constants.with_grid(plan.band_grid);
                     directional = true;
+                    let reach_of = |&(centre, radius): &(DVec3, f64)| {
+                        plan.grid.reach(plan.from_reference.transform_point3(centre), radius)
+                    };
+                    reach = models.spheres.iter().map(reach_of).fold(reach, f64::max);
                     directional_witness(&plan, w.band, &models, viewport_half_side)?
                 }
             };
@@ -122,7 +128,6 @@ impl PinholeJob {
         let table_buffer =
             job_table.as_ref().map(|(table, _)| table).or(witnesses.and_then(|set| set.shared_table.as_ref()));
         let reference = view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?;
-        let reach = witness_draws.iter().map(|w| w.reach).fold(0.0, f64::max);
         Ok(Self {
             whole,
             reference,
@@ -204,9 +209,7 @@ fn pinhole_witness(
     let area = PixelRect { row: seen.row + band.row, ..seen };
     let viewport = ViewportFrame::around(band, viewport_half_side);
     let draws = view_draws(&drawing, models, viewport)?;
-    // The compute rasterizer clips a pinhole view's triangles to its viewport: no reach to
-    // bound (raster.comp, clipped_polygon).
-    Ok(WitnessDraws { attachment: WitnessAttachment::Pinhole, band, area, viewport, draws, reach: 0.0 })
+    Ok(WitnessDraws { attachment: WitnessAttachment::Pinhole, band, area, viewport, draws })
 }
 
 /// A directional witness's band for `models` as `plan` places it: each draw's constants on
@@ -230,12 +233,7 @@ fn directional_witness(
             Ok((constants, cull_mode(draw.mesh.solidity)))
         })
         .collect::<Result<_>>()?;
-    let reach = models
-        .spheres
-        .iter()
-        .map(|&(centre, radius)| plan.grid.reach(plan.from_reference.transform_point3(centre), radius))
-        .fold(0.0, f64::max);
-    Ok(WitnessDraws { attachment: WitnessAttachment::Directional, band, area: plan.area, viewport, draws, reach })
+    Ok(WitnessDraws { attachment: WitnessAttachment::Directional, band, area: plan.area, viewport, draws })
 }
 
 /// Model i's pose holds no f32 value in `view`.

@@ -124,7 +124,7 @@ impl Renderer {
         let footprint: u64 = spheres
             .iter()
             .filter_map(|&(centre, radius)| scene.sensor.reference.footprint(centre, radius, FOOTPRINT_MARGIN))
-            .map(|area| u64::from(area.width) * u64::from(area.height))
+            .map(|area| area.pixels())
             .sum();
         let compute = self.computes_rig(&job, &draws, footprint, witnesses.as_ref());
         let source = Source::Pinhole { job: &job, witnesses: witnesses.as_ref(), compute };
