@@ -84,13 +84,44 @@ float l1_length(vec3 v) {
 const int MAX_WALK_STEPS = 256;
 // walk_to's answer when it gave up.
 const uint WALK_TOO_LONG = 0xfffffffeu;
+// walk_to's answer when it reached a triangle an earlier walk toward the same point went
+// through (WalkMemo).
+const uint WALK_JOINED = 0xfffffffdu;
+
+// The triangles the latest walks toward one point went through (of one draw), the newest
+// first, none where a slot holds NO_NEIGHBOUR. A walk's path depends only on the triangle it
+// is on and the point (its corners are the triangle's, whichever way it was entered), so a
+// walk that reaches a triangle an earlier walk went through goes on as that one did: it ends
+// where that one ended, whose surface did not hide the point (else the test had stopped), or
+// gives up sooner, which says the same. Walks from the pixels around a point converge on the
+// triangle over it, and on a dense mesh most of them join an earlier one within a step or two.
+// A walk that gave up forgets them all: its steps were not all taken.
+struct WalkMemo {
+    uvec4 newer;
+    uvec4 older;
+};
+
+const WalkMemo NO_WALKS = WalkMemo(uvec4(NO_NEIGHBOUR), uvec4(NO_NEIGHBOUR));
+
+bool walked(WalkMemo memo, uint t) {
+    return any(equal(memo.newer, uvec4(t))) || any(equal(memo.older, uvec4(t)));
+}
+
+void remember(inout WalkMemo memo, uint t) {
+    memo.older = uvec4(memo.newer.w, memo.older.xyz);
+    memo.newer = uvec4(t, memo.newer.xyz);
+}
 
 // Walks over the surface of draw d, from triangle t across edges toward the ray through p,
 // each step leaving through the edge p lies farthest outside of. Returns the triangle whose
 // rays hold p's (edges included, within `tolerance`), NO_NEIGHBOUR where this layer of the
 // surface ends before p — a border, or a fold, where the surface turns away from the witness
-// (its silhouette) — or WALK_TOO_LONG.
-uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central) {
+// (its silhouette) — WALK_JOINED where it reached a triangle of `memo`, or WALK_TOO_LONG.
+uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central, inout WalkMemo memo) {
+    if (walked(memo, t)) {
+        return WALK_JOINED;
+    }
+    remember(memo, t);
     // Written without arrays: a software rasterizer keeps dynamically indexed arrays in memory.
     // Each step's corners are the ones the step before had.
     vec3 a = view_corner(d, t, 0u), b = view_corner(d, t, 1u), c = view_corner(d, t, 2u);
@@ -113,6 +144,10 @@ uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central) {
         // The neighbour shares from and to (the same points: vertices are matched by
         // position), so only its third corner is read.
         uint next = link >> LINK_INDEX_SHIFT, edge = link & LINK_EDGE_MASK;
+        // Whether the surface folds here or goes on, the walk ends as the earlier one did.
+        if (walked(memo, next)) {
+            return WALK_JOINED;
+        }
         vec3 third = view_corner(d, next, (edge + 2u) % 3u);
         if (edge_side(from, to, opposite, central) * edge_side(from, to, third, central) >= 0.0) {
             return NO_NEIGHBOUR;
@@ -124,7 +159,9 @@ uint walk_to(DrawData d, uint t, vec3 p, float tolerance, bool central) {
         b = edge == 0u ? second : (edge == 1u ? first : third);
         c = edge == 0u ? third : (edge == 1u ? second : first);
         t = next;
+        remember(memo, t);
     }
+    memo = NO_WALKS;
     return WALK_TOO_LONG;
 }
 
@@ -185,10 +222,11 @@ vec2 plane_rise(DrawData d, uint t, vec3 p, float scale, float bias, bool centra
 // silhouette f32 misjudged).
 // `lower` is the (draw, triangle) over p last found not to hide it: walks from the pixels
 // around p mostly end on the same triangle, whose plane is then not evaluated again.
-bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias, bool central, inout uvec2 lower) {
+bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias, bool central, inout uvec2 lower,
+           inout WalkMemo memo) {
     float tolerance = m.bias_relative * scale;
-    uint t = walk_to(d, seen_at.y, p, tolerance, central);
-    if (t == NO_NEIGHBOUR || t == WALK_TOO_LONG || uvec2(seen_at.x, t) == lower) {
+    uint t = walk_to(d, seen_at.y, p, tolerance, central, memo);
+    if (t == NO_NEIGHBOUR || t == WALK_TOO_LONG || t == WALK_JOINED || uvec2(seen_at.x, t) == lower) {
         return false;
     }
     vec3 slope;
@@ -201,50 +239,61 @@ bool hides(DrawData d, uvec2 seen_at, vec3 p, vec3 own, float scale, float bias,
     return false;
 }
 
+// The k-th of the nine pixels around a pixel, from it: the pixel itself, then its eight
+// neighbours in rows.
+ivec2 nine_offset(int k) {
+    int i = k == 0 ? 4 : k - int(k <= 4);
+    return ivec2(i % 3 - 1, i / 3 - 1);
+}
+
 // Whether a surface lies between p (witness frame) and the witness, p's ray meeting the
 // witness's image nearest pixel s: the surfaces seen at the pixels around s, each
 // once. Exact wherever the occluder over p is seen at one of those nine pixel centres, or is
 // joined by its edges to a triangle that is.
 bool occluded(ivec2 s, vec3 p, vec3 own, float scale, float bias, bool central) {
-    // Neighbours that saw the same triangle as the centre, or as the neighbour before them,
-    // are not walked again (a large triangle fills the whole neighbourhood).
-    uvec4 at_centre = occluder_holds(s) ? occluder_seen(s) : uvec4(0u);
-    // Background carries no triangle: a pair no draw can have, so no neighbour is skipped for it.
-    uvec2 centre = at_centre.x != 0u ? at_centre.yz : uvec2(0xffffffffu);
-    uvec2 previous = centre;
+    // Which of the nine to walk from, bit k for the k-th in order (the centre, then its eight
+    // neighbours in rows), read in one pass that every invocation takes alike. A pixel that
+    // saw what the centre saw, or what the pixel before it saw, is not walked from again (a
+    // large triangle fills the whole neighbourhood). Background carries no triangle: a pair
+    // no draw can have, so no neighbour is skipped for it.
+    uint to_walk = 0u;
+    uvec2 centre = uvec2(0xffffffffu), before = uvec2(0xffffffffu);
+    for (int k = 0; k < 9; k++) {
+        ivec2 q = s + nine_offset(k);
+        uvec4 at = occluder_holds(q) ? occluder_seen(q) : uvec4(0u);
+        if (at.x == 0u) {
+            continue;
+        }
+        if (k == 0) {
+            centre = at.yz;
+        }
+        if (k == 0 || (at.yz != centre && at.yz != before)) {
+            to_walk |= 1u << k;
+        }
+        before = at.yz;
+    }
     // The draw last read from the table, read again only for a pixel that saw another (a view
     // of one object has one): a software rasterizer gathers it word by word.
     uint loaded = 0xffffffffu;
     DrawData d;
     uvec2 lower = uvec2(0xffffffffu);
-    // Each invocation goes through its nine on its own cursor, one walk a round: invocations
-    // that run in lockstep then take as many rounds as the most walks any of them needs, not
-    // one for each of the nine that any of them walks from.
-    int k = 0;
-    while (true) {
-        // The next pixel to walk from: the centre first, then its eight neighbours in rows.
-        uvec2 seen = uvec2(0xffffffffu);
-        bool found = false;
-        for (; k < 9 && !found; k++) {
-            int i = k == 0 ? 4 : k - int(k <= 4);
-            ivec2 q = s + ivec2(i % 3 - 1, i / 3 - 1);
-            if (!occluder_holds(q)) {
-                continue;
-            }
-            uvec4 at = occluder_seen(q);
-            seen = at.yz;
-            found = at.x != 0u && (k == 0 || (seen != centre && seen != previous));
-        }
-        if (!found) {
-            return false;
-        }
-        previous = seen;
+    // The walks of the draw last read.
+    WalkMemo memo = NO_WALKS;
+    // Each invocation takes its own pixels in turn, one walk a round: invocations that run in
+    // lockstep then take as many rounds as the most walks any of them needs, not one for each
+    // of the nine that any of them walks from.
+    while (to_walk != 0u) {
+        int k = findLSB(to_walk);
+        to_walk &= to_walk - 1u;
+        uvec2 seen = occluder_seen(s + nine_offset(k)).yz;
         if (seen.x != loaded) {
             d = occluder_draw(seen.x);
             loaded = seen.x;
+            memo = NO_WALKS;
         }
-        if (hides(d, seen, p, own, scale, bias, central, lower)) {
+        if (hides(d, seen, p, own, scale, bias, central, lower, memo)) {
             return true;
         }
     }
+    return false;
 }

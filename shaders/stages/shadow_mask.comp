@@ -134,7 +134,12 @@ bool occluder_holds(ivec2 q) {
 }
 
 DrawData occluder_draw(uint draw) {
+#ifdef FROM_WORDS
+    // The view's one draw, read in main.
+    return shadow_draw;
+#else
     return draws[draw];
+#endif
 }
 
 #include "occluder_walk.glsl"
