@@ -56,12 +56,16 @@ RangePixel range_pixel_by_words(DrawData d, uint t, vec2 pixel) {
 
 // range_pixel where the pixel's word already holds the plane's z there (z_of_key,
 // visibility_word.glsl): the triangle's label, that z, and, where `with_gradient`, its plane's
-// gradient (else zero), which is all that is left to read of its record: its normal.
-RangePixel range_pixel_at_z(DrawData d, uint t, float z, bool with_gradient) {
+// gradient (else zero), which is all that is left to read of its record: its normal. Where
+// it reads the normal, `normal_z` is its z in the view's frame (else 0).
+RangePixel range_pixel_at_z(DrawData d, uint t, float z, bool with_gradient, out float normal_z) {
     vec2 gradient = vec2(0.0);
+    normal_z = 0.0;
     if (with_gradient) {
         float third_z;
-        gradient = plane_gradient(rotate_to_view(d, mesh_normal_by_words(d, t, third_z)));
+        vec3 n = rotate_to_view(d, mesh_normal_by_words(d, t, third_z));
+        gradient = plane_gradient(n);
+        normal_z = n.z;
     }
     return RangePixel(triangle_label(d, t), z, gradient);
 }

@@ -46,9 +46,11 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
+    uvec2 hull_faces;   // FROM_WORDS: device address of the draw's mesh's hull-face bits
     uint words_draw;    // FROM_WORDS: the one draw both views rendered
     uint shadow_stride; // FROM_WORDS: pixels per row of the shadow view's words
     uint range_stride;  // FROM_WORDS: pixels per row of the range view's words
+    float hull_tolerance; // FROM_WORDS: how far in front of a hull face a vertex may lie
 } m;
 
 // The test this pipeline runs, and the codes of the label tests, nearest pixel and 2x2; any
@@ -144,7 +146,9 @@ DrawData occluder_draw(uint draw) {
 
 #include "occluder_walk.glsl"
 
-bool shadowed(ivec2 pixel, RangePixel range) {
+// `on_hull`: p lies on a face of its model's convex hull, seen from the face's front
+// (resolve_range), in views that hold that model alone.
+bool shadowed(ivec2 pixel, RangePixel range, bool on_hull) {
     uint label = range.label;
     precise vec2 xy = orthographic_centre(m.range_grid, vec2(pixel));
     float z = range.z;
@@ -183,6 +187,15 @@ bool shadowed(ivec2 pixel, RangePixel range) {
     if (!in_grid) {
         return false;
     }
+    // Nothing of p's model lies in front of its hull face's plane, and nothing else is in the
+    // views (src/mesh/hull_faces.rs): nothing lies between p and the camera the face turns
+    // toward, and the walks below could only confirm it. A vertex may lie up to
+    // hull_tolerance in front of the plane (its f32 rounding), which rises along the camera's
+    // ray, leaving the face at cosine facing / |n|, by at most hull_tolerance · |n| / facing:
+    // the shortcut is taken only where that is at most half the bias's constant part.
+    if (on_hull && facing * m.bias_pitch > 2.0 * m.hull_tolerance * length(vec3(gradient, 1.0))) {
+        return false;
+    }
     // Then whatever lies between the point and the camera.
     return occluded(s, ps, vec3(own, 0.0), scale, bias, false);
 }
@@ -193,13 +206,18 @@ bool shadowed(ivec2 pixel, RangePixel range) {
 // where no triangle covers it), its label and gradient only where a later pass reads them:
 // the stores cost time on a software rasterizer.
 // The gradient is read only where it is written or the depth test needs it.
-RangePixel resolve_range(DrawData d, ivec2 pixel) {
+// For the depth test, `on_hull` says whether the pixel's triangle lies on its mesh's convex
+// hull and the view sees its front (its normal toward the view, +z).
+RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull) {
     uint at = 2u * word_index(m.range_stride, pixel);
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
+    on_hull = false;
     if (t != EMPTY_HALF) {
         bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || !LABEL_TEST;
-        range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient);
+        float normal_z;
+        range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient, normal_z);
+        on_hull = !LABEL_TEST && normal_z > 0.0 && ((Words(m.hull_faces).word[t >> 5u] >> (t & 31u)) & 1u) != 0u;
     }
     imageStore(range_z, pixel, vec4(range.z));
     if (WRITE_LABEL_AND_GRADIENT != 0u) {
@@ -232,10 +250,12 @@ void main() {
     }
     ivec2 pixel = m.region.xy + ivec2(gl_GlobalInvocationID.xy);
 #ifdef FROM_WORDS
-    RangePixel range = resolve_range(range_draw, pixel);
+    bool on_hull;
+    RangePixel range = resolve_range(range_draw, pixel, on_hull);
 #else
     RangePixel range = read_range(pixel);
+    bool on_hull = false;
 #endif
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
-    masked_label[index] = (range.label != 0u && shadowed(pixel, range)) ? 0u : range.label;
+    masked_label[index] = (range.label != 0u && shadowed(pixel, range, on_hull)) ? 0u : range.label;
 }

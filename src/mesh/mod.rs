@@ -18,6 +18,7 @@
 
 mod adjacency;
 mod builtin;
+mod hull_faces;
 mod mtl;
 mod obj;
 mod ply;
@@ -28,6 +29,7 @@ mod surfaces;
 pub use adjacency::NO_NEIGHBOUR;
 pub(crate) use adjacency::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY, MAX_LINKED_TRIANGLES};
 pub use builtin::{builtin_bytes, builtin_mesh, canonical_builtin_name, BUILTIN_NAMES};
+pub(crate) use hull_faces::{hull_face_bits, hull_tolerance};
 pub use obj::{load_obj, parse_obj};
 pub use ply::{load_ply, parse_ply};
 pub use solid::Solidity;

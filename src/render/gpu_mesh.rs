@@ -1,7 +1,7 @@
 //! A mesh uploaded once into device-local memory: vertex positions (offsets from the mesh's
 //! origin, `Mesh::origin`) and triangle indices (the graphics pipeline's vertex input), a
-//! record of each triangle's corners and unit normal, per-triangle surface ids and edge links;
-//! and whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
+//! record of each triangle's corners and unit normal, per-triangle surface ids, edge links
+//! and whether each lies on the mesh's convex hull; and whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
 //! triangles facing away. The shaders read them
 //! through buffer device addresses, indexed by triangle (gl_PrimitiveID in the fragment
 //! shader), to label the pixel and evaluate its triangle's plane exactly.
@@ -20,7 +20,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::shaders::matches_shader_struct;
 use crate::gpu::{Buffer, GpuContext};
-use crate::mesh::{Mesh, Solidity, MAX_LINKED_TRIANGLES};
+use crate::mesh::{hull_face_bits, hull_tolerance, Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
 use glam::DVec3;
 use std::sync::Arc;
@@ -33,6 +33,11 @@ pub struct GpuMesh {
     pub(crate) surface_ids: Buffer,
     /// What lies across each triangle's three edges (`Mesh::edge_links`).
     pub(crate) links: Buffer,
+    /// Which triangles lie on the mesh's convex hull, facing out, a bit each
+    /// (`mesh::hull_face_bits`), and how far in front of such a face a vertex may lie, model
+    /// units (`mesh::hull_tolerance`): the depth test skips its walks from those faces.
+    pub(crate) hull_faces: Buffer,
+    pub(crate) hull_tolerance: f32,
     pub(crate) index_count: u32,
     /// Whether the mesh bounds a solid, and which way its normals point.
     pub(crate) solidity: Solidity,
@@ -98,6 +103,13 @@ impl GpuMesh {
                 &links,
                 &format!("{name} edge links"),
             )?,
+            hull_faces: Buffer::device_local_with_data(
+                ctx,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                &hull_face_bits(mesh),
+                &format!("{name} hull faces"),
+            )?,
+            hull_tolerance: hull_tolerance(mesh) as f32,
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&links),
             longest_edge: longest_edge(mesh),

@@ -541,10 +541,10 @@ impl<'p> Passes<'p> {
             // range view's use. It writes the range view's label and gradient only where a
             // pass after it reads them: an effect, or the sink.
             let reading_words = match (compute, &words) {
-                (Some((_, rp, (index, [_]))), Some((_, strides))) => {
+                (Some((_, rp, (index, [draw]))), Some((_, strides))) => {
                     let read_later = slot.effects.is_some() || sink.reads_range_label();
                     let mask = if read_later { &rp.mask } else { &rp.mask_for_scoring };
-                    Some((mask, constants.reading_words(index, *strides)))
+                    Some((mask, constants.reading_words(index, draw.mesh, *strides)))
                 }
                 _ => None,
             };

@@ -16,6 +16,7 @@ use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
+use crate::render::gpu_mesh::GpuMesh;
 use crate::render::plan::Views;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{PixelRect, Scanner, ViewGrid};
@@ -36,9 +37,11 @@ pub struct MaskConstants {
     sin_theta: f32,
     bias_pitch: f32,
     bias_relative: f32,
+    hull_faces: [u32; 2],
     words_draw: u32,
     shadow_stride: u32,
     range_stride: u32,
+    hull_tolerance: f32,
 }
 
 // std430 offsets of `Mask` in shaders/stages/shadow_mask.comp.
@@ -53,9 +56,11 @@ matches_shader_struct!(
         sin_theta,
         bias_pitch,
         bias_relative,
+        hull_faces,
         words_draw,
         shadow_stride,
         range_stride,
+        hull_tolerance,
     }
 );
 
@@ -76,17 +81,27 @@ impl MaskConstants {
             sin_theta: sensor.theta().sin() as f32,
             bias_pitch: (DEPTH_BIAS_PIXELS * sensor.pitch[0]) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
+            hull_faces: [0; 2],
             words_draw: 0,
             shadow_stride: 0,
             range_stride: 0,
+            hull_tolerance: 0.0,
         }
     }
 
     /// The same constants for the pipelines reading both views from visibility words, the
     /// range view's `range_stride` pixels a row and the shadow view's `shadow_stride`, which
-    /// rendered draw `draw` alone.
-    pub fn reading_words(self, draw: u32, (range_stride, shadow_stride): (u32, u32)) -> Self {
-        Self { words_draw: draw, shadow_stride, range_stride, ..self }
+    /// rendered draw `draw` of `mesh` alone: the depth test skips its walks from the mesh's
+    /// hull faces (`GpuMesh::hull_faces`), which nothing else in the views can hide.
+    pub fn reading_words(self, draw: u32, mesh: &GpuMesh, (range_stride, shadow_stride): (u32, u32)) -> Self {
+        Self {
+            hull_faces: mesh.hull_faces.address_words(),
+            words_draw: draw,
+            shadow_stride,
+            range_stride,
+            hull_tolerance: mesh.hull_tolerance,
+            ..self
+        }
     }
 }
 
