@@ -298,10 +298,12 @@ int clipped_polygon(DrawData d, ViewTriangle v, out vec3 polygon[8]) {
         for (int i = 0; i < corners; i++) {
             vec3 a = polygon[i], b = polygon[i + 1 == corners ? 0 : i + 1];
             float inside_a = inside_clip_plane(d, k, a), inside_b = inside_clip_plane(d, k, b);
-            if (inside_a >= 0.0) {
+            // A convex polygon gains at most one corner a plane; rounding could make one that
+            // is not quite convex gain more, which the array's bound keeps out.
+            if (inside_a >= 0.0 && count < 8) {
                 kept[count++] = a;
             }
-            if ((inside_a >= 0.0) != (inside_b >= 0.0)) {
+            if ((inside_a >= 0.0) != (inside_b >= 0.0) && count < 8) {
                 kept[count++] = mix(a, b, inside_a / (inside_a - inside_b));
             }
         }

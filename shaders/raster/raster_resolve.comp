@@ -64,9 +64,8 @@ void main() {
         range = pinhole_range_pixel(d, t, vec2(pixel));
 #else
         // One draw's words hold the z (visibility_word.glsl); several draws', depths.
-        float normal_z;
         range = SEVERAL_DRAWS != 0u ? range_pixel_by_words(d, t, vec2(pixel))
-                                    : range_pixel_at_z(d, t, z_of_key(uint(word >> 32)), true, normal_z);
+                                    : range_pixel_at_z(d, t, z_of_key(uint(word >> 32)), true);
 #endif
     }
     imageStore(label, pixel, uvec4(range.label));

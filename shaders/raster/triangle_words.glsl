@@ -69,3 +69,8 @@ RangePixel range_pixel_at_z(DrawData d, uint t, float z, bool with_gradient, out
     }
     return RangePixel(triangle_label(d, t), z, gradient);
 }
+
+RangePixel range_pixel_at_z(DrawData d, uint t, float z, bool with_gradient) {
+    float normal_z;
+    return range_pixel_at_z(d, t, z, with_gradient, normal_z);
+}

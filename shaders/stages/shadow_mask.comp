@@ -191,7 +191,7 @@ bool shadowed(ivec2 pixel, RangePixel range, bool on_hull) {
     // views (src/mesh/hull_faces.rs): nothing lies between p and the camera the face turns
     // toward, and the walks below could only confirm it. A vertex may lie up to
     // hull_tolerance in front of the plane (its f32 rounding), which rises along the camera's
-    // ray, leaving the face at cosine facing / |n|, by at most hull_tolerance · |n| / facing:
+    // ray (at cosine facing / |n| to the face's normal) by at most hull_tolerance · |n| / facing:
     // the shortcut is taken only where that is at most half the bias's constant part.
     if (on_hull && facing * m.bias_pitch > 2.0 * m.hull_tolerance * length(vec3(gradient, 1.0))) {
         return false;

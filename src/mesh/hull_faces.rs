@@ -9,12 +9,13 @@
 //! cylinders, spheres and most outer faces of a machined part are such faces.
 //!
 //! The hull is parry3d's (quickhull); each face's plane is then checked against the hull's
-//! vertex farthest along its normal, found by climbing the hull's edges (on a convex polytope
-//! a vertex no neighbour beats is the farthest), from where the previous face's climb ended.
-//! A face counts only if no vertex lies more than [`HULL_TOLERANCE`] of the mesh's extent in
-//! front of its plane (f32 rounding of the positions). A mesh the
-//! hull cannot be built for (a failure in the library), or of more than [`MAX_HULL_VERTICES`]
-//! distinct vertices, has no hull faces: the test then walks as before.
+//! vertex farthest along its normal, found by climbing the hull's edges from where the previous
+//! face's climb ended (`Climb`). A face counts only if no vertex lies more than
+//! [`HULL_TOLERANCE`] of the mesh's extent in front of its plane (f32 rounding of the
+//! positions). A mesh whose hull cannot be built (fewer than four distinct vertices, a failure
+//! in the library) or has no volume (a flat or nearly flat mesh), one of more than
+//! [`MAX_HULL_VERTICES`] distinct vertices, and one whose climbs run past their budget have no
+//! hull faces: the test then walks as before.
 
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -44,25 +45,35 @@ pub fn hull_tolerance(mesh: &Mesh) -> f64 {
 /// Bit t % 32 of word t / 32 set where triangle t lies on the mesh's convex hull, facing out.
 pub fn hull_face_bits(mesh: &Mesh) -> Vec<u32> {
     let mut bits = vec![0u32; mesh.triangles.len().div_ceil(32)];
-    let Some(hull) = Hull::of(mesh) else {
+    let [lo, hi] = mesh.bounding_box();
+    let extent = (hi - lo).length();
+    let Some(hull) = Hull::of(mesh, extent) else {
         return bits;
     };
     let tolerance = hull_tolerance(mesh);
-    let mut start = 0;
+    let mut climb =
+        Climb::new(&hull, tolerance / 8.0, CLIMB_STEPS_PER_ITEM * (mesh.triangles.len() + hull.vertices.len()));
     for (t, &[a, b, c]) in mesh.triangles.iter().enumerate() {
         let (a, b, c) = (offset(mesh, a), offset(mesh, b), offset(mesh, c));
         let normal = (b - a).cross(c - a).normalize_or_zero();
         if normal == DVec3::ZERO {
             continue;
         }
-        let farthest;
-        (farthest, start) = hull.farthest_along(normal, start);
+        let Some(farthest) = climb.farthest_along(normal) else {
+            return vec![0; bits.len()];
+        };
         if farthest - normal.dot(a) <= tolerance {
             bits[t / 32] |= 1 << (t % 32);
         }
     }
     bits
 }
+
+/// The neighbours a face's climb may look at, on average over the faces and the hull's
+/// vertices, before the mesh is given up as having no hull faces: climbs from one face to the
+/// next are short on a mesh whose faces come in order, and a plateau (a flat region of the
+/// hull, many vertices of it in one plane) is crossed whole.
+const CLIMB_STEPS_PER_ITEM: usize = 512;
 
 /// Vertex v as its offset from the mesh's origin: the hull and the planes are found in the
 /// frame the positions are stored in, where their digits are.
@@ -77,9 +88,14 @@ struct Hull {
 }
 
 impl Hull {
-    fn of(mesh: &Mesh) -> Option<Hull> {
-        // Each position once: a mesh may repeat its corners triangle by triangle.
-        let mut distinct: Vec<[u32; 3]> = mesh.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+    /// The hull of the mesh's vertices (`extent` its bounding box's diagonal), or None where it
+    /// is not a solid: parry3d returns a flat polygon (or a segment, or a point) for points
+    /// that lie nearly in a plane, leaving out the few that do not (a stud on a plate), so a
+    /// hull without volume says nothing.
+    fn of(mesh: &Mesh, extent: f64) -> Option<Hull> {
+        // Each position once (−0 and 0 as one): a mesh may repeat its corners triangle by
+        // triangle.
+        let mut distinct: Vec<[u32; 3]> = mesh.positions.iter().map(|p| p.map(|c| (c + 0.0).to_bits())).collect();
         distinct.sort_unstable();
         distinct.dedup();
         if distinct.len() < 4 || distinct.len() > MAX_HULL_VERTICES {
@@ -92,39 +108,90 @@ impl Hull {
             .collect();
         // The library asserts its own invariants: a failure there is a mesh without hull faces.
         let (vertices, triangles) = std::panic::catch_unwind(|| try_convex_hull(&points)).ok()?.ok()?;
-        if triangles.is_empty() {
-            return None;
-        }
+        let vertices: Vec<DVec3> = vertices.iter().map(|p| DVec3::new(p.x, p.y, p.z)).collect();
+        let corner = |i: u32| vertices.get(i as usize).copied();
+        let mut six_volume = 0.0;
         let mut neighbours = vec![Vec::new(); vertices.len()];
         for triangle in &triangles {
+            let [a, b, c] = [corner(triangle[0])?, corner(triangle[1])?, corner(triangle[2])?];
+            six_volume += (a - vertices[0]).dot((b - vertices[0]).cross(c - vertices[0]));
             for k in 0..3 {
                 let (from, to) = (triangle[k], triangle[(k + 1) % 3]);
-                neighbours.get_mut(from as usize)?.push(to);
-                neighbours.get_mut(to as usize)?.push(from);
+                neighbours[from as usize].push(to);
+                neighbours[to as usize].push(from);
             }
+        }
+        if six_volume.abs() <= 1e-9 * extent.powi(3) {
+            return None;
         }
         for list in &mut neighbours {
             list.sort_unstable();
             list.dedup();
         }
-        let vertices = vertices.iter().map(|p| DVec3::new(p.x, p.y, p.z)).collect();
         Some(Hull { vertices, neighbours })
     }
+}
 
-    /// The greatest `direction · v` over the hull's vertices, and the vertex that has it,
-    /// climbing from vertex `start`: each step moves to a neighbour farther along, so it ends.
-    fn farthest_along(&self, direction: DVec3, start: usize) -> (f64, usize) {
-        let mut at = start;
-        let mut best = direction.dot(self.vertices[at]);
-        loop {
-            let next = self.neighbours[at]
-                .iter()
-                .map(|&w| (direction.dot(self.vertices[w as usize]), w as usize))
-                .fold((best, at), |held, candidate| if candidate.0 > held.0 { candidate } else { held });
-            if next.1 == at {
-                return (best, at);
+/// Climbs a hull toward the vertex farthest along a direction, face after face, each climb
+/// starting where the last ended.
+struct Climb<'h> {
+    hull: &'h Hull,
+    /// Values within this of each other are a plateau, crossed whole.
+    tie: f64,
+    /// Neighbours left to look at.
+    budget: usize,
+    at: usize,
+    /// The vertices of the plateau being crossed, and the climb each was last reached by.
+    plateau: Vec<usize>,
+    reached_by: Vec<usize>,
+    climbs: usize,
+}
+
+impl<'h> Climb<'h> {
+    fn new(hull: &'h Hull, tie: f64, budget: usize) -> Self {
+        Climb {
+            hull,
+            tie,
+            budget,
+            at: 0,
+            plateau: Vec::new(),
+            reached_by: vec![usize::MAX; hull.vertices.len()],
+            climbs: 0,
+        }
+    }
+
+    /// The greatest `direction · v` over the hull's vertices, to within `tie`, or None when
+    /// the budget runs out. On a convex polytope every vertex short of the farthest has a
+    /// neighbour farther along, so a climb that finds none from a whole plateau (the vertices
+    /// within `tie` of where it stands, joined by edges) has found the farthest; stopping at
+    /// the first vertex without a farther neighbour would stop inside a flat face of the hull
+    /// turned away from the direction, at its nearest.
+    fn farthest_along(&mut self, direction: DVec3) -> Option<f64> {
+        let value = |v: usize| direction.dot(self.hull.vertices[v]);
+        let mut best = value(self.at);
+        'climb: loop {
+            self.climbs += 1;
+            self.plateau.clear();
+            self.plateau.push(self.at);
+            self.reached_by[self.at] = self.climbs;
+            let mut next = 0;
+            while let Some(&from) = self.plateau.get(next) {
+                next += 1;
+                for &w in &self.hull.neighbours[from] {
+                    self.budget = self.budget.checked_sub(1)?;
+                    let w = w as usize;
+                    let farther = value(w);
+                    if farther > best + self.tie {
+                        (self.at, best) = (w, farther);
+                        continue 'climb;
+                    }
+                    if farther >= best - self.tie && self.reached_by[w] != self.climbs {
+                        self.reached_by[w] = self.climbs;
+                        self.plateau.push(w);
+                    }
+                }
             }
-            (best, at) = next;
+            return Some(self.plateau.iter().map(|&v| value(v)).fold(best, f64::max));
         }
     }
 }
@@ -172,21 +239,84 @@ mod tests {
         assert!(bits_as_bools(&mesh).iter().all(|&b| !b));
     }
 
-    /// Nothing lies in front of a flat mesh, on either side.
+    /// parry3d's hull of nearly coplanar points is a flat polygon, which says nothing.
     #[test]
-    fn a_flat_mesh_is_all_hull_faces() {
-        let mut mesh = builtin_mesh("builtin:plane:2").unwrap();
-        assert!(bits_as_bools(&mesh).iter().all(|&b| b));
-        for t in &mut mesh.triangles {
-            t.swap(1, 2);
-        }
-        assert!(bits_as_bools(&mesh).iter().all(|&b| b));
+    fn a_flat_mesh_has_none() {
+        let mesh = builtin_mesh("builtin:plane:2").unwrap();
+        assert!(bits_as_bools(&mesh).iter().all(|&b| !b));
     }
 
-    /// Concave meshes (an L of boxes, a terrain of random heights) against brute force: the
-    /// faces in a notch or a valley are not on the hull.
+    /// A metre-wide plate of many vertices with a 1 cm stud on it: its points lie nearly in a
+    /// plane, and parry3d leaves the stud out of the flat hull it makes of them. No face the
+    /// stud rises in front of may count.
     #[test]
-    fn concave_meshes_match_brute_force() {
+    fn a_plate_with_a_stud_marks_no_face_the_stud_rises_in_front_of() {
+        let n = 200;
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let index = |i: usize, j: usize| (i * n + j) as u32;
+        for i in 0..n {
+            for j in 0..n {
+                positions.push([i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64, 0.0]);
+            }
+        }
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                triangles.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+                triangles.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+            }
+        }
+        let stud = builtin_mesh("builtin:box").unwrap();
+        let first = positions.len() as u32;
+        positions.extend(
+            (0..stud.positions.len() as u32).map(|v| (stud.vertex(v) * 0.01 + DVec3::new(0.5, 0.5, 0.005)).to_array()),
+        );
+        triangles.extend(stud.triangles.iter().map(|t| t.map(|v| v + first)));
+        let surfaces = vec![1; triangles.len()];
+        let mesh = Mesh::new("plate", positions, triangles, surfaces, vec!["s".into()]).unwrap();
+        let tolerance = hull_tolerance(&mesh);
+        let on_hull = |t: usize| {
+            let [a, b, c] = mesh.triangles[t].map(|v| offset(&mesh, v));
+            let normal = (b - a).cross(c - a).normalize();
+            (0..mesh.positions.len() as u32).all(|v| normal.dot(offset(&mesh, v) - a) <= tolerance)
+        };
+        assert!(!on_hull(0), "the plate's faces lie behind the stud's top");
+        let bits = bits_as_bools(&mesh);
+        assert!((0..bits.len()).all(|t| !bits[t] || on_hull(t)));
+    }
+
+    /// A climb that starts inside a flat face of the hull turned away from its direction sees
+    /// only neighbours as near as itself; it must cross that face to reach the far vertex.
+    #[test]
+    fn a_climb_crosses_a_flat_face_turned_away() {
+        // A square pyramid whose base has a vertex at its centre (vertex 4), joined to the
+        // base's corners only; the apex (5) is 1 above.
+        let vertices = vec![
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(1.0, -1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(-1.0, 1.0, 0.0),
+            DVec3::ZERO,
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        let neighbours = vec![
+            vec![1, 3, 4, 5],
+            vec![0, 2, 4, 5],
+            vec![1, 3, 4, 5],
+            vec![0, 2, 4, 5],
+            vec![0, 1, 2, 3],
+            vec![0, 1, 2, 3],
+        ];
+        let hull = Hull { vertices, neighbours };
+        let mut climb = Climb::new(&hull, 1e-12, 1000);
+        climb.at = 4;
+        assert_eq!(climb.farthest_along(DVec3::Z), Some(1.0));
+    }
+
+    /// Terrains of random heights closed by a cone below, against brute force: the faces in a
+    /// valley are not on the hull.
+    #[test]
+    fn terrains_match_brute_force() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let (mut on_hull, mut off_hull) = (0, 0);
         for trial in 0..20 {

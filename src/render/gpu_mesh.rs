@@ -1,8 +1,9 @@
 //! A mesh uploaded once into device-local memory: vertex positions (offsets from the mesh's
 //! origin, `Mesh::origin`) and triangle indices (the graphics pipeline's vertex input), a
-//! record of each triangle's corners and unit normal, per-triangle surface ids, edge links
-//! and whether each lies on the mesh's convex hull; and whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
-//! triangles facing away. The shaders read them
+//! record of each triangle's corners and unit normal, per-triangle surface ids and edge links,
+//! and which triangles lie on the mesh's convex hull; and whether the mesh bounds a solid,
+//! found once here, so that both rasterizers may skip the triangles facing away. The shaders
+//! read them
 //! through buffer device addresses, indexed by triangle (gl_PrimitiveID in the fragment
 //! shader), to label the pixel and evaluate its triangle's plane exactly.
 //!
