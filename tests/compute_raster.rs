@@ -560,6 +560,16 @@ fn both_rasterizers_draw_identical_rigs() {
     inside.objects.push(SceneObject { mesh: Arc::new(around), ..inside.objects[0].clone() });
     inside.objects.last_mut().unwrap().pose = DMat4::from_translation(DVec3::new(0.1, 0.05, 0.4));
     scenes.push(("the Kinect rig inside a box".into(), inside));
+    // Each model alone: views of one draw, where the compute rasterizer's depth test skips its
+    // walks from the model's hull faces (src/mesh/hull_faces.rs) and the graphics pipeline's
+    // does not. The cylinder's side lies along the camera's rays, its gradient clamped.
+    for rig in ["kinect-v1", "photometric-stereo"] {
+        let whole = example(rig);
+        for (i, object) in whole.objects.iter().enumerate().skip(1) {
+            let alone = Scene { objects: vec![object.clone()], ..whole.clone() };
+            scenes.push((format!("{rig}, its object {i} alone"), alone));
+        }
+    }
     for (name, scene) in scenes {
         for mode in [ShadowMode::None, ShadowMode::Label, ShadowMode::Depth] {
             let mut scene = scene.clone();

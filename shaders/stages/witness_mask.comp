@@ -11,6 +11,7 @@
 // along its direction. A point any witness does not see is shadowed; bit k of its `lost_by`
 // word says witness k did not see it.
 #include "../raster/draw.glsl"
+#include "../raster/visibility_word.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -55,6 +56,12 @@ layout(push_constant, std430) uniform WitnessMask {
     float facing_tolerance; // the least cosine at which a surface faces a witness (src/exact/)
     float bias_per_depth;   // the depth test's constant bias, model units per unit of depth
     float bias_relative;    // the depth test's f32 rounding allowance, relative
+    uint reference_stride;  // pixels a row of the reference view's words
+    uvec2 reference_words;  // device address of the reference view's visibility words
+                            // (visibility_word.glsl), in a job of one draw the compute
+                            // rasterizer drew; 0 otherwise
+    uvec2 hull_faces;       // device address of that draw's mesh's hull-face bits
+    float hull_tolerance;   // how far in front of a hull face a vertex may lie
 } m;
 
 // The test, by the codes of ShadowTest (src/shadow.rs).
@@ -114,9 +121,18 @@ vec3 to_witness(vec3 v, float w) {
     return q;
 }
 
+// Whether triangle t of the job's one draw (draw index 0), on its mesh's convex hull, shows the
+// witness its front on the side `lit`: its stored (outward) normal, in the witness's frame,
+// points that way.
+bool front_toward_witness(uint t, vec3 lit) {
+    return dot(triangle_normal(WitnessDraws(witness.draws).draws[0], t), to_witness(lit, 0.0)) > 0.0;
+}
+
 // Whether the witness sees p, whose surface has normal `lit` (on the side the reference sees)
 // and errs by up to `steepness` times f32 rounding of p's coordinates (the depth test).
-bool sees(vec3 p, vec3 lit, uint label, float steepness) {
+// `hull_face`: the triangle p lies on where it lies on its mesh's convex hull, in a job of that
+// mesh alone (else NO_NEIGHBOUR).
+bool sees(vec3 p, vec3 lit, uint label, float steepness, uint hull_face) {
     bool directional = witness.centre.w == 0.0;
     precise vec3 toward = directional ? witness.centre.xyz : witness.centre.xyz - p;
     precise float facing = dot(lit, toward);
@@ -163,6 +179,18 @@ bool sees(vec3 p, vec3 lit, uint label, float steepness) {
     // p's own plane, and the rays toward the witness, in its frame.
     vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
     vec3 own = ray_slope(to_witness(lit, 0.0), rays);
+    // Nothing of p's model lies in front of its hull face's plane, and nothing else is in the
+    // views (src/mesh/hull_faces.rs): nothing lies between p and a witness the face's front
+    // turns toward, and the walks could only confirm it. A vertex may lie up to
+    // hull_tolerance in front of the plane (its f32 rounding), which rises along the ray
+    // toward the witness (at cosine facing / (|lit| |toward|) to the face's normal) by at most
+    // hull_tolerance · |lit| |toward| / facing: the shortcut is taken only where that is at
+    // most half the bias's constant part (as the scanner's mask does, shadow_mask.comp).
+    if (hull_face != NO_NEIGHBOUR
+        && facing * m.bias_per_depth * p.z > 2.0 * m.hull_tolerance * length(lit) * length(toward)
+        && front_toward_witness(hull_face, lit)) {
+        return true;
+    }
     return !occluded(s, q, own, scale, bias, !directional);
 }
 
@@ -178,6 +206,9 @@ void main() {
         float z = imageLoad(range_z, pixel).r;
         precise vec3 p = view_point(VIEW_PINHOLE, m.intrinsics, vec2(pixel), z);
         vec3 n = vec3(-imageLoad(range_dz_dx, pixel).r, -imageLoad(range_dz_dy, pixel).r, 1.0);
+        // The hull faces' shortcut (sees) trusts `lit`, which a gradient clamped at ±1e30 (a
+        // face along the view's rays: pinhole_range_pixel) no longer points along.
+        bool normal_kept = max(abs(n.x), abs(n.y)) < 1e30;
         // Scaled to components of at most 1: a face along the view's axis has a gradient of
         // up to 1e30, whose square would overflow.
         n /= max(1.0, max(abs(n.x), abs(n.y)));
@@ -187,9 +218,16 @@ void main() {
         // proportion (∞ for a plane along the ray, which then hides nothing behind it).
         vec3 ray = pinhole_ray(m.intrinsics, vec2(pixel));
         float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
+        uint hull_face = NO_NEIGHBOUR;
+        if (TEST == TEST_DEPTH && m.reference_words != uvec2(0u) && normal_kept) {
+            uint t = Words(m.reference_words).word[2u * word_index(m.reference_stride, pixel)];
+            if (((Words(m.hull_faces).word[t >> 5u] >> (t & 31u)) & 1u) != 0u) {
+                hull_face = t;
+            }
+        }
         for (uint k = 0u; k < m.witness_count; k++) {
             witness = Witnesses(m.witnesses).witnesses[k];
-            if (!sees(p, lit, label, steepness)) {
+            if (!sees(p, lit, label, steepness, hull_face)) {
                 lost |= 1u << k;
             }
         }

@@ -590,9 +590,19 @@ impl<'p> Passes<'p> {
             (Some(w), Some(masked)) => {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
                 images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
-                let buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
+                let mut buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
+                // A job of one draw on the compute rasterizer: the depth test reads which
+                // triangle each reference pixel saw, for the draw's hull faces.
+                let constants = match (&slot.rig, job.compute, job.draws) {
+                    (Some(rig), true, [draw]) => rig.reference_words().map(|words| {
+                        buffers.push((words.0, Access::ComputeRead));
+                        pinhole.mask.with_hull_faces(words, draw.mesh)
+                    }),
+                    _ => None,
+                }
+                .unwrap_or(pinhole.mask);
                 let mask = pipelines.mask(w.test);
-                let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &pinhole.mask);
+                let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &constants);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));
                 Some(masked)
             }

@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::render::gpu_mesh::GpuMesh;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{Intrinsics, PixelRect};
 use crate::shadow::{DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
@@ -107,6 +108,10 @@ pub struct WitnessMaskConstants {
     facing_tolerance: f32,
     bias_per_depth: f32,
     bias_relative: f32,
+    reference_stride: u32,
+    reference_words: [u32; 2],
+    hull_faces: [u32; 2],
+    hull_tolerance: f32,
     _pad: u32,
 }
 
@@ -120,7 +125,11 @@ matches_shader_struct!(
         witnesses,
         facing_tolerance,
         bias_per_depth,
-        bias_relative
+        bias_relative,
+        reference_stride,
+        reference_words,
+        hull_faces,
+        hull_tolerance
     }
 );
 
@@ -140,7 +149,24 @@ impl WitnessMaskConstants {
             // depth, the finer axis's.
             bias_per_depth: (DEPTH_BIAS_PIXELS / reference.fx.max(reference.fy)) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
+            reference_stride: 0,
+            reference_words: [0; 2],
+            hull_faces: [0; 2],
+            hull_tolerance: 0.0,
             _pad: 0,
+        }
+    }
+
+    /// The same constants for a job of one draw of `mesh` whose reference view the compute
+    /// rasterizer drew into `words`, `stride` pixels a row: the depth test skips its walks from
+    /// the mesh's hull faces (`GpuMesh::hull_faces`), which nothing else in the views can hide.
+    pub fn with_hull_faces(self, (words, stride): (&Buffer, u32), mesh: &GpuMesh) -> Self {
+        Self {
+            reference_stride: stride,
+            reference_words: words.address_words(),
+            hull_faces: mesh.hull_faces.address_words(),
+            hull_tolerance: mesh.hull_tolerance,
+            ..self
         }
     }
 }

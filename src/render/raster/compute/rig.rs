@@ -143,6 +143,12 @@ impl ComputeRasterPipelines {
 }
 
 impl<'p> RigCoverage<'p> {
+    /// The reference view's words and their pixels a row: the witness mask reads which
+    /// triangle each pixel saw there (render/pinhole/witness_mask.rs, hull faces).
+    pub fn reference_words(&self) -> Option<(&Buffer, u32)> {
+        self.words[words_index(RigTarget::Reference)].as_ref().map(|(buffer, stride)| (buffer, *stride))
+    }
+
     /// A slot's state for views resolved into `views`' targets, each of its projection (the
     /// reference view's first, then each witness's, in the order of a job's views), into
     /// `targets`, for jobs of up to `max_draws` draws of up to `max_triangles` each.
