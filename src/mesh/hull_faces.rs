@@ -5,8 +5,9 @@
 //! the face's plane, so nothing of that model can lie between it and any witness the face
 //! turns toward. The depth test's walks over the surfaces a witness saw (the costliest part of
 //! shadow mode `depth`) can only confirm it; where the views hold that model alone, as a
-//! verified hypothesis's do, the test skips them (shaders/stages/shadow_mask.comp). Boxes,
-//! cylinders, spheres and most outer faces of a machined part are such faces.
+//! verified hypothesis's do, the test skips them (shaders/stages/shadow_mask.comp and
+//! witness_mask.comp). Boxes, cylinders, spheres and most outer faces of a machined part are
+//! such faces.
 //!
 //! The hull is parry3d's (quickhull); each face's plane is then checked against the hull's
 //! vertex farthest along its normal, found by climbing the hull's edges from where the previous

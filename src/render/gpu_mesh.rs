@@ -3,9 +3,8 @@
 //! record of each triangle's corners and unit normal, per-triangle surface ids and edge links,
 //! and which triangles lie on the mesh's convex hull; and whether the mesh bounds a solid,
 //! found once here, so that both rasterizers may skip the triangles facing away. The shaders
-//! read them
-//! through buffer device addresses, indexed by triangle (gl_PrimitiveID in the fragment
-//! shader), to label the pixel and evaluate its triangle's plane exactly.
+//! read them through buffer device addresses, indexed by triangle (gl_PrimitiveID in the
+//! fragment shader), to label the pixel and evaluate its triangle's plane exactly.
 //!
 //! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
 //! triangle's corner then reads it directly, not an index first and then the position it
