@@ -247,6 +247,23 @@ ivec2 nine_offset(int k) {
     return ivec2(i % 3 - 1, i / 3 - 1);
 }
 
+// Whether triangle t is a face of its mesh's convex hull (src/mesh/hull_faces.rs: bit t % 32
+// of word t / 32 at `bits`, a device address).
+bool on_hull(uvec2 bits, uint t) {
+    return ((Words(bits).word[t >> 5u] >> (t & 31u)) & 1u) != 0u;
+}
+
+// Whether a point on a hull face of its model, in views that hold that model alone, is clear
+// toward a witness its face's front turns toward, without a walk: nothing of the model lies in
+// front of the face's plane but vertices up to `hull_tolerance` in front of it (their f32
+// rounding), which rise along the ray toward the witness, at cosine facing / `lengths` to the
+// face's normal (`facing` the dot product of the normal and the ray's direction, `lengths` the
+// product of their lengths), by at most hull_tolerance · lengths / facing. The walks could only
+// confirm it where that is at most half the bias's constant part, `bias_constant`.
+bool hull_face_clear(float facing, float lengths, float bias_constant, float hull_tolerance) {
+    return facing * bias_constant > 2.0 * hull_tolerance * lengths;
+}
+
 // Whether a surface lies between p (witness frame) and the witness, p's ray meeting the
 // witness's image nearest pixel s: the surfaces seen at the pixels around s, each
 // once. Exact wherever the occluder over p is seen at one of those nine pixel centres, or is

@@ -146,9 +146,9 @@ DrawData occluder_draw(uint draw) {
 
 #include "occluder_walk.glsl"
 
-// `on_hull`: p lies on a face of its model's convex hull, seen from the face's front
+// `on_hull_front`: p lies on a face of its model's convex hull, seen from the face's front
 // (resolve_range), in views that hold that model alone.
-bool shadowed(ivec2 pixel, RangePixel range, bool on_hull) {
+bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
     uint label = range.label;
     precise vec2 xy = orthographic_centre(m.range_grid, vec2(pixel));
     float z = range.z;
@@ -187,13 +187,9 @@ bool shadowed(ivec2 pixel, RangePixel range, bool on_hull) {
     if (!in_grid) {
         return false;
     }
-    // Nothing of p's model lies in front of its hull face's plane, and nothing else is in the
-    // views (src/mesh/hull_faces.rs): nothing lies between p and the camera the face turns
-    // toward, and the walks below could only confirm it. A vertex may lie up to
-    // hull_tolerance in front of the plane (its f32 rounding), which rises along the camera's
-    // ray (at cosine facing / |n| to the face's normal) by at most hull_tolerance · |n| / facing:
-    // the shortcut is taken only where that is at most half the bias's constant part.
-    if (on_hull && facing * m.bias_pitch > 2.0 * m.hull_tolerance * length(vec3(gradient, 1.0))) {
+    // A point on a hull face, in views of its model alone (occluder_walk.glsl); n's length
+    // times the camera direction's (1).
+    if (on_hull_front && hull_face_clear(facing, length(vec3(gradient, 1.0)), m.bias_pitch, m.hull_tolerance)) {
         return false;
     }
     // Then whatever lies between the point and the camera.
@@ -206,18 +202,18 @@ bool shadowed(ivec2 pixel, RangePixel range, bool on_hull) {
 // where no triangle covers it), its label and gradient only where a later pass reads them:
 // the stores cost time on a software rasterizer.
 // The gradient is read only where it is written or the depth test needs it.
-// For the depth test, `on_hull` says whether the pixel's triangle lies on its mesh's convex
-// hull and the view sees its front (its normal toward the view, +z).
-RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull) {
+// For the depth test, `on_hull_front` says whether the pixel's triangle lies on its mesh's
+// convex hull and the view sees its front (its normal toward the view, +z).
+RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull_front) {
     uint at = 2u * word_index(m.range_stride, pixel);
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
-    on_hull = false;
+    on_hull_front = false;
     if (t != EMPTY_HALF) {
         bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || !LABEL_TEST;
         float normal_z;
         range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient, normal_z);
-        on_hull = !LABEL_TEST && normal_z > 0.0 && ((Words(m.hull_faces).word[t >> 5u] >> (t & 31u)) & 1u) != 0u;
+        on_hull_front = !LABEL_TEST && normal_z > 0.0 && on_hull(m.hull_faces, t);
     }
     imageStore(range_z, pixel, vec4(range.z));
     if (WRITE_LABEL_AND_GRADIENT != 0u) {
@@ -250,12 +246,12 @@ void main() {
     }
     ivec2 pixel = m.region.xy + ivec2(gl_GlobalInvocationID.xy);
 #ifdef FROM_WORDS
-    bool on_hull;
-    RangePixel range = resolve_range(range_draw, pixel, on_hull);
+    bool on_hull_front;
+    RangePixel range = resolve_range(range_draw, pixel, on_hull_front);
 #else
     RangePixel range = read_range(pixel);
-    bool on_hull = false;
+    bool on_hull_front = false;
 #endif
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
-    masked_label[index] = (range.label != 0u && shadowed(pixel, range, on_hull)) ? 0u : range.label;
+    masked_label[index] = (range.label != 0u && shadowed(pixel, range, on_hull_front)) ? 0u : range.label;
 }

@@ -179,15 +179,10 @@ bool sees(vec3 p, vec3 lit, uint label, float steepness, uint hull_face) {
     // p's own plane, and the rays toward the witness, in its frame.
     vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
     vec3 own = ray_slope(to_witness(lit, 0.0), rays);
-    // Nothing of p's model lies in front of its hull face's plane, and nothing else is in the
-    // views (src/mesh/hull_faces.rs): nothing lies between p and a witness the face's front
-    // turns toward, and the walks could only confirm it. A vertex may lie up to
-    // hull_tolerance in front of the plane (its f32 rounding), which rises along the ray
-    // toward the witness (at cosine facing / (|lit| |toward|) to the face's normal) by at most
-    // hull_tolerance · |lit| |toward| / facing: the shortcut is taken only where that is at
-    // most half the bias's constant part (as the scanner's mask does, shadow_mask.comp).
+    // A point on a hull face, in views of its model alone (occluder_walk.glsl), whose front
+    // turns toward the witness.
     if (hull_face != NO_NEIGHBOUR
-        && facing * m.bias_per_depth * p.z > 2.0 * m.hull_tolerance * length(lit) * length(toward)
+        && hull_face_clear(facing, length(lit) * length(toward), m.bias_per_depth * p.z, m.hull_tolerance)
         && front_toward_witness(hull_face, lit)) {
         return true;
     }
@@ -221,7 +216,7 @@ void main() {
         uint hull_face = NO_NEIGHBOUR;
         if (TEST == TEST_DEPTH && m.reference_words != uvec2(0u) && normal_kept) {
             uint t = Words(m.reference_words).word[2u * word_index(m.reference_stride, pixel)];
-            if (((Words(m.hull_faces).word[t >> 5u] >> (t & 31u)) & 1u) != 0u) {
+            if (on_hull(m.hull_faces, t)) {
                 hull_face = t;
             }
         }
