@@ -54,6 +54,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster/raster.frag", "raster_pinhole_shadow_ties.frag.spv", &["PINHOLE", "SHADOW_VIEW", "TIES"]),
     ("stages/shadow_mask.comp", "shadow_mask.comp.spv", &[]),
     ("stages/shadow_mask.comp", "shadow_mask_words.comp.spv", &["FROM_WORDS"]),
+    ("stages/shadow_mask.comp", "shadow_mask_walks.comp.spv", &["FROM_WORDS", "WALKS_FROM_LIST"]),
     ("stages/witness_mask.comp", "witness_mask.comp.spv", &[]),
     ("raster/raster.comp", "raster.comp.spv", &[]),
     ("raster/raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),

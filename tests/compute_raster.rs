@@ -131,7 +131,8 @@ fn the_compute_rasterizer_renders_both_views_in_one_pass() {
         assert_eq!(out.raster, Some(Raster::Compute));
         out.timings.iter().map(|t| t.name).collect::<Vec<_>>()
     };
-    assert_eq!(names(ShadowMode::Depth), ["range and shadow", "shadow mask"]);
+    assert_eq!(names(ShadowMode::Depth), ["range and shadow", "shadow mask", "shadow mask: walks"]);
+    assert_eq!(names(ShadowMode::Label), ["range and shadow", "shadow mask"]);
     assert_eq!(names(ShadowMode::None), ["range"]);
 }
 

@@ -7,7 +7,11 @@
 // It reads the shadow view from its visibility words, and resolves the range view itself: it
 // reads the range view's words, writes the range view's attachments as the resolve pass would
 // (raster_resolve.comp) and tests the values it wrote, so the range view takes no resolve pass
-// of its own.
+// of its own. Its depth test runs in two passes: this one decides every pixel it can without a
+// walk over the surface and lists the others; the second (WALKS_FROM_LIST, the variant
+// defining it too) walks from the listed pixels only. A software rasterizer runs invocations
+// in lockstep and runs every branch's code even where no invocation takes it, so a pass that
+// walked in place would pay for the walk's code at every pixel a shortcut decided.
 #include "../raster/draw.glsl"
 #include "../raster/visibility_word.glsl"
 #ifdef FROM_WORDS
@@ -36,6 +40,19 @@ layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[
 layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
 layout(set = 0, binding = 8, std430) readonly buffer RangeDrawTable { DrawData range_draws[]; };
 layout(set = 0, binding = 9, std430) readonly buffer RangeWords { uint range_words[]; };
+// FROM_WORDS, depth test: the range pixels left to walk from (their indices in Masked), and
+// the second pass's indirect dispatch (x, y, z), x the groups of WALK_GROUP pixels up to
+// MAX_GROUPS, then the list's length. Set to (0, 1, 1, 0) before the first pass
+// (src/render/passes.rs); the second only reads it.
+#ifdef WALKS_FROM_LIST
+#define WALK_LIST_ACCESS readonly
+#else
+#define WALK_LIST_ACCESS
+#endif
+layout(set = 0, binding = 10, std430) WALK_LIST_ACCESS buffer WalkList {
+    uvec4 walk_args;
+    uint walk_pixels[];
+};
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -69,6 +86,11 @@ layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 // score pass of shadowed labels, without effects), which are then not written (MaskVariant,
 // src/render/stages/shadow_mask.rs). Its z always is.
 layout(constant_id = 6) const uint WRITE_LABEL_AND_GRADIENT = 1u;
+// The most workgroups the depth test's second pass's indirect dispatch holds (its groups
+// stride over a longer list).
+layout(constant_id = 7) const uint MAX_GROUPS = 1u;
+// Pixels a workgroup of the second pass takes in a round: its 8 x 8 invocations.
+const uint WALK_GROUP = 64u;
 
 #ifdef FROM_WORDS
 // The shadow view's one draw, read in main with the range view's.
@@ -146,9 +168,23 @@ DrawData occluder_draw(uint draw) {
 
 #include "occluder_walk.glsl"
 
+// What the shadow test decided of a pixel without walking over the surface: lit, shadowed,
+// or a walk to take (occluded, with what it takes).
+const uint LIT = 0u;
+const uint SHADOWED = 1u;
+const uint TO_WALK = 2u;
+struct Walk {
+    ivec2 s;
+    vec3 p;
+    vec3 own;
+    float scale;
+    float bias;
+};
+
 // `on_hull_front`: p lies on a face of its model's convex hull, seen from the face's front
-// (resolve_range), in views that hold that model alone.
-bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
+// (range_from_words), in views that hold that model alone.
+uint decided(ivec2 pixel, RangePixel range, bool on_hull_front, out Walk walk) {
+    walk = Walk(ivec2(0), vec3(0.0), vec3(0.0), 0.0, 0.0);
     uint label = range.label;
     precise vec2 xy = orthographic_centre(m.range_grid, vec2(pixel));
     float z = range.z;
@@ -160,14 +196,15 @@ bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
     // outside it can only come from rounding at its border and is treated as lit.
     bool in_grid = in_shadow_grid(s);
     if (TEST == TEST_LABEL) {
-        return in_grid && shadow_seen(s).r != label;
+        return in_grid && shadow_seen(s).r != label ? SHADOWED : LIT;
     }
     if (TEST == TEST_LABEL_SQUARE) {
         // The four shadow pixels whose centres surround p'; outside the grid it is lit, as above.
         ivec2 corner = ivec2(floor(projected));
         bool outside = any(lessThan(corner, ivec2(-1))) || any(greaterThanEqual(corner, m.sizes.zw));
         return !outside && !shadow_label_is(corner, label) && !shadow_label_is(corner + ivec2(1, 0), label)
-            && !shadow_label_is(corner + ivec2(0, 1), label) && !shadow_label_is(corner + ivec2(1, 1), label);
+            && !shadow_label_is(corner + ivec2(0, 1), label) && !shadow_label_is(corner + ivec2(1, 1), label)
+            ? SHADOWED : LIT;
     }
     // Depth mode. The camera sees the side of a surface the projector lights only when that
     // side faces it: n · d_cam > 0 with n = (−∂z/∂x, −∂z/∂y, 1), d_cam = (sin θ, 0, cos θ).
@@ -180,31 +217,40 @@ bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
     // The gradient came from an f32 normal; its error grows with the square of steepness.
     precise float facing_bound = m.bias_relative * steepness * steepness;
     if (facing <= facing_bound) {
-        return true;
+        return SHADOWED;
     }
     // The same plane in the shadow frame: n = R_y(−θ)(−∂z/∂x, −∂z/∂y, 1), whose z is `facing`.
     precise vec2 own = vec2(m.cos_theta * gradient.x + m.sin_theta, gradient.y) / facing;
     if (!in_grid) {
-        return false;
+        return LIT;
     }
     // A point on a hull face, in views of its model alone (occluder_walk.glsl); n's length
     // times the camera direction's (1).
     if (on_hull_front && hull_face_clear(facing, length(vec3(gradient, 1.0)), m.bias_pitch, m.hull_tolerance)) {
-        return false;
+        return LIT;
     }
     // Then whatever lies between the point and the camera.
-    return occluded(s, ps, vec3(own, 0.0), scale, bias, false);
+    walk = Walk(s, ps, vec3(own, 0.0), scale, bias);
+    return TO_WALK;
+}
+
+// The whole test of a pixel, walking in place where it takes a walk.
+bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
+    Walk walk;
+    uint verdict = decided(pixel, range, on_hull_front, walk);
+    if (verdict == TO_WALK) {
+        return occluded(walk.s, walk.p, walk.own, walk.scale, walk.bias, false);
+    }
+    return verdict == SHADOWED;
 }
 
 #ifdef FROM_WORDS
 // The range view at a pixel from its words (a view of one draw, whose words hold z keys:
-// visibility_word.glsl), written to its attachments as raster_resolve.comp writes them (zeros
-// where no triangle covers it), its label and gradient only where a later pass reads them:
-// the stores cost time on a software rasterizer.
-// The gradient is read only where it is written or the depth test needs it.
-// For the depth test, `on_hull_front` says whether the pixel's triangle lies on its mesh's
-// convex hull and the view sees its front (its normal toward the view, +z).
-RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull_front) {
+// visibility_word.glsl); zeros where no triangle covers it. The gradient is read only where
+// it is written or the depth test needs it. For the depth test, `on_hull_front` says whether
+// the pixel's triangle lies on its mesh's convex hull and the view sees its front (its normal
+// toward the view, +z).
+RangePixel range_from_words(DrawData d, ivec2 pixel, out bool on_hull_front) {
     uint at = 2u * word_index(m.range_stride, pixel);
     uint t = range_words[at];
     RangePixel range = RangePixel(0u, 0.0, vec2(0.0));
@@ -215,6 +261,14 @@ RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull_front) {
         range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient, normal_z);
         on_hull_front = !LABEL_TEST && normal_z > 0.0 && on_hull(m.hull_faces, t);
     }
+    return range;
+}
+
+// range_from_words, written to the range view's attachments as raster_resolve.comp writes
+// them, its label and gradient only where a later pass reads them: the stores cost time on a
+// software rasterizer.
+RangePixel resolve_range(DrawData d, ivec2 pixel, out bool on_hull_front) {
+    RangePixel range = range_from_words(d, pixel, on_hull_front);
     imageStore(range_z, pixel, vec4(range.z));
     if (WRITE_LABEL_AND_GRADIENT != 0u) {
         imageStore(range_label, pixel, uvec4(range.label));
@@ -231,6 +285,41 @@ RangePixel read_range(ivec2 pixel) {
         range.gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
     }
     return range;
+}
+#endif
+
+#ifdef WALKS_FROM_LIST
+// The second pass of the depth test: each invocation walks from listed pixels, whose labels
+// the first pass wrote, and drops the label where a surface hides the point.
+void walk_from_list(DrawData range_draw) {
+    uint stride = gl_NumWorkGroups.x * WALK_GROUP;
+    for (uint i = gl_WorkGroupID.x * WALK_GROUP + gl_LocalInvocationIndex; i < walk_args.w; i += stride) {
+        uint index = walk_pixels[i];
+        ivec2 pixel = ivec2(index % uint(m.sizes.x), index / uint(m.sizes.x));
+        bool on_hull_front;
+        RangePixel range = range_from_words(range_draw, pixel, on_hull_front);
+        Walk walk;
+        decided(pixel, range, on_hull_front, walk);
+        if (occluded(walk.s, walk.p, walk.own, walk.scale, walk.bias, false)) {
+            masked_label[index] = 0u;
+        }
+    }
+}
+
+void main() {
+    DrawData range_draw = range_draws[m.words_draw];
+    shadow_draw = draws[m.words_draw];
+    walk_from_list(range_draw);
+}
+#else
+#ifdef FROM_WORDS
+// Lists range pixel `index` for the second pass, and counts the workgroups it takes.
+void list_walk(uint index) {
+    uint at = atomicAdd(walk_args.w, 1u);
+    walk_pixels[at] = index;
+    if (at % WALK_GROUP == 0u && at / WALK_GROUP < MAX_GROUPS) {
+        atomicAdd(walk_args.x, 1u);
+    }
 }
 #endif
 
@@ -253,5 +342,19 @@ void main() {
     bool on_hull_front = false;
 #endif
     uint index = uint(pixel.y) * uint(m.sizes.x) + uint(pixel.x);
+#ifdef FROM_WORDS
+    if (!LABEL_TEST) {
+        // The depth test's first pass: a listed pixel keeps its label until the second finds
+        // it hidden.
+        Walk walk;
+        uint verdict = range.label == 0u ? LIT : decided(pixel, range, on_hull_front, walk);
+        masked_label[index] = verdict == SHADOWED ? 0u : range.label;
+        if (verdict == TO_WALK) {
+            list_walk(index);
+        }
+        return;
+    }
+#endif
     masked_label[index] = (range.label != 0u && shadowed(pixel, range, on_hull_front)) ? 0u : range.label;
 }
+#endif

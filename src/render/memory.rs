@@ -7,6 +7,7 @@ use crate::exact;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use crate::render::stages::host_view::HostView;
+use crate::render::stages::shadow_mask::WalkList;
 use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
@@ -27,8 +28,8 @@ const WRITING_BYTES: u64 = 60;
 
 /// GPU bytes one job's slot takes: per pixel of the range view (its attachments, the
 /// shadowed labels, the effects' outputs where effects are named) and of the shadow view (its
-/// attachments), and with the compute rasterizer each view's visibility words and a queue
-/// with room for `compute_triangles` in each of `views` views.
+/// attachments), and with the compute rasterizer each view's visibility words, a queue
+/// with room for `compute_triangles` in each of `views` views and the shadow mask's walk list.
 pub(crate) fn slot_bytes(
     (range_pixels, shadow_pixels): (u64, u64),
     effects: &Effects,
@@ -37,10 +38,14 @@ pub(crate) fn slot_bytes(
 ) -> u64 {
     let effect_bytes = if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
     let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
+    let walk_list = match compute_triangles {
+        Some(_) if shadow_pixels > 0 => WalkList::bytes(range_pixels),
+        _ => 0,
+    };
     let range = ViewKind::Range.bytes_per_pixel() + SHADOWED_LABEL_BYTES + effect_bytes + visibility;
     let shadow = ViewKind::Shadow.bytes_per_pixel() + visibility;
     let queue = compute_triangles.map_or(0, |t| large_queue_bytes(t, views));
-    range * range_pixels + shadow * shadow_pixels + queue
+    range * range_pixels + shadow * shadow_pixels + queue + walk_list
 }
 
 /// Bytes a render of a rig's pinhole views takes at its peak (pinhole/), rendering or writing

@@ -29,7 +29,7 @@ use crate::render::raster::compute::{
 use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
 use crate::render::stages::host_view::HostView;
-use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
+use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants, WalkList};
 use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
@@ -46,6 +46,9 @@ pub(crate) struct Slot<'a> {
     /// The shadow mask's output labels.
     masked: Option<Buffer>,
     mask_bindings: Option<MaskBindings>,
+    /// The pixels the depth test's first pass leaves to its second, where the mask reads the
+    /// compute rasterizer's words (stages/shadow_mask.rs).
+    walk_list: Option<WalkList>,
     /// The shadow view's draw table, which the mask reads.
     shadow_table: Option<&'a DrawTable>,
     /// The effect passes' outputs, where effects are named.
@@ -155,18 +158,20 @@ impl<'a> Slot<'a> {
             }
             _ => None,
         };
-        let (shadow, masked, mask_bindings) = match (shape.shadow, shadow) {
+        let (shadow, masked, mask_bindings, walk_list) = match (shape.shadow, shadow) {
             (None, _) if shape.from_host || shape.witnesses.is_some() => {
-                (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None)
+                (None, Some(Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?), None, None)
             }
             (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
-                let bindings =
-                    MaskBindings::new(ctx, &p.mask, &range, &shadow, &masked, &draw_table.buffer, words.as_ref())?;
-                (Some(shadow), Some(masked), Some(bindings))
+                let walk_list =
+                    words.as_ref().map(|_| WalkList::new(ctx, u64::from(w) * u64::from(h), name)).transpose()?;
+                let to_mask = words.as_ref().zip(walk_list.as_ref());
+                let bindings = MaskBindings::new(ctx, &p.mask, &range, &shadow, &masked, &draw_table.buffer, to_mask)?;
+                (Some(shadow), Some(masked), Some(bindings), walk_list)
             }
-            _ => (None, None, None),
+            _ => (None, None, None, None),
         };
         let effects = match (&shape.effects, effect_pipelines) {
             (Some(effect_shape), Some(pipelines)) => {
@@ -210,6 +215,7 @@ impl<'a> Slot<'a> {
             shadow,
             masked,
             mask_bindings,
+            walk_list,
             shadow_table,
             effects,
             reflectivities,
@@ -474,8 +480,9 @@ impl<'p> Passes<'p> {
         if let Some(pinhole) = job.pinhole {
             return self.pinhole_steps(slot, job, pinhole, sink);
         }
-        // Room for the rasters, the mask, an effect and the sink's steps: no growing.
-        let mut steps = Vec::with_capacity(8);
+        // Room for the rasters, the mask's two passes, an effect and the sink's steps: no
+        // growing.
+        let mut steps = Vec::with_capacity(9);
         let compute = self.compute_job(slot, job);
         let shadow = self.shadow_pass(slot, job);
         match compute {
@@ -494,9 +501,17 @@ impl<'p> Passes<'p> {
                 // The coverage's time, up to here; and a step of nothing in place of the shadow
                 // raster, so that in a run the masks and scores of jobs either rasterizer
                 // rendered fall in the same stages.
-                Some(_) => {
+                // The step after it empties the depth test's walk list, where the mask takes two
+                // passes (stages/shadow_mask.rs).
+                Some((.., test)) => {
                     steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}).timed("range and shadow"));
-                    steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}));
+                    match slot.walk_list.as_ref().filter(|_| test == ShadowTest::Depth) {
+                        Some(list) => {
+                            let empty = move |ctx: &GpuContext, cmd| list.record_emptying(ctx, cmd);
+                            steps.push(Step::new(Vec::new(), vec![(&list.buffer, Access::TransferWrite)], empty));
+                        }
+                        None => steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {})),
+                    }
                 }
             },
             None => {
@@ -552,15 +567,29 @@ impl<'p> Passes<'p> {
             let mut images = Vec::with_capacity(slot.range.colour.len() + targets.colour.len());
             images.extend(slot.range.colour.iter().map(|image| (image, range_use)));
             images.extend(targets.colour.iter().map(|image| (image, Access::ComputeRead)));
-            let mut buffers = Vec::with_capacity(5);
+            let mut buffers = Vec::with_capacity(6);
             buffers.push((masked, Access::ComputeWrite));
             buffers.extend(slot.shadow_table.map(|table| (&table.buffer, Access::ComputeRead)));
             if let Some((w, _)) = &words {
                 buffers.extend([w.shadow_words, w.range_table, w.range_words].map(|b| (b, Access::ComputeRead)));
             }
+            // The depth test's second pass, where the variant takes one: it reads the words and
+            // the list, and drops labels. The first writes the list in every test (a validator
+            // takes every test's pipeline to write it: one shader).
+            let list = slot.walk_list.as_ref().filter(|_| reading_words.is_some());
             let (mask, constants) = reading_words.unwrap_or((&p.mask, constants));
+            let second = mask.second_pass(test).zip(list).map(|(walks, list)| {
+                let mut walk_buffers = buffers.clone();
+                walk_buffers.push((&list.buffer, Access::IndirectAndComputeRead));
+                let record_walks = move |_: &GpuContext, cmd| bindings.record_walks(cmd, walks, list, &constants);
+                Step::new(Vec::new(), walk_buffers, record_walks).timed("shadow mask: walks")
+            });
+            buffers.extend(list.map(|list| (&list.buffer, Access::ComputeWrite)));
             let record_mask = move |_: &GpuContext, cmd| bindings.record(cmd, mask, test, &constants);
             steps.push(Step::new(images, buffers, record_mask).timed("shadow mask"));
+            // Jobs without a second pass take a step of nothing in its place, so that in a run
+            // the scores of every job fall in the same stage.
+            steps.push(second.unwrap_or_else(|| Step::new(Vec::new(), Vec::new(), |_, _| {})));
             shadowed_labels = Some(masked);
         }
         steps.extend(self.effects_and_sink(slot, job, shadowed_labels, sink));

@@ -10,11 +10,19 @@
 //! (docs/compute-rasterizer.md). Where no pass after it reads the range view's label or
 //! gradient, a variant writes only its z ([`MaskVariant::WordsForScoring`]), saving those
 //! stores.
+//!
+//! That variant's depth test runs in two passes: the first decides each pixel it can without
+//! a walk over the surface (facing away, outside the shadow view, on a hull face) and lists
+//! the others in a [`WalkList`]; the second, an indirect dispatch of a variant of its own,
+//! walks from the listed pixels only. A software rasterizer runs a pass's invocations in lockstep, eight
+//! at a time, and runs the code of every branch even where none of the eight takes it: walking
+//! in place, a pixel the hull-face shortcut decided paid for the walk's code all the same (a
+//! box's mask: 2.0 ms a hypothesis at 256², 0.5 without the walk's code).
 
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
-use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
+use crate::gpu::{shaders, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::gpu_mesh::GpuMesh;
 use crate::render::plan::Views;
@@ -118,7 +126,8 @@ pub enum MaskVariant {
 }
 
 /// The mask pipelines of one [`MaskVariant`], one per [`ShadowTest`], the test a
-/// specialization constant. Their descriptor-set layouts are defined identically, so one set
+/// specialization constant, and for the variants reading words the depth test's second pass
+/// (the shader's variant WALKS_FROM_LIST). Their descriptor-set layouts are defined identically, so one set
 /// serves them all. A software rasterizer such as lavapipe runs both sides of a branch on a
 /// uniform value, so each test gets a pipeline of its own rather than a branch on a push
 /// constant.
@@ -126,6 +135,7 @@ pub struct MaskPipelines {
     label: ComputePipeline,
     label_square: ComputePipeline,
     depth: ComputePipeline,
+    walks: Option<ComputePipeline>,
 }
 
 impl MaskPipelines {
@@ -136,7 +146,7 @@ impl MaskPipelines {
             MaskVariant::WordsForScoring => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words, for scoring"),
         };
         let write_label_and_gradient = u32::from(variant != MaskVariant::WordsForScoring);
-        let pipeline = |test: ShadowTest, name: &str| {
+        let pipeline = |code, test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
                 SetShape::storage(MaskBindings::IMAGES, MaskBindings::BUFFERS),
@@ -150,14 +160,19 @@ impl MaskPipelines {
                     (spec::LINK_SAME_WAY, LINK_SAME_WAY),
                     (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
                     (spec::WRITE_LABEL_AND_GRADIENT, write_label_and_gradient),
+                    (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
                 ],
                 &format!("{name}{source}"),
             )
         };
+        let walks = (variant != MaskVariant::Attachments)
+            .then(|| pipeline(shaders::SHADOW_MASK_WALKS_COMP, ShadowTest::Depth, "shadow mask (depth test's walks)"))
+            .transpose()?;
         Ok(Self {
-            label: pipeline(ShadowTest::Label, "shadow mask (label test)")?,
-            label_square: pipeline(ShadowTest::LabelSquare, "shadow mask (2x2 label test)")?,
-            depth: pipeline(ShadowTest::Depth, "shadow mask (depth test)")?,
+            label: pipeline(code, ShadowTest::Label, "shadow mask (label test)")?,
+            label_square: pipeline(code, ShadowTest::LabelSquare, "shadow mask (2x2 label test)")?,
+            depth: pipeline(code, ShadowTest::Depth, "shadow mask (depth test)")?,
+            walks,
         })
     }
 
@@ -167,6 +182,50 @@ impl MaskPipelines {
             ShadowTest::LabelSquare => &self.label_square,
             ShadowTest::Depth => &self.depth,
         }
+    }
+
+    /// The second pass `test` takes, where it takes one: the depth test's walks from the
+    /// pixels the first listed, in the variants reading words.
+    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
+        self.walks.as_ref().filter(|_| test == ShadowTest::Depth)
+    }
+}
+
+/// The range pixels the depth test's first pass leaves to walk from, and the second pass's
+/// indirect dispatch (shadow_mask.comp's `WalkList`): a slot's, where the compute rasterizer
+/// renders its views.
+pub struct WalkList {
+    pub buffer: Buffer,
+}
+
+impl WalkList {
+    /// Bytes a list takes per range pixel...
+    const BYTES_PER_PIXEL: u64 = 4;
+    /// ...after the dispatch's arguments (x, y, z) and the list's length.
+    const HEADER_BYTES: u64 = 16;
+    /// The most workgroups the second pass dispatches; they stride over a longer list.
+    const MAX_GROUPS: u32 = 65_535;
+
+    /// Bytes a list for a range view of `pixels` takes (src/render/memory.rs).
+    pub fn bytes(pixels: u64) -> u64 {
+        Self::HEADER_BYTES + Self::BYTES_PER_PIXEL * pixels
+    }
+
+    /// A list with room for every pixel of a range view of `pixels`.
+    pub fn new(ctx: &Arc<GpuContext>, pixels: u64, name: &str) -> Result<Self> {
+        let desc = BufferDesc {
+            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..BufferDesc::gpu_storage(Self::bytes(pixels))
+        };
+        Ok(Self { buffer: Buffer::new(ctx, desc, &format!("{name} depth test's walk list"))? })
+    }
+
+    /// Records the list's emptying, before the first pass: no workgroups, no pixels (x, y, z,
+    /// length). A transfer write.
+    pub fn record_emptying(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
+        // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffer; the
+        // update fits its header.
+        unsafe { ctx.device.cmd_update_buffer(cmd, self.buffer.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0])) };
     }
 }
 
@@ -180,7 +239,8 @@ pub struct WordsToMask<'a> {
 
 /// The descriptor set binding both views' colour attachments (range view's, then shadow
 /// view's), the output labels, the shadow view's draw table and what the variant reading
-/// visibility words reads (the draw table again where there are none: never read then).
+/// visibility words reads and writes (the draw table again where there are none: never read
+/// then).
 pub struct MaskBindings {
     set: StorageSet,
 }
@@ -188,9 +248,9 @@ pub struct MaskBindings {
 impl MaskBindings {
     /// Storage images the mask pass binds, from binding 0.
     pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
-    /// Storage buffers bound after them: the shadowed labels, the draw table and
-    /// [`WordsToMask`]'s three.
-    pub const BUFFERS: usize = 5;
+    /// Storage buffers bound after them: the shadowed labels, the draw table,
+    /// [`WordsToMask`]'s three and the [`WalkList`].
+    pub const BUFFERS: usize = 6;
 
     /// `draw_table` holds the shadow pass's [`DrawConstants`](crate::render::raster::draw::DrawConstants)
     /// at the draw indices it recorded.
@@ -201,15 +261,15 @@ impl MaskBindings {
         shadow: &ViewTargets,
         masked: &Buffer,
         draw_table: &Buffer,
-        words: Option<&WordsToMask>,
+        words: Option<(&WordsToMask, &WalkList)>,
     ) -> Result<Self> {
         let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
         debug_assert_eq!(images.len(), Self::IMAGES);
         let buffers = match words {
-            Some(w) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words],
-            None => [masked, draw_table, draw_table, draw_table, draw_table],
+            Some((w, walks)) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words, &walks.buffer],
+            None => [masked, draw_table, draw_table, draw_table, draw_table, draw_table],
         };
-        matches_shader_bindings!([SHADOW_MASK_COMP, SHADOW_MASK_WORDS_COMP] {
+        matches_shader_bindings!([SHADOW_MASK_COMP, SHADOW_MASK_WORDS_COMP, SHADOW_MASK_WALKS_COMP] {
             range_label,
             range_z,
             range_dz_dx,
@@ -220,6 +280,7 @@ impl MaskBindings {
             ShadowWords,
             RangeDrawTable,
             RangeWords,
+            WalkList,
         });
         let set_layout = pipelines.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, (&[], &buffers), "shadow mask bindings")? })
@@ -235,5 +296,17 @@ impl MaskBindings {
     ) {
         let groups = [constants.region[2] as u32, constants.region[3] as u32].map(|n| n.div_ceil(8));
         self.set.dispatch(cmd, pipelines.for_test(test), bytemuck::bytes_of(constants), groups);
+    }
+
+    /// Records the depth test's second pass, `walks` ([`MaskPipelines::second_pass`]), over the
+    /// pixels the first listed in `list`.
+    pub fn record_walks(
+        &self,
+        cmd: vk::CommandBuffer,
+        walks: &ComputePipeline,
+        list: &WalkList,
+        constants: &MaskConstants,
+    ) {
+        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.buffer);
     }
 }
