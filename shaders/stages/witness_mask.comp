@@ -10,6 +10,9 @@
 // A pinhole witness's image is drawn in projection, a directional witness's orthographically
 // along its direction. A point any witness does not see is shadowed; bit k of its `lost_by`
 // word says witness k did not see it.
+// The depth test runs in two passes: this one decides what it can without a walk over the
+// surface and lists each pixel with the witnesses it leaves to walk toward; the second
+// (WALKS_FROM_LIST, the variant defining it) takes the walks (shadow_mask.comp says why).
 #include "../raster/draw.glsl"
 #include "../raster/visibility_word.glsl"
 
@@ -24,7 +27,22 @@ layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
 layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D witness_visibility;
 layout(set = 0, binding = 5, rgba32ui) uniform readonly uimage2D directional_visibility;
 layout(set = 0, binding = 6, std430) writeonly buffer Masked { uint masked_label[]; };
-layout(set = 0, binding = 7, std430) writeonly buffer LostBy { uint lost_by[]; };
+#ifdef WALKS_FROM_LIST
+#define LOST_BY_ACCESS
+#define WALK_LIST_ACCESS readonly
+#else
+#define LOST_BY_ACCESS writeonly
+#define WALK_LIST_ACCESS
+#endif
+layout(set = 0, binding = 7, std430) LOST_BY_ACCESS buffer LostBy { uint lost_by[]; };
+// The depth test: the pixels left to walk from (their indices in Masked, and bit k for each
+// witness k to walk toward), and the second pass's indirect dispatch (x, y, z), x the groups
+// of WALK_GROUP entries up to MAX_GROUPS, then the list's length. Set to (0, 1, 1, 0) before
+// the first pass (src/render/passes.rs); the second only reads it.
+layout(set = 0, binding = 8, std430) WALK_LIST_ACCESS buffer WitnessWalkList {
+    uvec4 walk_args;
+    uvec2 walk_entries[];
+};
 
 // One witness as the mask sees it (src/render/pinhole/witness_mask.rs, WitnessConstants).
 struct WitnessData {
@@ -72,6 +90,11 @@ layout(constant_id = 2) const uint TEST_DEPTH = 0xffffffffu;
 layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
+// The most workgroups the depth test's second pass's indirect dispatch holds (its groups
+// stride over a longer list).
+layout(constant_id = 6) const uint MAX_GROUPS = 1u;
+// Entries a workgroup of the second pass takes in a round: its 8 x 8 invocations.
+const uint WALK_GROUP = 64u;
 
 // The witness being tested, whose image and draw table the depth test's walk reads.
 WitnessData witness;
@@ -128,50 +151,78 @@ bool front_toward_witness(uint t, vec3 lit) {
     return dot(triangle_normal(WitnessDraws(witness.draws).draws[0], t), to_witness(lit, 0.0)) > 0.0;
 }
 
-// Whether the witness sees p, whose surface has normal `lit` (on the side the reference sees)
-// and errs by up to `steepness` times f32 rounding of p's coordinates (the depth test).
-// `hull_face`: the triangle p lies on where it lies on its mesh's convex hull, in a job of that
-// mesh alone (else NO_NEIGHBOUR).
-bool sees(vec3 p, vec3 lit, uint label, float steepness, uint hull_face) {
+// What the test decided of a point toward the witness without walking over the surface:
+// seen, not seen, or a walk to take (occluded, with what it takes).
+const uint SEEN = 0u;
+const uint UNSEEN = 1u;
+const uint TO_WALK = 2u;
+struct Walk {
+    ivec2 s;
+    vec3 q;
+    vec3 own;
+    float scale;
+    float bias;
+    bool central;
+};
+
+// A reference pixel's point p (reference frame) and its label (0: no surface there), and for
+// the tests toward the witnesses: its surface's normal `lit`, on the side the reference sees;
+// how many times f32 rounding of p's coordinates p errs by (`steepness`, the depth test); and
+// the triangle p lies on where it lies on its mesh's convex hull, in a job of that mesh alone
+// (else NO_NEIGHBOUR).
+struct ReferencePoint {
+    uint label;
+    vec3 p;
+    vec3 lit;
+    float steepness;
+    uint hull_face;
+};
+
+// Whether the witness sees the point, or a walk is to tell.
+uint decided(ReferencePoint r, out Walk walk) {
+    walk = Walk(ivec2(0), vec3(0.0), vec3(0.0), 0.0, 0.0, false);
+    vec3 p = r.p, lit = r.lit;
     bool directional = witness.centre.w == 0.0;
     precise vec3 toward = directional ? witness.centre.xyz : witness.centre.xyz - p;
     precise float facing = dot(lit, toward);
     if (!(facing > m.facing_tolerance * length(lit) * length(toward))) {
-        return false;
+        return UNSEEN;
     }
     vec3 q = to_witness(p, 1.0);
     // Parallel rays come from beyond everything; a pinhole witness sees what lies in front.
     if (!(directional || q.z > 0.0)) {
-        return false;
+        return UNSEEN;
     }
     precise vec2 uv = directional ? orthographic_pixel(witness.grid, q.xy) : pinhole_pixel(witness.grid, q);
     // Off the image by more than a pixel (checked in floats: a far projection does not fit an
     // int, whose conversion is then undefined).
     if (!(all(greaterThanEqual(uv, vec2(-1.0))) && all(lessThanEqual(uv, vec2(witness.band.xy))))) {
-        return false;
+        return UNSEEN;
     }
     if (TEST == TEST_LABEL_SQUARE) {
         ivec2 corner = ivec2(floor(uv));
-        return carries(corner, label) || carries(corner + ivec2(1, 0), label) || carries(corner + ivec2(0, 1), label)
-            || carries(corner + ivec2(1, 1), label);
+        return carries(corner, r.label) || carries(corner + ivec2(1, 0), r.label)
+            || carries(corner + ivec2(0, 1), r.label) || carries(corner + ivec2(1, 1), r.label)
+            ? SEEN : UNSEEN;
     }
     // The nearest pixel; its square around its centre is the image's (Intrinsics::contains).
     ivec2 s = ivec2(floor(uv + 0.5));
     if (TEST != TEST_DEPTH) {
-        return carries(s, label);
+        return carries(s, r.label) ? SEEN : UNSEEN;
     }
     // The depth test. A pinhole witness sees only its image's squares; a directional
     // witness's image covers every point the reference view can see (directional.rs), and a
     // point outside it can only come from rounding at its border.
     if (!on_image(s)) {
-        return directional;
+        return directional ? SEEN : UNSEEN;
     }
+    float steepness = r.steepness;
     // The normal came from an f32 gradient, whose error grows with the square of steepness:
     // as the scanner's mask does, a surface turned from the witness by less than that counts
     // as turned away (which also bounds its slope along the witness's rays, `own`).
     precise float facing_bound = m.bias_relative * steepness * steepness;
     if (!(facing > facing_bound * length(lit) * length(toward))) {
-        return false;
+        return UNSEEN;
     }
     float scale = max(max(max(abs(q.x), abs(q.y)), abs(q.z)), max(max(abs(p.x), abs(p.y)), abs(p.z)));
     // p came from a plane evaluated in f32, which errs in proportion to its steepness.
@@ -181,27 +232,24 @@ bool sees(vec3 p, vec3 lit, uint label, float steepness, uint hull_face) {
     vec3 own = ray_slope(to_witness(lit, 0.0), rays);
     // A point on a hull face, in views of its model alone (occluder_walk.glsl), whose front
     // turns toward the witness.
-    if (hull_face != NO_NEIGHBOUR
+    if (r.hull_face != NO_NEIGHBOUR
         && hull_face_clear(facing, length(lit) * length(toward), m.bias_per_depth * p.z, m.hull_tolerance)
-        && front_toward_witness(hull_face, lit)) {
-        return true;
+        && front_toward_witness(r.hull_face, lit)) {
+        return SEEN;
     }
-    return !occluded(s, q, own, scale, bias, !directional);
+    walk = Walk(s, q, own, scale, bias, !directional);
+    return TO_WALK;
 }
 
-void main() {
-    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, m.region.zw))) {
-        return;
-    }
-    ivec2 pixel = ivec2(m.region.xy + gl_GlobalInvocationID.xy);
-    uint index = uint(pixel.y) * m.width + uint(pixel.x);
-    uint label = imageLoad(range_label, pixel).r;
-    uint lost = 0u;
-    if (label != 0u) {
+// The point a reference pixel saw, from the reference view's attachments (a label of 0 and
+// nothing else where it saw none).
+ReferencePoint reference_point(ivec2 pixel) {
+    ReferencePoint r = ReferencePoint(imageLoad(range_label, pixel).r, vec3(0.0), vec3(0.0), 0.0, NO_NEIGHBOUR);
+    if (r.label != 0u) {
         float z = imageLoad(range_z, pixel).r;
         precise vec3 p = view_point(VIEW_PINHOLE, m.intrinsics, vec2(pixel), z);
         vec3 n = vec3(-imageLoad(range_dz_dx, pixel).r, -imageLoad(range_dz_dy, pixel).r, 1.0);
-        // The hull faces' shortcut (sees) trusts `lit`, which a gradient clamped at ±1e30 (a
+        // The hull faces' shortcut (decided) trusts `lit`, which a gradient clamped at ±1e30 (a
         // face along the view's rays: pinhole_range_pixel) no longer points along.
         bool normal_kept = max(abs(n.x), abs(n.y)) < 1e30;
         // Scaled to components of at most 1: a face along the view's axis has a gradient of
@@ -220,13 +268,72 @@ void main() {
                 hull_face = t;
             }
         }
+        r = ReferencePoint(r.label, p, lit, steepness, hull_face);
+    }
+    return r;
+}
+
+#ifdef WALKS_FROM_LIST
+// The depth test's second pass: each invocation walks from listed pixels toward the witnesses
+// listed with them, and sets the bits of those a surface hides the point from (the first pass
+// wrote the others' bits and the labels).
+void main() {
+    uint stride = gl_NumWorkGroups.x * WALK_GROUP;
+    for (uint i = gl_WorkGroupID.x * WALK_GROUP + gl_LocalInvocationIndex; i < walk_args.w; i += stride) {
+        uvec2 entry = walk_entries[i];
+        uint index = entry.x;
+        ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width));
+        uint lost = 0u;
+        for (uint to_walk = entry.y; to_walk != 0u; to_walk &= to_walk - 1u) {
+            uint k = uint(findLSB(to_walk));
+            witness = Witnesses(m.witnesses).witnesses[k];
+            Walk walk;
+            decided(r, walk);
+            if (occluded(walk.s, walk.q, walk.own, walk.scale, walk.bias, walk.central)) {
+                lost |= 1u << k;
+            }
+        }
+        if (lost != 0u) {
+            atomicOr(lost_by[index], lost);
+            masked_label[index] = 0u;
+        }
+    }
+}
+#else
+// Lists pixel `index` for the second pass with the witnesses `to_walk` toward, and counts the
+// workgroups it takes.
+void list_walks(uint index, uint to_walk) {
+    uint at = atomicAdd(walk_args.w, 1u);
+    walk_entries[at] = uvec2(index, to_walk);
+    if (at % WALK_GROUP == 0u && at / WALK_GROUP < MAX_GROUPS) {
+        atomicAdd(walk_args.x, 1u);
+    }
+}
+
+void main() {
+    if (any(greaterThanEqual(gl_GlobalInvocationID.xy, m.region.zw))) {
+        return;
+    }
+    ivec2 pixel = ivec2(m.region.xy + gl_GlobalInvocationID.xy);
+    uint index = uint(pixel.y) * m.width + uint(pixel.x);
+    ReferencePoint r = reference_point(pixel);
+    uint lost = 0u, to_walk = 0u;
+    if (r.label != 0u) {
         for (uint k = 0u; k < m.witness_count; k++) {
             witness = Witnesses(m.witnesses).witnesses[k];
-            if (!sees(p, lit, label, steepness, hull_face)) {
+            Walk walk;
+            uint verdict = decided(r, walk);
+            if (verdict == UNSEEN) {
                 lost |= 1u << k;
+            } else if (verdict == TO_WALK) {
+                to_walk |= 1u << k;
             }
         }
     }
     lost_by[index] = lost;
-    masked_label[index] = lost == 0u ? label : 0u;
+    masked_label[index] = lost == 0u ? r.label : 0u;
+    if (to_walk != 0u) {
+        list_walks(index, to_walk);
+    }
 }
+#endif

@@ -7,7 +7,7 @@ use crate::exact;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use crate::render::stages::host_view::HostView;
-use crate::render::stages::shadow_mask::WalkList;
+use crate::render::stages::walk_list::{WalkEntry, WalkList};
 use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
@@ -39,7 +39,7 @@ pub(crate) fn slot_bytes(
     let effect_bytes = if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
     let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
     let walk_list = match compute_triangles {
-        Some(_) if shadow_pixels > 0 => WalkList::bytes(range_pixels),
+        Some(_) if shadow_pixels > 0 => WalkList::bytes(range_pixels, WalkEntry::Pixel),
         _ => 0,
     };
     let range = ViewKind::Range.bytes_per_pixel() + SHADOWED_LABEL_BYTES + effect_bytes + visibility;
@@ -61,9 +61,9 @@ pub(crate) fn rig_render_bytes(
 
 /// GPU bytes one job's slot takes under a rig's pinhole views: [`slot_bytes`] with the
 /// witnesses' images of `witness_pixels` in place of a shadow view's, and each range
-/// pixel's witness bits; and where the compute rasterizer draws its `views` views
-/// (raster/compute/rig.rs), `compute` = (the triangles a view's queue has room for, `views`),
-/// their visibility words and queues.
+/// pixel's witness bits and the depth test's walk list; and where the compute rasterizer draws
+/// its `views` views (raster/compute/rig.rs), `compute` = (the triangles a view's queue has
+/// room for, `views`), their visibility words and queues.
 pub(crate) fn rig_slot_bytes(
     (pixels, witness_pixels): (u64, u64),
     effects: &Effects,
@@ -73,7 +73,8 @@ pub(crate) fn rig_slot_bytes(
         let queues = large_queue_bytes(triangles, views);
         VISIBILITY_WORD_BYTES * (pixels + witness_pixels) + queues
     });
-    slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels + compute_bytes
+    let walk_list = WalkList::bytes(pixels, WalkEntry::PixelAndWitnesses);
+    slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels + walk_list + compute_bytes
 }
 
 /// Bytes a render on the CPU alone takes (a rig other than the paper's scanner, by exact ray

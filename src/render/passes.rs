@@ -29,7 +29,8 @@ use crate::render::raster::compute::{
 use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
 use crate::render::stages::host_view::HostView;
-use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants, WalkList};
+use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
+use crate::render::stages::walk_list::{WalkEntry, WalkList};
 use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
@@ -73,6 +74,8 @@ pub(crate) struct Slot<'a> {
 struct WitnessSlot<'a> {
     targets: [Option<PooledTargets<'a>>; 2],
     lost_by: Buffer,
+    /// The pixels the depth test's first pass leaves to its second (stages/walk_list.rs).
+    walk_list: WalkList,
     bindings: WitnessMaskBindings,
     test: ShadowTest,
 }
@@ -165,8 +168,10 @@ impl<'a> Slot<'a> {
             (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
-                let walk_list =
-                    words.as_ref().map(|_| WalkList::new(ctx, u64::from(w) * u64::from(h), name)).transpose()?;
+                let walk_list = words
+                    .as_ref()
+                    .map(|_| WalkList::new(ctx, u64::from(w) * u64::from(h), WalkEntry::Pixel, name))
+                    .transpose()?;
                 let to_mask = words.as_ref().zip(walk_list.as_ref());
                 let bindings = MaskBindings::new(ctx, &p.mask, &range, &shadow, &masked, &draw_table.buffer, to_mask)?;
                 (Some(shadow), Some(masked), Some(bindings), walk_list)
@@ -189,14 +194,15 @@ impl<'a> Slot<'a> {
                 let [pinhole, directional] = targets;
                 let targets = [pinhole?, directional?];
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
+                let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), WalkEntry::PixelAndWitnesses, name)?;
                 let mask = p.pinhole()?.mask(set.test);
                 // A rig without a kind of witness binds the other's images in its place (a
                 // witness set holds one witness at least: the error cannot arise).
                 let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
                 let images = pinhole.or(directional).zip(directional.or(pinhole)).map(|(p, d)| [p, d]);
                 let images = images.ok_or_else(|| Error::Scene("a rig's witness set holds no witness".into()))?;
-                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by))?;
-                Some(WitnessSlot { targets, lost_by, bindings, test: set.test })
+                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by, &walk_list))?;
+                Some(WitnessSlot { targets, lost_by, walk_list, bindings, test: set.test })
             }
             _ => None,
         };
@@ -609,17 +615,32 @@ impl<'p> Passes<'p> {
         let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
         let witnesses = slot.witnesses.as_ref();
         let witness_targets = || witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
-        let mut steps = match (&slot.rig, job.compute) {
-            (Some(rig), true) => {
-                rig.steps(rig_targets(&slot.range, witnesses), &pinhole.compute_views(job.area), job.draws)
-            }
-            _ => vec![self.pinhole_draw_step(slot, job, pinhole, pipelines)],
-        };
+        // First, the depth test's walk list emptied, for its first pass.
+        let mut steps: Vec<Step> = witnesses
+            .filter(|w| w.test == ShadowTest::Depth)
+            .map(|w| {
+                let empty = move |ctx: &GpuContext, cmd| w.walk_list.record_emptying(ctx, cmd);
+                Step::new(Vec::new(), vec![(&w.walk_list.buffer, Access::TransferWrite)], empty)
+            })
+            .into_iter()
+            .collect();
+        match (&slot.rig, job.compute) {
+            (Some(rig), true) => steps.extend(rig.steps(
+                rig_targets(&slot.range, witnesses),
+                &pinhole.compute_views(job.area),
+                job.draws,
+            )),
+            _ => steps.push(self.pinhole_draw_step(slot, job, pinhole, pipelines)),
+        }
         let shadowed = match (witnesses, &slot.masked) {
             (Some(w), Some(masked)) => {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
                 images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
-                let mut buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
+                let mut buffers = vec![
+                    (masked, Access::ComputeWrite),
+                    (&w.lost_by, Access::ComputeWrite),
+                    (&w.walk_list.buffer, Access::ComputeWrite),
+                ];
                 // A job of one draw on the compute rasterizer: the depth test reads which
                 // triangle each reference pixel saw, for the draw's hull faces.
                 let constants = match (&slot.rig, job.compute, job.draws) {
@@ -630,9 +651,21 @@ impl<'p> Passes<'p> {
                     _ => None,
                 }
                 .unwrap_or(pinhole.mask);
+                // The depth test's second pass reads the reference view and the witnesses'
+                // images as the first does, and the list; it sets labels' and bits' words.
+                let second = pipelines.second_pass(w.test).map(|walks| {
+                    let mut walk_buffers = buffers.clone();
+                    walk_buffers.retain(|&(buffer, _)| !std::ptr::eq(buffer, &w.walk_list.buffer));
+                    walk_buffers.push((&w.walk_list.buffer, Access::IndirectAndComputeRead));
+                    let walk = move |_: &GpuContext, cmd| w.bindings.record_walks(cmd, walks, &w.walk_list, &constants);
+                    Step::new(images.clone(), walk_buffers, walk).timed("shadow mask: walks")
+                });
                 let mask = pipelines.mask(w.test);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &constants);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));
+                // Jobs without a second pass take a step of nothing in its place, so that in a
+                // run the scores of every job fall in the same stage.
+                steps.push(second.unwrap_or_else(|| Step::new(Vec::new(), Vec::new(), |_, _| {})));
                 Some(masked)
             }
             _ => None,

@@ -1,5 +1,6 @@
 //! The pipelines of a rig's pinhole views: the reference view's and the witnesses' raster
-//! pipelines (shaders/raster/ with PINHOLE) and the witness mask's, one per shadow test.
+//! pipelines (shaders/raster/ with PINHOLE) and the witness mask's, one per shadow test, and
+//! the depth test's second pass (stages/walk_list.rs).
 
 use super::witness_mask::{WitnessMaskBindings, WitnessMaskConstants};
 use crate::error::Result;
@@ -9,6 +10,7 @@ use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::raster::draw::Projection;
 use crate::render::raster::draw::ViewPipelines;
 use crate::render::raster::graphics::view_pipelines;
+use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::ViewKind;
 use crate::shadow::ShadowTest;
 use ash::vk;
@@ -21,17 +23,18 @@ pub struct PinholePipelines {
     mask_label: ComputePipeline,
     mask_label_square: ComputePipeline,
     mask_depth: ComputePipeline,
+    mask_walks: ComputePipeline,
 }
 
 impl PinholePipelines {
     /// `layout`: the raster pipelines' layout (their push constants), which the renderer owns.
     pub fn new(ctx: &Arc<GpuContext>, layout: vk::PipelineLayout) -> Result<Self> {
-        let mask = |test: ShadowTest, name: &str| {
+        let mask = |code, test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
                 SetShape::storage(WitnessMaskBindings::IMAGES, WitnessMaskBindings::BUFFERS),
                 size_of::<WitnessMaskConstants>(),
-                shaders::WITNESS_MASK_COMP,
+                code,
                 &[
                     (spec::TEST, test as u32),
                     (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
@@ -39,13 +42,17 @@ impl PinholePipelines {
                     (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
                     (spec::LINK_SAME_WAY, LINK_SAME_WAY),
                     (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
+                    (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
                 ],
                 name,
             )
         };
-        let mask_label = mask(ShadowTest::Label, "witness mask (label test)")?;
-        let mask_label_square = mask(ShadowTest::LabelSquare, "witness mask (2x2 label test)")?;
-        let mask_depth = mask(ShadowTest::Depth, "witness mask (depth test)")?;
+        let first = shaders::WITNESS_MASK_COMP;
+        let mask_label = mask(first, ShadowTest::Label, "witness mask (label test)")?;
+        let mask_label_square = mask(first, ShadowTest::LabelSquare, "witness mask (2x2 label test)")?;
+        let mask_depth = mask(first, ShadowTest::Depth, "witness mask (depth test)")?;
+        let walks = shaders::WITNESS_MASK_WALKS_COMP;
+        let mask_walks = mask(walks, ShadowTest::Depth, "witness mask (depth test's walks)")?;
         let reference = view_pipelines(ctx, layout, ViewKind::Range, Projection::Pinhole)?;
         let witnesses = match view_pipelines(ctx, layout, ViewKind::Shadow, Projection::Pinhole) {
             Ok(witnesses) => witnesses,
@@ -54,7 +61,7 @@ impl PinholePipelines {
                 return Err(e);
             }
         };
-        Ok(Self { ctx: ctx.clone(), reference, witnesses, mask_label, mask_label_square, mask_depth })
+        Ok(Self { ctx: ctx.clone(), reference, witnesses, mask_label, mask_label_square, mask_depth, mask_walks })
     }
 
     /// The mask pipeline of `test`.
@@ -64,6 +71,12 @@ impl PinholePipelines {
             ShadowTest::LabelSquare => &self.mask_label_square,
             ShadowTest::Depth => &self.mask_depth,
         }
+    }
+
+    /// The second pass `test` takes, where it takes one: the depth test's walks from the
+    /// pixels the first listed.
+    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
+        (test == ShadowTest::Depth).then_some(&self.mask_walks)
     }
 }
 

@@ -1,12 +1,14 @@
 //! The compute pass that tests a pinhole reference view's points against every witness's
-//! image (shaders/stages/witness_mask.comp), by the label test or the depth test: what it
-//! reads of each witness, its push constants, and its bindings.
+//! image (shaders/stages/witness_mask.comp), by the label test or the depth test (in two
+//! passes: stages/walk_list.rs): what it reads of each witness, its push constants, and its
+//! bindings.
 
 use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
 use crate::render::gpu_mesh::GpuMesh;
+use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{Intrinsics, PixelRect};
 use crate::shadow::{DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
@@ -172,8 +174,8 @@ impl WitnessMaskConstants {
 }
 
 /// The mask's descriptor set: the reference view's attachments, the pinhole witnesses'
-/// images and the directional witnesses', then the masked labels and each pixel's witness
-/// bits.
+/// images and the directional witnesses', then the masked labels, each pixel's witness bits
+/// and the depth test's walk list.
 pub struct WitnessMaskBindings {
     set: StorageSet,
 }
@@ -181,7 +183,7 @@ pub struct WitnessMaskBindings {
 impl WitnessMaskBindings {
     pub const IMAGES: usize =
         ViewKind::Range.colour_attachments().len() + 2 * ViewKind::Shadow.colour_attachments().len();
-    pub const BUFFERS: usize = 2;
+    pub const BUFFERS: usize = 3;
 
     /// `pipeline`: any of the mask's pipelines (their set layouts are defined alike).
     /// `witnesses`: the pinhole witnesses' attachments and the directional witnesses' (where a
@@ -190,9 +192,9 @@ impl WitnessMaskBindings {
         ctx: &Arc<GpuContext>,
         pipeline: &ComputePipeline,
         (reference, [pinhole, directional]): (&ViewTargets, [&ViewTargets; 2]),
-        (masked, lost_by): (&Buffer, &Buffer),
+        (masked, lost_by, walk_list): (&Buffer, &Buffer, &WalkList),
     ) -> Result<Self> {
-        matches_shader_bindings!(WITNESS_MASK_COMP {
+        matches_shader_bindings!([WITNESS_MASK_COMP, WITNESS_MASK_WALKS_COMP] {
             range_label,
             range_z,
             range_dz_dx,
@@ -201,10 +203,11 @@ impl WitnessMaskBindings {
             directional_visibility,
             Masked,
             LostBy,
+            WitnessWalkList,
         });
         let images: Vec<&Image> = reference.colour.iter().chain(&pinhole.colour).chain(&directional.colour).collect();
-        let set =
-            StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &[masked, lost_by]), "witness mask bindings")?;
+        let buffers = [masked, lost_by, &walk_list.buffer];
+        let set = StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), "witness mask bindings")?;
         Ok(Self { set })
     }
 
@@ -212,5 +215,17 @@ impl WitnessMaskBindings {
     pub fn record(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &WitnessMaskConstants) {
         let groups = [constants.region[2], constants.region[3]].map(|n| n.div_ceil(8));
         self.set.dispatch(cmd, pipeline, bytemuck::bytes_of(constants), groups);
+    }
+
+    /// Records the depth test's second pass, `walks`, over the entries the first listed in
+    /// `list`.
+    pub fn record_walks(
+        &self,
+        cmd: vk::CommandBuffer,
+        walks: &ComputePipeline,
+        list: &WalkList,
+        constants: &WitnessMaskConstants,
+    ) {
+        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.buffer);
     }
 }

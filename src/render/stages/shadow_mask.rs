@@ -13,19 +13,17 @@
 //!
 //! That variant's depth test runs in two passes: the first decides each pixel it can without
 //! a walk over the surface (facing away, outside the shadow view, on a hull face) and lists
-//! the others in a [`WalkList`]; the second, an indirect dispatch of a variant of its own,
-//! walks from the listed pixels only. A software rasterizer runs a pass's invocations in lockstep, eight
-//! at a time, and runs the code of every branch even where none of the eight takes it: walking
-//! in place, a pixel the hull-face shortcut decided paid for the walk's code all the same (a
-//! box's mask: 2.0 ms a hypothesis at 256², 0.5 without the walk's code).
+//! the others in a [`WalkList`] (which says why); the second, an indirect dispatch of a
+//! variant of its own, walks from the listed pixels only.
 
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
-use crate::gpu::{shaders, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
+use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::gpu_mesh::GpuMesh;
 use crate::render::plan::Views;
+use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{PixelRect, Scanner, ViewGrid};
 use crate::shadow::{ShadowTest, DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
@@ -188,44 +186,6 @@ impl MaskPipelines {
     /// pixels the first listed, in the variants reading words.
     pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
         self.walks.as_ref().filter(|_| test == ShadowTest::Depth)
-    }
-}
-
-/// The range pixels the depth test's first pass leaves to walk from, and the second pass's
-/// indirect dispatch (shadow_mask.comp's `WalkList`): a slot's, where the compute rasterizer
-/// renders its views.
-pub struct WalkList {
-    pub buffer: Buffer,
-}
-
-impl WalkList {
-    /// Bytes a list takes per range pixel...
-    const BYTES_PER_PIXEL: u64 = 4;
-    /// ...after the dispatch's arguments (x, y, z) and the list's length.
-    const HEADER_BYTES: u64 = 16;
-    /// The most workgroups the second pass dispatches; they stride over a longer list.
-    const MAX_GROUPS: u32 = 65_535;
-
-    /// Bytes a list for a range view of `pixels` takes (src/render/memory.rs).
-    pub fn bytes(pixels: u64) -> u64 {
-        Self::HEADER_BYTES + Self::BYTES_PER_PIXEL * pixels
-    }
-
-    /// A list with room for every pixel of a range view of `pixels`.
-    pub fn new(ctx: &Arc<GpuContext>, pixels: u64, name: &str) -> Result<Self> {
-        let desc = BufferDesc {
-            usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(Self::bytes(pixels))
-        };
-        Ok(Self { buffer: Buffer::new(ctx, desc, &format!("{name} depth test's walk list"))? })
-    }
-
-    /// Records the list's emptying, before the first pass: no workgroups, no pixels (x, y, z,
-    /// length). A transfer write.
-    pub fn record_emptying(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
-        // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffer; the
-        // update fits its header.
-        unsafe { ctx.device.cmd_update_buffer(cmd, self.buffer.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0])) };
     }
 }
 
