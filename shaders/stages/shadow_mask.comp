@@ -234,11 +234,12 @@ uint decided(ivec2 pixel, RangePixel range, bool on_hull_front, out Walk walk) {
     return TO_WALK;
 }
 
-// The whole test of a pixel, walking in place where it takes a walk.
+// The whole test of a pixel, walking in place where it takes a walk (the depth test: the
+// label tests' pipelines then hold no walk, which a software rasterizer would run through).
 bool shadowed(ivec2 pixel, RangePixel range, bool on_hull_front) {
     Walk walk;
     uint verdict = decided(pixel, range, on_hull_front, walk);
-    if (verdict == TO_WALK) {
+    if (!LABEL_TEST && verdict == TO_WALK) {
         return occluded(walk.s, walk.p, walk.own, walk.scale, walk.bias, false);
     }
     return verdict == SHADOWED;

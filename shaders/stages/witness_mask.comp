@@ -332,7 +332,9 @@ void main() {
     }
     lost_by[index] = lost;
     masked_label[index] = lost == 0u ? r.label : 0u;
-    if (to_walk != 0u) {
+    // The depth test alone lists (the label tests' pipelines then hold no list's atomics,
+    // which a software rasterizer would run through).
+    if (TEST == TEST_DEPTH && to_walk != 0u) {
         list_walks(index, to_walk);
     }
 }
