@@ -63,7 +63,7 @@ layout(push_constant, std430) uniform Mask {
     float sin_theta;
     float bias_pitch;   // constant bias, model units
     float bias_relative;// f32 rounding allowance, relative
-    uvec2 hull_faces;   // FROM_WORDS: device address of the draw's mesh's hull-face bits
+    uvec2 hull_faces;   // FROM_WORDS: device address of the draw's mesh's hull-face bits (0: none)
     uint words_draw;    // FROM_WORDS: the one draw both views rendered
     uint shadow_stride; // FROM_WORDS: pixels per row of the shadow view's words
     uint range_stride;  // FROM_WORDS: pixels per row of the range view's words
@@ -260,7 +260,7 @@ RangePixel range_from_words(DrawData d, ivec2 pixel, out bool on_hull_front) {
         bool with_gradient = WRITE_LABEL_AND_GRADIENT != 0u || !LABEL_TEST;
         float normal_z;
         range = range_pixel_at_z(d, t, z_of_key(range_words[at + 1u]), with_gradient, normal_z);
-        on_hull_front = !LABEL_TEST && normal_z > 0.0 && on_hull(m.hull_faces, t);
+        on_hull_front = !LABEL_TEST && normal_z > 0.0 && m.hull_faces != uvec2(0u) && on_hull(m.hull_faces, t);
     }
     return range;
 }

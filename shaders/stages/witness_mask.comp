@@ -76,8 +76,9 @@ layout(push_constant, std430) uniform WitnessMask {
     float bias_relative;    // the depth test's f32 rounding allowance, relative
     uint reference_stride;  // pixels a row of the reference view's words
     uvec2 reference_words;  // device address of the reference view's visibility words
-                            // (visibility_word.glsl), in a job of one draw the compute
-                            // rasterizer drew; 0 otherwise
+                            // (visibility_word.glsl), in the depth test of a job of one
+                            // draw the compute rasterizer drew, whose mesh has hull faces;
+                            // 0 otherwise
     uvec2 hull_faces;       // device address of that draw's mesh's hull-face bits
     float hull_tolerance;   // how far in front of a hull face a vertex may lie
 } m;

@@ -1,8 +1,10 @@
 //! A mesh uploaded once into device-local memory: vertex positions (offsets from the mesh's
 //! origin, `Mesh::origin`) and triangle indices (the graphics pipeline's vertex input), a
 //! record of each triangle's corners and unit normal, per-triangle surface ids and edge links,
-//! and which triangles lie on the mesh's convex hull; and whether the mesh bounds a solid,
-//! found once here, so that both rasterizers may skip the triangles facing away. The shaders
+//! and which triangles lie on the mesh's convex hull (found on first use: only the depth
+//! test reads them, and a dense mesh's hull takes a large share of a render's time); and
+//! whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
+//! triangles facing away. The shaders
 //! read them through buffer device addresses, indexed by triangle (gl_PrimitiveID in the
 //! fragment shader), to label the pixel and evaluate its triangle's plane exactly.
 //!
@@ -23,7 +25,7 @@ use crate::gpu::{Buffer, GpuContext};
 use crate::mesh::{hull_face_bits, hull_tolerance, Mesh, Solidity, MAX_LINKED_TRIANGLES};
 use ash::vk;
 use glam::DVec3;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock, Weak};
 
 pub struct GpuMesh {
     pub(crate) vertices: Buffer,
@@ -33,11 +35,11 @@ pub struct GpuMesh {
     pub(crate) surface_ids: Buffer,
     /// What lies across each triangle's three edges (`Mesh::edge_links`).
     pub(crate) links: Buffer,
-    /// Which triangles lie on the mesh's convex hull, facing out, a bit each
-    /// (`mesh::hull_face_bits`), and how far in front of such a face a vertex may lie, model
-    /// units (`mesh::hull_tolerance`): the depth test skips its walks from those faces.
-    pub(crate) hull_faces: Buffer,
-    pub(crate) hull_tolerance: f32,
+    /// Which triangles lie on the mesh's convex hull ([`GpuMesh::hull_faces`]), found from
+    /// `mesh` on first use; `None` there where it has none.
+    hull: OnceLock<Option<HullFaces>>,
+    mesh: Weak<Mesh>,
+    ctx: Arc<GpuContext>,
     pub(crate) index_count: u32,
     /// Whether the mesh bounds a solid, and which way its normals point.
     pub(crate) solidity: Solidity,
@@ -52,8 +54,18 @@ pub struct GpuMesh {
     pub(crate) bounding_box: [DVec3; 2],
 }
 
+/// Which triangles of a mesh lie on its convex hull, facing out, a bit each
+/// (`mesh::hull_face_bits`), and how far in front of such a face a vertex may lie, model units
+/// (`mesh::hull_tolerance`): the depth test skips its walks from those faces.
+pub(crate) struct HullFaces {
+    pub bits: Buffer,
+    pub tolerance: f32,
+}
+
 impl GpuMesh {
-    pub fn upload(ctx: &Arc<GpuContext>, mesh: &Mesh) -> Result<Self> {
+    /// Uploads `mesh`, which the GPU copy refers back to (weakly) for what it finds on first
+    /// use.
+    pub fn upload(ctx: &Arc<GpuContext>, mesh: &Arc<Mesh>) -> Result<Self> {
         let name = &mesh.name;
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         if mesh.triangles.len() > MAX_LINKED_TRIANGLES {
@@ -103,19 +115,38 @@ impl GpuMesh {
                 &links,
                 &format!("{name} edge links"),
             )?,
-            hull_faces: Buffer::device_local_with_data(
-                ctx,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                &hull_face_bits(mesh),
-                &format!("{name} hull faces"),
-            )?,
-            hull_tolerance: hull_tolerance(mesh) as f32,
+            hull: OnceLock::new(),
+            mesh: Arc::downgrade(mesh),
+            ctx: ctx.clone(),
             index_count: indices.len() as u32,
             solidity: mesh.solidity_with(&links),
             longest_edge: longest_edge(mesh),
             origin: mesh.origin,
             bounding_box: mesh.bounding_box(),
         })
+    }
+}
+
+impl GpuMesh {
+    /// The mesh's hull faces, found and uploaded on the first call: `None` where it has none
+    /// (`mesh::hull_face_bits`: no hull, or one the library could not build), where its mesh
+    /// is gone, or where the upload failed. The depth test then walks from every face, which
+    /// gives the same answers more slowly; a device that failed the upload fails the work
+    /// that follows it with its own error.
+    pub(crate) fn hull_faces(&self) -> Option<&HullFaces> {
+        self.hull
+            .get_or_init(|| {
+                let mesh = self.mesh.upgrade()?;
+                let bits = hull_face_bits(&mesh);
+                if bits.iter().all(|&word| word == 0) {
+                    return None;
+                }
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+                let name = format!("{} hull faces", mesh.name);
+                let bits = Buffer::device_local_with_data(&self.ctx, usage, &bits, &name).ok()?;
+                Some(HullFaces { bits, tolerance: hull_tolerance(&mesh) as f32 })
+            })
+            .as_ref()
     }
 }
 

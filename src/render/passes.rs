@@ -641,13 +641,15 @@ impl<'p> Passes<'p> {
                     (&w.lost_by, Access::ComputeWrite),
                     (&w.walk_list.buffer, Access::ComputeWrite),
                 ];
-                // A job of one draw on the compute rasterizer: the depth test reads which
+                // A job of one draw on the compute rasterizer, in the depth test: it reads which
                 // triangle each reference pixel saw, for the draw's hull faces.
                 let constants = match (&slot.rig, job.compute, job.draws) {
-                    (Some(rig), true, [draw]) => rig.reference_words().map(|words| {
-                        buffers.push((words.0, Access::ComputeRead));
-                        pinhole.mask.with_hull_faces(words, draw.mesh)
-                    }),
+                    (Some(rig), true, [draw]) if w.test == ShadowTest::Depth => {
+                        rig.reference_words().zip(draw.mesh.hull_faces()).map(|(words, hull)| {
+                            buffers.push((words.0, Access::ComputeRead));
+                            pinhole.mask.with_hull_faces(words, hull)
+                        })
+                    }
                     _ => None,
                 }
                 .unwrap_or(pinhole.mask);

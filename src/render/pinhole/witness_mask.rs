@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
-use crate::render::gpu_mesh::GpuMesh;
+use crate::render::gpu_mesh::HullFaces;
 use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{Intrinsics, PixelRect};
@@ -159,15 +159,15 @@ impl WitnessMaskConstants {
         }
     }
 
-    /// The same constants for a job of one draw of `mesh` whose reference view the compute
+    /// The same constants for a job of one draw of a mesh whose reference view the compute
     /// rasterizer drew into `words`, `stride` pixels a row: the depth test skips its walks from
     /// the mesh's hull faces (`GpuMesh::hull_faces`), which nothing else in the views can hide.
-    pub fn with_hull_faces(self, (words, stride): (&Buffer, u32), mesh: &GpuMesh) -> Self {
+    pub fn with_hull_faces(self, (words, stride): (&Buffer, u32), hull: &HullFaces) -> Self {
         Self {
             reference_stride: stride,
             reference_words: words.address_words(),
-            hull_faces: mesh.hull_faces.address_words(),
-            hull_tolerance: mesh.hull_tolerance,
+            hull_faces: hull.bits.address_words(),
+            hull_tolerance: hull.tolerance,
             ..self
         }
     }

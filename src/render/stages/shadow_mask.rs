@@ -98,14 +98,16 @@ impl MaskConstants {
     /// The same constants for the pipelines reading both views from visibility words, the
     /// range view's `range_stride` pixels a row and the shadow view's `shadow_stride`, which
     /// rendered draw `draw` of `mesh` alone: the depth test skips its walks from the mesh's
-    /// hull faces (`GpuMesh::hull_faces`), which nothing else in the views can hide.
+    /// hull faces (`GpuMesh::hull_faces`, where it has them), which nothing else in the views
+    /// can hide.
     pub fn reading_words(self, draw: u32, mesh: &GpuMesh, (range_stride, shadow_stride): (u32, u32)) -> Self {
+        let hull = mesh.hull_faces();
         Self {
-            hull_faces: mesh.hull_faces.address_words(),
+            hull_faces: hull.map_or([0; 2], |hull| hull.bits.address_words()),
             words_draw: draw,
             shadow_stride,
             range_stride,
-            hull_tolerance: mesh.hull_tolerance,
+            hull_tolerance: hull.map_or(0.0, |hull| hull.tolerance),
             ..self
         }
     }
