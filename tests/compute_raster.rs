@@ -69,8 +69,10 @@ fn turned() -> DMat4 {
 #[test]
 fn both_rasterizers_render_identical_images_of_one_object() {
     // Triangles of every size: sphere:16's fill boxes of up to 8 rows (raster.comp's small
-    // boxes keep the covered pixels of rows 4–7 apart), sphere:320's cover a pixel or none.
+    // boxes keep the covered pixels of rows 4–7 apart), sphere:320's cover a pixel or none. A
+    // flat plane has no hull faces (`GpuMesh::hull_faces`): its depth test walks from every face.
     let models = [
+        "builtin:plane:6",
         "builtin:box",
         "builtin:step",
         "builtin:cylinder:48",
@@ -134,6 +136,56 @@ fn the_compute_rasterizer_renders_both_views_in_one_pass() {
     assert_eq!(names(ShadowMode::Depth), ["range and shadow", "shadow mask", "shadow mask: walks"]);
     assert_eq!(names(ShadowMode::Label), ["range and shadow", "shadow mask"]);
     assert_eq!(names(ShadowMode::None), ["range"]);
+}
+
+/// A rig's views of several objects on the compute rasterizer, in the depth test, with every
+/// effect: the most passes a job records (four of coverage, the resolves, the mask's two, and
+/// eight effects), every one of them timed in the render's summary.
+#[test]
+fn a_job_of_every_pass_times_every_pass() {
+    use rangesynth::sensor::{Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
+    let camera = Intrinsics { width: 96, height: 80, fx: 80.0, fy: 80.0, cx: 47.5, cy: 39.5 };
+    let projector = Witness {
+        name: "projector".into(),
+        geometry: WitnessGeometry::Pinhole {
+            pose: DMat4::from_translation(DVec3::new(0.5, 0.0, 0.0)),
+            intrinsics: camera,
+        },
+    };
+    let sensor = Sensor {
+        reference: View::Pinhole(Pinhole { intrinsics: camera, near: 0.0, far: f64::INFINITY }),
+        witnesses: vec![projector],
+    };
+    let facing =
+        |z: f64| DMat4::from_translation(DVec3::new(0.0, 0.0, z)) * DMat4::from_rotation_x(std::f64::consts::PI);
+    let mut sc = scene(sensor, ShadowMode::Depth, &[("builtin:plane:20", facing(5.0)), ("builtin:box", facing(4.5))]);
+    sc.effects = toml::from_str(
+        "[quantize]\nz_step = 0.01\n[noise]\nsigma = 0.001\n[dropout]\nprobability = 0.1\n\
+         [edges]\njump = 0.2\n[reflectivity]\nthreshold = 0.1\n[range]\nmax_z = 9\n\
+         [grazing]\nmax_incidence_deg = 80\n[disparity]\nbaseline = 0.075\nfocal_px = 80\nsubpixel = 8\n",
+    )
+    .expect("effects");
+    let out = render_compute(&sc);
+    assert_eq!(out.raster, Some(Raster::Compute));
+    let names: Vec<&str> = out.timings.iter().map(|t| t.name).collect();
+    let expected = [
+        "coverage: set-up",
+        "coverage",
+        "coverage: large triangles",
+        "coverage: ties",
+        "range",
+        "shadow mask",
+        "shadow mask: walks",
+        "grazing",
+        "working volume",
+        "reflectivity",
+        "edges",
+        "dropout",
+        "noise",
+        "quantize",
+        "disparity",
+    ];
+    assert_eq!(names, expected);
 }
 
 #[test]

@@ -300,8 +300,8 @@ void walk_from_list(DrawData range_draw) {
         bool on_hull_front;
         RangePixel range = range_from_words(range_draw, pixel, on_hull_front);
         Walk walk;
-        decided(pixel, range, on_hull_front, walk);
-        if (occluded(walk.s, walk.p, walk.own, walk.scale, walk.bias, false)) {
+        if (decided(pixel, range, on_hull_front, walk) == TO_WALK
+            && occluded(walk.s, walk.p, walk.own, walk.scale, walk.bias, false)) {
             masked_label[index] = 0u;
         }
     }

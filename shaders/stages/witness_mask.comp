@@ -179,14 +179,17 @@ struct ReferencePoint {
     uint hull_face;
 };
 
-// Whether the witness sees the point, or a walk is to tell.
+// Whether the witness sees the point, or a walk is to tell. Its arithmetic is unfused
+// (`precise`) wherever it decides: the depth test's second pass works it out again, in a
+// shader of its own, which a GPU could otherwise fuse differently.
 uint decided(ReferencePoint r, out Walk walk) {
     walk = Walk(ivec2(0), vec3(0.0), vec3(0.0), 0.0, 0.0, false);
     vec3 p = r.p, lit = r.lit;
     bool directional = witness.centre.w == 0.0;
     precise vec3 toward = directional ? witness.centre.xyz : witness.centre.xyz - p;
     precise float facing = dot(lit, toward);
-    if (!(facing > m.facing_tolerance * length(lit) * length(toward))) {
+    precise float lengths = length(lit) * length(toward);
+    if (!(facing > m.facing_tolerance * lengths)) {
         return UNSEEN;
     }
     vec3 q = to_witness(p, 1.0);
@@ -222,19 +225,19 @@ uint decided(ReferencePoint r, out Walk walk) {
     // as the scanner's mask does, a surface turned from the witness by less than that counts
     // as turned away (which also bounds its slope along the witness's rays, `own`).
     precise float facing_bound = m.bias_relative * steepness * steepness;
-    if (!(facing > facing_bound * length(lit) * length(toward))) {
+    if (!(facing > facing_bound * lengths)) {
         return UNSEEN;
     }
     float scale = max(max(max(abs(q.x), abs(q.y)), abs(q.z)), max(max(abs(p.x), abs(p.y)), abs(p.z)));
     // p came from a plane evaluated in f32, which errs in proportion to its steepness.
     precise float bias = m.bias_per_depth * p.z + m.bias_relative * scale * (1.0 + steepness);
     // p's own plane, and the rays toward the witness, in its frame.
-    vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
+    precise vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
     vec3 own = ray_slope(to_witness(lit, 0.0), rays);
     // A point on a hull face, in views of its model alone (occluder_walk.glsl), whose front
     // turns toward the witness.
     if (r.hull_face != NO_NEIGHBOUR
-        && hull_face_clear(facing, length(lit) * length(toward), m.bias_per_depth * p.z, m.hull_tolerance)
+        && hull_face_clear(facing, lengths, m.bias_per_depth * p.z, m.hull_tolerance)
         && front_toward_witness(r.hull_face, lit)) {
         return SEEN;
     }
@@ -257,11 +260,12 @@ ReferencePoint reference_point(ivec2 pixel) {
         // up to 1e30, whose square would overflow.
         n /= max(1.0, max(abs(n.x), abs(n.y)));
         // The side of the surface the reference view sees: the one facing back along its ray.
-        vec3 lit = dot(n, p) > 0.0 ? -n : n;
+        precise float along_ray = dot(n, p);
+        vec3 lit = along_ray > 0.0 ? -n : n;
         // How steeply the plane lies along the pixel's ray: Z, from the plane in f32, errs in
         // proportion (∞ for a plane along the ray, which then hides nothing behind it).
         vec3 ray = pinhole_ray(m.intrinsics, vec2(pixel));
-        float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
+        precise float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
         uint hull_face = NO_NEIGHBOUR;
         if (TEST == TEST_DEPTH && m.reference_words != uvec2(0u) && normal_kept) {
             uint t = Words(m.reference_words).word[2u * word_index(m.reference_stride, pixel)];
@@ -289,8 +293,7 @@ void main() {
             uint k = uint(findLSB(to_walk));
             witness = Witnesses(m.witnesses).witnesses[k];
             Walk walk;
-            decided(r, walk);
-            if (occluded(walk.s, walk.q, walk.own, walk.scale, walk.bias, walk.central)) {
+            if (decided(r, walk) == TO_WALK && occluded(walk.s, walk.q, walk.own, walk.scale, walk.bias, walk.central)) {
                 lost |= 1u << k;
             }
         }

@@ -324,9 +324,9 @@ pub(crate) struct PassClock<'t> {
 
 impl<'t> PassClock<'t> {
     /// Room for every pass of a job (at most a rig's four of coverage on the compute
-    /// rasterizer, its resolves and its shadow mask; then the effects), and the timestamp
-    /// before the first.
-    pub const QUERIES: u32 = 7 + EFFECT_ORDER.len() as u32;
+    /// rasterizer, its resolves and its shadow mask's two; then the effects), and the
+    /// timestamp before the first.
+    pub const QUERIES: u32 = 8 + EFFECT_ORDER.len() as u32;
 
     pub fn new(timestamps: &'t Timestamps) -> Self {
         Self { timestamps, names: Vec::new() }

@@ -11,10 +11,11 @@
 //! gradient, a variant writes only its z ([`MaskVariant::WordsForScoring`]), saving those
 //! stores.
 //!
-//! That variant's depth test runs in two passes: the first decides each pixel it can without
-//! a walk over the surface (facing away, outside the shadow view, on a hull face) and lists
-//! the others in a [`WalkList`] (which says why); the second, an indirect dispatch of a
-//! variant of its own, walks from the listed pixels only.
+//! The variants reading words take the depth test in two passes: the first decides each pixel
+//! it can without a walk over the surface (facing away, outside the shadow view, on a hull
+//! face) and lists the others in a [`WalkList`] (which says why); the second, an indirect
+//! dispatch of a shader variant of its own, walks from the listed pixels only. (Views of
+//! several draws, which the mask reads from their attachments, walk in place.)
 
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
