@@ -4,9 +4,9 @@
 //! and which triangles lie on the mesh's convex hull (found on first use: only the depth
 //! test reads them, and a dense mesh's hull takes a large share of a render's time); and
 //! whether the mesh bounds a solid, found once here, so that both rasterizers may skip the
-//! triangles facing away. The shaders
-//! read them through buffer device addresses, indexed by triangle (gl_PrimitiveID in the
-//! fragment shader), to label the pixel and evaluate its triangle's plane exactly.
+//! triangles facing away. The shaders read them through buffer device addresses, indexed by
+//! triangle (gl_PrimitiveID in the fragment shader), to label the pixel and evaluate its
+//! triangle's plane exactly.
 //!
 //! The corners are stored a triangle at a time, as well as indexed: a shader reaching a
 //! triangle's corner then reads it directly, not an index first and then the position it
@@ -35,9 +35,11 @@ pub struct GpuMesh {
     pub(crate) surface_ids: Buffer,
     /// What lies across each triangle's three edges (`Mesh::edge_links`).
     pub(crate) links: Buffer,
-    /// Which triangles lie on the mesh's convex hull ([`GpuMesh::hull_faces`]), found from
-    /// `mesh` on first use; `None` there where it has none.
+    /// Which triangles lie on the mesh's convex hull ([`GpuMesh::hull_faces`]), found on
+    /// first use (`None` where it has none)...
     hull: OnceLock<Option<HullFaces>>,
+    /// ...from the mesh this was uploaded from, held weakly (a cache of uploads must not keep
+    /// its models alive), on this device.
     mesh: Weak<Mesh>,
     ctx: Arc<GpuContext>,
     pub(crate) index_count: u32,

@@ -504,11 +504,10 @@ impl<'p> Passes<'p> {
             // pass does.
             Some((state, rp, (index, _))) => match shadow {
                 None => steps.push(state.resolve_step(rp, (&slot.range, job.area), (index, 1)).timed("range")),
-                // The coverage's time, up to here; and a step of nothing in place of the shadow
-                // raster, so that in a run the masks and scores of jobs either rasterizer
-                // rendered fall in the same stages.
-                // The step after it empties the depth test's walk list, where the mask takes two
-                // passes (stages/shadow_mask.rs).
+                // The coverage's time, up to here; and in place of the shadow raster, so that in
+                // a run the masks and scores of jobs either rasterizer rendered fall in the same
+                // stages, the emptying of the depth test's walk list (its mask takes two passes:
+                // stages/shadow_mask.rs), or a step of nothing.
                 Some((.., test)) => {
                     steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}).timed("range and shadow"));
                     match slot.walk_list.as_ref().filter(|_| test == ShadowTest::Depth) {
