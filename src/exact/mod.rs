@@ -120,7 +120,7 @@ impl VerticalCaster {
     /// `tie` of it, the lowest label, and of that label's triangles (a point on an edge, or a
     /// vertex) the first in scene order, whose plane gives z and which way the surface faces.
     fn front(&self, p: DVec2, tie: f64) -> Option<(f64, &Triangle)> {
-        let hits: smallvec::SmallVec<[(f64, u32, &Triangle); 16]> = self.hits(p).collect();
+        let hits: smallvec::SmallVec<[(f64, u32, &Triangle); 4]> = self.hits(p).collect();
         let top = hits.iter().map(|h| h.0).max_by(f64::total_cmp)?;
         let (z, _, triangle) = hits.into_iter().filter(|h| h.0 >= top - tie).min_by_key(|h| (h.2.label, h.1))?;
         Some((z, triangle))
@@ -166,7 +166,7 @@ const SPHERE_MARGIN: f64 = 1e-5;
 /// largest |coordinate| of every triangle's corners, those left out included (at least 1):
 /// the scene's scale, which the tie distance is relative to, whatever a caster keeps.
 fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> (Vec<Triangle>, f64) {
-    let mut out = Vec::new();
+    let mut out = Vec::with_capacity(objects.iter().map(|object| object.mesh.triangles.len()).sum());
     let mut largest = 1.0f64;
     for object in objects {
         let m = frame * object.pose;
