@@ -39,7 +39,9 @@ pub use crate::shader_contract::TIE_RELATIVE;
 pub(crate) const FACING_TOLERANCE: f64 = 1e-9;
 
 /// Bytes a caster takes per triangle: corners and label, and a hierarchy over their bounds
-/// (src/exact/ray_caster.rs) or a grid (src/exact/column_grid.rs), whichever is larger.
+/// (src/exact/ray_caster.rs) or a grid (src/exact/column_grid.rs), whichever is larger (more
+/// than the mesh's posed vertices, at most three a triangle, which posing holds before either
+/// is built: `posed_triangles`).
 pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + {
     let hierarchy = 48 + 96;
     if column_grid::BYTES_PER_TRIANGLE > hierarchy {
@@ -48,6 +50,9 @@ pub const CASTER_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 8 + {
         hierarchy
     }
 };
+// The posed vertices (three a triangle, 24 bytes each) fit in the bytes the hierarchy or
+// grid takes later.
+const _: () = assert!(CASTER_BYTES_PER_TRIANGLE - (3 * 24 + 8) >= 3 * 24);
 /// Bytes exact mode takes per triangle under the paper's scanner (its two casters) and per
 /// pixel (the image it returns), for memory budgets.
 pub const BYTES_PER_TRIANGLE: u64 = 2 * CASTER_BYTES_PER_TRIANGLE;
@@ -186,8 +191,17 @@ fn posed_triangles(objects: &[ExactObject], frame: DMat4, cull: Cull) -> (Vec<Tr
                 (if clear { away } else { 0.0 }, Some(centre))
             }
         };
+        // Each vertex posed once, where the mesh has no more vertices than its triangles have
+        // corners (a caster's bytes a triangle hold them: its grid is not built yet); else
+        // each corner.
+        let pose = |v: u32| m.transform_point3(mesh.vertex(v));
+        let posed: Option<Vec<DVec3>> = (mesh.positions.len() <= 3 * mesh.triangles.len())
+            .then(|| (0..mesh.positions.len() as u32).map(pose).collect());
         for (triangle, &surface) in mesh.triangles.iter().zip(&mesh.triangle_surfaces) {
-            let corners = triangle.map(|v| m.transform_point3(mesh.vertex(v)));
+            let corners = match &posed {
+                Some(vertices) => triangle.map(|v| vertices[v as usize]),
+                None => triangle.map(pose),
+            };
             largest = corners.iter().fold(largest, |l, c| l.max(c.abs().max_element()));
             let [a, b, c] = corners;
             let normal = (b - a).cross(c - a);
