@@ -203,6 +203,38 @@ fn views_too_large_for_their_visibility_words_stay_on_the_graphics_path() {
     assert!(out.label.iter().any(|&l| l != 0), "in view");
 }
 
+/// A rig's depth test lists the pixels it leaves to walk from in a buffer of 4 bytes a pixel,
+/// as large as the shadowed labels, which the device binds for any image the renderer accepts
+/// (`check_pixel_buffers`): a rig whose reference view's 8-byte words do not fit one buffer
+/// (4,097² on lavapipe) still renders, on the graphics pipeline.
+#[test]
+fn a_rig_too_large_for_its_visibility_words_tests_its_depth_all_the_same() {
+    use rangesynth::sensor::{Intrinsics, Pinhole, Sensor, View, Witness, WitnessGeometry};
+    let range = COMPUTE.renderer().context().max_storage_buffer_range();
+    let side = ((range / 8) as f64).sqrt().floor() as u32 + 1;
+    if side > MAX_IMAGE_SIDE {
+        // A device binding more (NVIDIA's 4 GiB): no accepted image comes near its limit.
+        return;
+    }
+    let half = f64::from(side) / 2.0 - 0.5;
+    let camera = Intrinsics { width: side, height: side, fx: f64::from(side), fy: f64::from(side), cx: half, cy: half };
+    let projector = Witness {
+        name: "projector".into(),
+        geometry: WitnessGeometry::Pinhole {
+            pose: DMat4::from_translation(DVec3::new(0.5, 0.0, 0.0)),
+            intrinsics: Intrinsics { width: 256, height: 256, fx: 256.0, fy: 256.0, cx: 127.5, cy: 127.5 },
+        },
+    };
+    let sensor = Sensor {
+        reference: View::Pinhole(Pinhole { intrinsics: camera, near: 0.0, far: f64::INFINITY }),
+        witnesses: vec![projector],
+    };
+    let pose = DMat4::from_translation(DVec3::new(0.0, 0.0, 6.0)) * DMat4::from_rotation_x(std::f64::consts::PI);
+    let out = render_compute(&scene(sensor, ShadowMode::Depth, &[("builtin:box", pose)]));
+    assert_eq!(out.raster, Some(Raster::Graphics));
+    assert!(out.label.iter().any(|&l| l != 0), "in view");
+}
+
 /// Views of two to four objects: their draws share the view's words, and the ties between
 /// them go to the lower label as the graphics path's ties pass decides them (draw.rs), among
 /// them coincident faces (two boxes whose tops overlap in one plane, listed either way), an

@@ -40,19 +40,17 @@ layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[
 layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
 layout(set = 0, binding = 8, std430) readonly buffer RangeDrawTable { DrawData range_draws[]; };
 layout(set = 0, binding = 9, std430) readonly buffer RangeWords { uint range_words[]; };
-// FROM_WORDS, depth test: the range pixels left to walk from (their indices in Masked), and
-// the second pass's indirect dispatch (x, y, z), x the groups of WALK_GROUP pixels up to
-// MAX_GROUPS, then the list's length. Set to (0, 1, 1, 0) before the first pass
-// (src/render/passes.rs); the second only reads it.
+// FROM_WORDS, depth test: the second pass's indirect dispatch (x, y, z), x the groups of
+// WALK_GROUP pixels up to MAX_GROUPS, then the list's length, set to (0, 1, 1, 0) before the
+// first pass (src/render/passes.rs); and the range pixels left to walk from (their indices in
+// Masked). The second pass only reads them.
 #ifdef WALKS_FROM_LIST
 #define WALK_LIST_ACCESS readonly
 #else
 #define WALK_LIST_ACCESS
 #endif
-layout(set = 0, binding = 10, std430) WALK_LIST_ACCESS buffer WalkList {
-    uvec4 walk_args;
-    uint walk_pixels[];
-};
+layout(set = 0, binding = 10, std430) WALK_LIST_ACCESS buffer WalkArgs { uvec4 walk_args; };
+layout(set = 0, binding = 11, std430) WALK_LIST_ACCESS buffer WalkPixels { uint walk_pixels[]; };
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view

@@ -11,8 +11,9 @@
 // along its direction. A point any witness does not see is shadowed; bit k of its `lost_by`
 // word says witness k did not see it.
 // The depth test runs in two passes: this one decides what it can without a walk over the
-// surface and lists each pixel with the witnesses it leaves to walk toward; the second
-// (WALKS_FROM_LIST, the variant defining it) takes the walks (shadow_mask.comp says why).
+// surface and lists the pixels it leaves to walk from toward some witness; the second
+// (WALKS_FROM_LIST, the variant defining it) decides each of them again toward every witness
+// and takes the walks (src/render/stages/walk_list.rs says why).
 #include "../raster/draw.glsl"
 #include "../raster/visibility_word.glsl"
 
@@ -35,14 +36,12 @@ layout(set = 0, binding = 6, std430) writeonly buffer Masked { uint masked_label
 #define WALK_LIST_ACCESS
 #endif
 layout(set = 0, binding = 7, std430) LOST_BY_ACCESS buffer LostBy { uint lost_by[]; };
-// The depth test: the pixels left to walk from (their indices in Masked, and bit k for each
-// witness k to walk toward), and the second pass's indirect dispatch (x, y, z), x the groups
-// of WALK_GROUP entries up to MAX_GROUPS, then the list's length. Set to (0, 1, 1, 0) before
-// the first pass (src/render/passes.rs); the second only reads it.
-layout(set = 0, binding = 8, std430) WALK_LIST_ACCESS buffer WitnessWalkList {
-    uvec4 walk_args;
-    uvec2 walk_entries[];
-};
+// The depth test: the second pass's indirect dispatch (x, y, z), x the groups of WALK_GROUP
+// pixels up to MAX_GROUPS, then the list's length, set to (0, 1, 1, 0) before the first pass
+// (src/render/passes.rs); and the pixels left to walk from toward some witness (their indices
+// in Masked). The second pass only reads them.
+layout(set = 0, binding = 8, std430) WALK_LIST_ACCESS buffer WalkArgs { uvec4 walk_args; };
+layout(set = 0, binding = 9, std430) WALK_LIST_ACCESS buffer WalkPixels { uint walk_pixels[]; };
 
 // One witness as the mask sees it (src/render/pinhole/witness_mask.rs, WitnessConstants).
 struct WitnessData {
@@ -94,7 +93,7 @@ layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 // The most workgroups the depth test's second pass's indirect dispatch holds (its groups
 // stride over a longer list).
 layout(constant_id = 6) const uint MAX_GROUPS = 1u;
-// Entries a workgroup of the second pass takes in a round: its 8 x 8 invocations.
+// Pixels a workgroup of the second pass takes in a round: its 8 x 8 invocations.
 const uint WALK_GROUP = 64u;
 
 // The witness being tested, whose image and draw table the depth test's walk reads.
@@ -279,18 +278,16 @@ ReferencePoint reference_point(ivec2 pixel) {
 }
 
 #ifdef WALKS_FROM_LIST
-// The depth test's second pass: each invocation walks from listed pixels toward the witnesses
-// listed with them, and sets the bits of those a surface hides the point from (the first pass
-// wrote the others' bits and the labels).
+// The depth test's second pass: each invocation decides listed pixels again toward every
+// witness, walks toward those the first pass left to a walk, and sets the bits of those a
+// surface hides the point from (the first pass wrote the others' bits and the labels).
 void main() {
     uint stride = gl_NumWorkGroups.x * WALK_GROUP;
     for (uint i = gl_WorkGroupID.x * WALK_GROUP + gl_LocalInvocationIndex; i < walk_args.w; i += stride) {
-        uvec2 entry = walk_entries[i];
-        uint index = entry.x;
+        uint index = walk_pixels[i];
         ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width));
         uint lost = 0u;
-        for (uint to_walk = entry.y; to_walk != 0u; to_walk &= to_walk - 1u) {
-            uint k = uint(findLSB(to_walk));
+        for (uint k = 0u; k < m.witness_count; k++) {
             witness = Witnesses(m.witnesses).witnesses[k];
             Walk walk;
             if (decided(r, walk) == TO_WALK && occluded(walk.s, walk.q, walk.own, walk.scale, walk.bias, walk.central)) {
@@ -304,11 +301,10 @@ void main() {
     }
 }
 #else
-// Lists pixel `index` for the second pass with the witnesses `to_walk` toward, and counts the
-// workgroups it takes.
-void list_walks(uint index, uint to_walk) {
+// Lists pixel `index` for the second pass, and counts the workgroups it takes.
+void list_walk(uint index) {
     uint at = atomicAdd(walk_args.w, 1u);
-    walk_entries[at] = uvec2(index, to_walk);
+    walk_pixels[at] = index;
     if (at % WALK_GROUP == 0u && at / WALK_GROUP < MAX_GROUPS) {
         atomicAdd(walk_args.x, 1u);
     }
@@ -321,7 +317,8 @@ void main() {
     ivec2 pixel = ivec2(m.region.xy + gl_GlobalInvocationID.xy);
     uint index = uint(pixel.y) * m.width + uint(pixel.x);
     ReferencePoint r = reference_point(pixel);
-    uint lost = 0u, to_walk = 0u;
+    uint lost = 0u;
+    bool to_walk = false;
     if (r.label != 0u) {
         for (uint k = 0u; k < m.witness_count; k++) {
             witness = Witnesses(m.witnesses).witnesses[k];
@@ -330,7 +327,7 @@ void main() {
             if (verdict == UNSEEN) {
                 lost |= 1u << k;
             } else if (verdict == TO_WALK) {
-                to_walk |= 1u << k;
+                to_walk = true;
             }
         }
     }
@@ -338,8 +335,8 @@ void main() {
     masked_label[index] = lost == 0u ? r.label : 0u;
     // The depth test alone lists (the label tests' pipelines then hold no list's atomics,
     // which a software rasterizer would run through).
-    if (TEST == TEST_DEPTH && to_walk != 0u) {
-        list_walks(index, to_walk);
+    if (TEST == TEST_DEPTH && to_walk) {
+        list_walk(index);
     }
 }
 #endif

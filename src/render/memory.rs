@@ -7,7 +7,7 @@ use crate::exact;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{large_queue_bytes, VISIBILITY_WORD_BYTES};
 use crate::render::stages::host_view::HostView;
-use crate::render::stages::walk_list::{WalkEntry, WalkList};
+use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::ViewKind;
 
 /// Bytes a range pixel's shadowed label takes (the shadow mask's or exact mode's output).
@@ -39,7 +39,7 @@ pub(crate) fn slot_bytes(
     let effect_bytes = if effects.is_empty() { 0 } else { EFFECT_OUTPUT_BYTES };
     let visibility = if compute_triangles.is_some() { VISIBILITY_WORD_BYTES } else { 0 };
     let walk_list = match compute_triangles {
-        Some(_) if shadow_pixels > 0 => WalkList::bytes(range_pixels, WalkEntry::Pixel),
+        Some(_) if shadow_pixels > 0 => WalkList::bytes(range_pixels),
         _ => 0,
     };
     let range = ViewKind::Range.bytes_per_pixel() + SHADOWED_LABEL_BYTES + effect_bytes + visibility;
@@ -73,7 +73,7 @@ pub(crate) fn rig_slot_bytes(
         let queues = large_queue_bytes(triangles, views);
         VISIBILITY_WORD_BYTES * (pixels + witness_pixels) + queues
     });
-    let walk_list = WalkList::bytes(pixels, WalkEntry::PixelAndWitnesses);
+    let walk_list = WalkList::bytes(pixels);
     slot_bytes((pixels, witness_pixels), effects, None, 1) + WITNESS_BITS_BYTES * pixels + walk_list + compute_bytes
 }
 

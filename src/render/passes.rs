@@ -30,7 +30,7 @@ use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, Vi
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
 use crate::render::stages::host_view::HostView;
 use crate::render::stages::shadow_mask::{MaskBindings, MaskConstants};
-use crate::render::stages::walk_list::{WalkEntry, WalkList};
+use crate::render::stages::walk_list::WalkList;
 use crate::render::target_pool::{PooledTargets, TargetPool};
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::render_output::PassTime;
@@ -168,10 +168,8 @@ impl<'a> Slot<'a> {
             (Some((_, draw_table)), Some(shadow)) => {
                 let masked = Buffer::new(ctx, per_pixel(), &format!("{name} shadowed labels"))?;
                 let words = compute.as_ref().and_then(|c| c.to_mask()).map(|(words, _)| words);
-                let walk_list = words
-                    .as_ref()
-                    .map(|_| WalkList::new(ctx, u64::from(w) * u64::from(h), WalkEntry::Pixel, name))
-                    .transpose()?;
+                let walk_list =
+                    words.as_ref().map(|_| WalkList::new(ctx, u64::from(w) * u64::from(h), name)).transpose()?;
                 let to_mask = words.as_ref().zip(walk_list.as_ref());
                 let bindings = MaskBindings::new(ctx, &p.mask, &range, &shadow, &masked, &draw_table.buffer, to_mask)?;
                 (Some(shadow), Some(masked), Some(bindings), walk_list)
@@ -194,7 +192,7 @@ impl<'a> Slot<'a> {
                 let [pinhole, directional] = targets;
                 let targets = [pinhole?, directional?];
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
-                let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), WalkEntry::PixelAndWitnesses, name)?;
+                let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), name)?;
                 let mask = p.pinhole()?.mask(set.test);
                 // A rig without a kind of witness binds the other's images in its place (a
                 // witness set holds one witness at least: the error cannot arise).
@@ -513,7 +511,7 @@ impl<'p> Passes<'p> {
                     match slot.walk_list.as_ref().filter(|_| test == ShadowTest::Depth) {
                         Some(list) => {
                             let empty = move |ctx: &GpuContext, cmd| list.record_emptying(ctx, cmd);
-                            steps.push(Step::new(Vec::new(), vec![(&list.buffer, Access::TransferWrite)], empty));
+                            steps.push(Step::new(Vec::new(), vec![list.emptied()], empty));
                         }
                         None => steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {})),
                     }
@@ -585,11 +583,11 @@ impl<'p> Passes<'p> {
             let (mask, constants) = reading_words.unwrap_or((&p.mask, constants));
             let second = mask.second_pass(test).zip(list).map(|(walks, list)| {
                 let mut walk_buffers = buffers.clone();
-                walk_buffers.push((&list.buffer, Access::IndirectAndComputeRead));
+                walk_buffers.extend(list.walked());
                 let record_walks = move |_: &GpuContext, cmd| bindings.record_walks(cmd, walks, list, &constants);
                 Step::new(Vec::new(), walk_buffers, record_walks).timed("shadow mask: walks")
             });
-            buffers.extend(list.map(|list| (&list.buffer, Access::ComputeWrite)));
+            buffers.extend(list.into_iter().flat_map(WalkList::appended));
             let record_mask = move |_: &GpuContext, cmd| bindings.record(cmd, mask, test, &constants);
             steps.push(Step::new(images, buffers, record_mask).timed("shadow mask"));
             // Jobs without a second pass take a step of nothing in its place, so that in a run
@@ -619,7 +617,7 @@ impl<'p> Passes<'p> {
             .filter(|w| w.test == ShadowTest::Depth)
             .map(|w| {
                 let empty = move |ctx: &GpuContext, cmd| w.walk_list.record_emptying(ctx, cmd);
-                Step::new(Vec::new(), vec![(&w.walk_list.buffer, Access::TransferWrite)], empty)
+                Step::new(Vec::new(), vec![w.walk_list.emptied()], empty)
             })
             .into_iter()
             .collect();
@@ -635,11 +633,7 @@ impl<'p> Passes<'p> {
             (Some(w), Some(masked)) => {
                 let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
                 images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
-                let mut buffers = vec![
-                    (masked, Access::ComputeWrite),
-                    (&w.lost_by, Access::ComputeWrite),
-                    (&w.walk_list.buffer, Access::ComputeWrite),
-                ];
+                let mut buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
                 // A job of one draw on the compute rasterizer, in the depth test: it reads which
                 // triangle each reference pixel saw, for the draw's hull faces.
                 let constants = match (&slot.rig, job.compute, job.draws) {
@@ -656,11 +650,11 @@ impl<'p> Passes<'p> {
                 // images as the first does, and the list; it sets labels' and bits' words.
                 let second = pipelines.second_pass(w.test).map(|walks| {
                     let mut walk_buffers = buffers.clone();
-                    walk_buffers.retain(|&(buffer, _)| !std::ptr::eq(buffer, &w.walk_list.buffer));
-                    walk_buffers.push((&w.walk_list.buffer, Access::IndirectAndComputeRead));
+                    walk_buffers.extend(w.walk_list.walked());
                     let walk = move |_: &GpuContext, cmd| w.bindings.record_walks(cmd, walks, &w.walk_list, &constants);
                     Step::new(images.clone(), walk_buffers, walk).timed("shadow mask: walks")
                 });
+                buffers.extend(w.walk_list.appended());
                 let mask = pipelines.mask(w.test);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &constants);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));

@@ -183,7 +183,7 @@ pub struct WitnessMaskBindings {
 impl WitnessMaskBindings {
     pub const IMAGES: usize =
         ViewKind::Range.colour_attachments().len() + 2 * ViewKind::Shadow.colour_attachments().len();
-    pub const BUFFERS: usize = 3;
+    pub const BUFFERS: usize = 4;
 
     /// `pipeline`: any of the mask's pipelines (their set layouts are defined alike).
     /// `witnesses`: the pinhole witnesses' attachments and the directional witnesses' (where a
@@ -203,10 +203,11 @@ impl WitnessMaskBindings {
             directional_visibility,
             Masked,
             LostBy,
-            WitnessWalkList,
+            WalkArgs,
+            WalkPixels,
         });
         let images: Vec<&Image> = reference.colour.iter().chain(&pinhole.colour).chain(&directional.colour).collect();
-        let buffers = [masked, lost_by, &walk_list.buffer];
+        let buffers = [masked, lost_by, &walk_list.args, &walk_list.pixels];
         let set = StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), "witness mask bindings")?;
         Ok(Self { set })
     }
@@ -217,7 +218,7 @@ impl WitnessMaskBindings {
         self.set.dispatch(cmd, pipeline, bytemuck::bytes_of(constants), groups);
     }
 
-    /// Records the depth test's second pass, `walks`, over the entries the first listed in
+    /// Records the depth test's second pass, `walks`, over the pixels the first listed in
     /// `list`.
     pub fn record_walks(
         &self,
@@ -226,6 +227,6 @@ impl WitnessMaskBindings {
         list: &WalkList,
         constants: &WitnessMaskConstants,
     ) {
-        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.buffer);
+        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.args);
     }
 }

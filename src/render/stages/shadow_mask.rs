@@ -212,8 +212,8 @@ impl MaskBindings {
     /// Storage images the mask pass binds, from binding 0.
     pub const IMAGES: usize = ViewKind::Range.colour_attachments().len() + ViewKind::Shadow.colour_attachments().len();
     /// Storage buffers bound after them: the shadowed labels, the draw table,
-    /// [`WordsToMask`]'s three and the [`WalkList`].
-    pub const BUFFERS: usize = 6;
+    /// [`WordsToMask`]'s three and the [`WalkList`]'s two.
+    pub const BUFFERS: usize = 7;
 
     /// `draw_table` holds the shadow pass's [`DrawConstants`](crate::render::raster::draw::DrawConstants)
     /// at the draw indices it recorded.
@@ -229,8 +229,10 @@ impl MaskBindings {
         let images: Vec<&Image> = range.colour.iter().chain(&shadow.colour).collect();
         debug_assert_eq!(images.len(), Self::IMAGES);
         let buffers = match words {
-            Some((w, walks)) => [masked, draw_table, w.shadow_words, w.range_table, w.range_words, &walks.buffer],
-            None => [masked, draw_table, draw_table, draw_table, draw_table, draw_table],
+            Some((w, walks)) => {
+                [masked, draw_table, w.shadow_words, w.range_table, w.range_words, &walks.args, &walks.pixels]
+            }
+            None => [masked, draw_table, draw_table, draw_table, draw_table, draw_table, draw_table],
         };
         matches_shader_bindings!([SHADOW_MASK_COMP, SHADOW_MASK_WORDS_COMP, SHADOW_MASK_WALKS_COMP] {
             range_label,
@@ -243,7 +245,8 @@ impl MaskBindings {
             ShadowWords,
             RangeDrawTable,
             RangeWords,
-            WalkList,
+            WalkArgs,
+            WalkPixels,
         });
         let set_layout = pipelines.for_test(ShadowTest::Label).set_layout;
         Ok(Self { set: StorageSet::new(ctx, set_layout, &images, (&[], &buffers), "shadow mask bindings")? })
@@ -270,6 +273,6 @@ impl MaskBindings {
         list: &WalkList,
         constants: &MaskConstants,
     ) {
-        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.buffer);
+        self.set.dispatch_indirect(cmd, walks, bytemuck::bytes_of(constants), &list.args);
     }
 }
