@@ -562,7 +562,9 @@ impl<'p> Passes<'p> {
                 (Some((_, rp, (index, [draw]))), Some((_, strides))) => {
                     let read_later = slot.effects.is_some() || sink.reads_range_label();
                     let mask = if read_later { &rp.mask } else { &rp.mask_for_scoring };
-                    Some((mask, constants.reading_words(index, draw.mesh, *strides)))
+                    // The hull faces only where the depth test reads them: found on first use.
+                    let hull = (test == ShadowTest::Depth).then(|| draw.mesh.hull_faces()).flatten();
+                    Some((mask, constants.reading_words(index, hull, *strides)))
                 }
                 _ => None,
             };

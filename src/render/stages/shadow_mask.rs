@@ -22,7 +22,7 @@ use crate::gpu::shaders::layout::spec::SHADOW_MASK_COMP as spec;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
 use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, StorageSet};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
-use crate::render::gpu_mesh::GpuMesh;
+use crate::render::gpu_mesh::HullFaces;
 use crate::render::plan::Views;
 use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
@@ -98,11 +98,10 @@ impl MaskConstants {
 
     /// The same constants for the pipelines reading both views from visibility words, the
     /// range view's `range_stride` pixels a row and the shadow view's `shadow_stride`, which
-    /// rendered draw `draw` of `mesh` alone: the depth test skips its walks from the mesh's
-    /// hull faces (`GpuMesh::hull_faces`, where it has them), which nothing else in the views
-    /// can hide.
-    pub fn reading_words(self, draw: u32, mesh: &GpuMesh, (range_stride, shadow_stride): (u32, u32)) -> Self {
-        let hull = mesh.hull_faces();
+    /// rendered draw `draw` alone: where given its mesh's `hull` faces (`GpuMesh::hull_faces`,
+    /// the depth test's), the depth test skips its walks from them, which nothing else in the
+    /// views can hide.
+    pub fn reading_words(self, draw: u32, hull: Option<&HullFaces>, (range_stride, shadow_stride): (u32, u32)) -> Self {
         Self {
             hull_faces: hull.map_or([0; 2], |hull| hull.bits.address_words()),
             words_draw: draw,
