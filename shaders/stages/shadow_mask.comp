@@ -40,17 +40,11 @@ layout(set = 0, binding = 6, std430) readonly buffer DrawTable { DrawData draws[
 layout(set = 0, binding = 7, std430) readonly buffer ShadowWords { uint shadow_words[]; };
 layout(set = 0, binding = 8, std430) readonly buffer RangeDrawTable { DrawData range_draws[]; };
 layout(set = 0, binding = 9, std430) readonly buffer RangeWords { uint range_words[]; };
-// FROM_WORDS, depth test: the second pass's indirect dispatch (x, y, z), x the groups of
-// WALK_GROUP pixels up to MAX_GROUPS, then the list's length, set to (0, 1, 1, 0) before the
-// first pass (src/render/passes.rs); and the range pixels left to walk from (their indices in
-// Masked). The second pass only reads them.
-#ifdef WALKS_FROM_LIST
-#define WALK_LIST_ACCESS readonly
-#else
-#define WALK_LIST_ACCESS
-#endif
-layout(set = 0, binding = 10, std430) WALK_LIST_ACCESS buffer WalkArgs { uvec4 walk_args; };
-layout(set = 0, binding = 11, std430) WALK_LIST_ACCESS buffer WalkPixels { uint walk_pixels[]; };
+// FROM_WORDS, depth test: the walk list, bindings 10 and 11.
+#define WALK_ARGS_BINDING 10
+#define WALK_PIXELS_BINDING 11
+#define WALK_MAX_GROUPS_ID 7
+#include "walk_list.glsl"
 
 layout(push_constant, std430) uniform Mask {
     vec4 range_grid;    // x0, y0, dx, dy of the range view
@@ -84,11 +78,6 @@ layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 // score pass of shadowed labels, without effects), which are then not written (MaskVariant,
 // src/render/stages/shadow_mask.rs). Its z always is.
 layout(constant_id = 6) const uint WRITE_LABEL_AND_GRADIENT = 1u;
-// The most workgroups the depth test's second pass's indirect dispatch holds (its groups
-// stride over a longer list).
-layout(constant_id = 7) const uint MAX_GROUPS = 1u;
-// Pixels a workgroup of the second pass takes in a round: its 8 x 8 invocations.
-const uint WALK_GROUP = 64u;
 
 #ifdef FROM_WORDS
 // The shadow view's one draw, read in main with the range view's.
@@ -291,8 +280,7 @@ RangePixel read_range(ivec2 pixel) {
 // The second pass of the depth test: each invocation walks from listed pixels, whose labels
 // the first pass wrote, and drops the label where a surface hides the point.
 void walk_from_list(DrawData range_draw) {
-    uint stride = gl_NumWorkGroups.x * WALK_GROUP;
-    for (uint i = gl_WorkGroupID.x * WALK_GROUP + gl_LocalInvocationIndex; i < walk_args.w; i += stride) {
+    for (uint i = first_listed(); i < walk_args.w; i += listed_stride()) {
         uint index = walk_pixels[i];
         ivec2 pixel = ivec2(index % uint(m.sizes.x), index / uint(m.sizes.x));
         bool on_hull_front;
@@ -311,17 +299,6 @@ void main() {
     walk_from_list(range_draw);
 }
 #else
-#ifdef FROM_WORDS
-// Lists range pixel `index` for the second pass, and counts the workgroups it takes.
-void list_walk(uint index) {
-    uint at = atomicAdd(walk_args.w, 1u);
-    walk_pixels[at] = index;
-    if (at % WALK_GROUP == 0u && at / WALK_GROUP < MAX_GROUPS) {
-        atomicAdd(walk_args.x, 1u);
-    }
-}
-#endif
-
 void main() {
 #ifdef FROM_WORDS
     // Read while every invocation is still active: a software rasterizer then reads them once

@@ -28,20 +28,19 @@ layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
 layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D witness_visibility;
 layout(set = 0, binding = 5, rgba32ui) uniform readonly uimage2D directional_visibility;
 layout(set = 0, binding = 6, std430) writeonly buffer Masked { uint masked_label[]; };
+// The second pass of the depth test sets bits the first left clear, atomically.
 #ifdef WALKS_FROM_LIST
 #define LOST_BY_ACCESS
-#define WALK_LIST_ACCESS readonly
 #else
 #define LOST_BY_ACCESS writeonly
-#define WALK_LIST_ACCESS
 #endif
 layout(set = 0, binding = 7, std430) LOST_BY_ACCESS buffer LostBy { uint lost_by[]; };
-// The depth test: the second pass's indirect dispatch (x, y, z), x the groups of WALK_GROUP
-// pixels up to MAX_GROUPS, then the list's length, set to (0, 1, 1, 0) before the first pass
-// (src/render/passes.rs); and the pixels left to walk from toward some witness (their indices
-// in Masked). The second pass only reads them.
-layout(set = 0, binding = 8, std430) WALK_LIST_ACCESS buffer WalkArgs { uvec4 walk_args; };
-layout(set = 0, binding = 9, std430) WALK_LIST_ACCESS buffer WalkPixels { uint walk_pixels[]; };
+// The depth test: the walk list, bindings 8 and 9 (pixels left to walk from toward some
+// witness).
+#define WALK_ARGS_BINDING 8
+#define WALK_PIXELS_BINDING 9
+#define WALK_MAX_GROUPS_ID 6
+#include "walk_list.glsl"
 
 // One witness as the mask sees it (src/render/pinhole/witness_mask.rs, WitnessConstants).
 struct WitnessData {
@@ -90,11 +89,6 @@ layout(constant_id = 2) const uint TEST_DEPTH = 0xffffffffu;
 layout(constant_id = 3) const uint LINK_INDEX_SHIFT = 0u;
 layout(constant_id = 4) const uint LINK_SAME_WAY = 0u;
 layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
-// The most workgroups the depth test's second pass's indirect dispatch holds (its groups
-// stride over a longer list).
-layout(constant_id = 6) const uint MAX_GROUPS = 1u;
-// Pixels a workgroup of the second pass takes in a round: its 8 x 8 invocations.
-const uint WALK_GROUP = 64u;
 
 // The witness being tested, whose image and draw table the depth test's walk reads.
 WitnessData witness;
@@ -282,8 +276,7 @@ ReferencePoint reference_point(ivec2 pixel) {
 // witness, walks toward those the first pass left to a walk, and sets the bits of those a
 // surface hides the point from (the first pass wrote the others' bits and the labels).
 void main() {
-    uint stride = gl_NumWorkGroups.x * WALK_GROUP;
-    for (uint i = gl_WorkGroupID.x * WALK_GROUP + gl_LocalInvocationIndex; i < walk_args.w; i += stride) {
+    for (uint i = first_listed(); i < walk_args.w; i += listed_stride()) {
         uint index = walk_pixels[i];
         ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width));
         uint lost = 0u;
@@ -301,15 +294,6 @@ void main() {
     }
 }
 #else
-// Lists pixel `index` for the second pass, and counts the workgroups it takes.
-void list_walk(uint index) {
-    uint at = atomicAdd(walk_args.w, 1u);
-    walk_pixels[at] = index;
-    if (at % WALK_GROUP == 0u && at / WALK_GROUP < MAX_GROUPS) {
-        atomicAdd(walk_args.x, 1u);
-    }
-}
-
 void main() {
     if (any(greaterThanEqual(gl_GlobalInvocationID.xy, m.region.zw))) {
         return;

@@ -1,5 +1,6 @@
 //! The list a depth test's first pass leaves to its second (the scanner's shadow mask,
-//! stages/shadow_mask.rs, and a rig's witness mask, pinhole/witness_mask.rs): the pixels it
+//! stages/shadow_mask.rs, and a rig's witness mask, pinhole/witness_mask.rs; both shaders'
+//! side: shaders/stages/walk_list.glsl): the pixels it
 //! could not decide without a walk over the surface, and the second pass's indirect dispatch.
 //! A software rasterizer runs a pass's invocations in lockstep, eight at a time, and runs the
 //! code of every branch even where none of the eight takes it: walking in place, a pixel a
