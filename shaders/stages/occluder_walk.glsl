@@ -94,9 +94,10 @@ const uint WALK_JOINED = 0xfffffffdu;
 // walk that reaches a triangle an earlier walk went through goes on as that one did: it ends
 // where that one ended, whose surface did not hide the point (else the test had stopped), or
 // gives up sooner, which says the same. A walk that comes back to a triangle of its own goes
-// round until it gives up: it stops at once, and says the same. Walks from the pixels around a point converge on the
-// triangle over it, and on a dense mesh most of them join an earlier one within a step or two.
-// A walk that gave up forgets them all: its steps were not all taken.
+// round until it gives up: it stops at once, and says the same. Walks from the pixels around
+// a point converge on the triangle over it, and on a dense mesh most of them join an earlier
+// one within a step or two. A walk that gave up forgets them all: its steps were not all
+// taken.
 struct WalkMemo {
     uvec4 newer;
     uvec4 older;

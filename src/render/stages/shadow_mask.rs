@@ -127,8 +127,8 @@ pub enum MaskVariant {
 
 /// The mask pipelines of one [`MaskVariant`], one per [`ShadowTest`], the test a
 /// specialization constant, and for the variants reading words the depth test's second pass
-/// (the shader's variant WALKS_FROM_LIST). Their descriptor-set layouts are defined identically, so one set
-/// serves them all. A software rasterizer such as lavapipe runs both sides of a branch on a
+/// (the shader's variant WALKS_FROM_LIST). Their descriptor-set layouts are defined
+/// identically, so one set serves them all. A software rasterizer such as lavapipe runs both sides of a branch on a
 /// uniform value, so each test gets a pipeline of its own rather than a branch on a push
 /// constant.
 pub struct MaskPipelines {
