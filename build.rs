@@ -57,6 +57,8 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("stages/shadow_mask.comp", "shadow_mask_walks.comp.spv", &["FROM_WORDS", "WALKS_FROM_LIST"]),
     ("stages/witness_mask.comp", "witness_mask.comp.spv", &[]),
     ("stages/witness_mask.comp", "witness_mask_walks.comp.spv", &["WALKS_FROM_LIST"]),
+    ("stages/witness_mask.comp", "witness_mask_words.comp.spv", &["FROM_WORDS"]),
+    ("stages/witness_mask.comp", "witness_mask_words_walks.comp.spv", &["FROM_WORDS", "WALKS_FROM_LIST"]),
     ("raster/raster.comp", "raster.comp.spv", &[]),
     ("raster/raster.comp", "raster_large.comp.spv", &["LARGE_TRIANGLES"]),
     ("raster/raster.comp", "raster_ties.comp.spv", &["TIES"]),

@@ -14,15 +14,27 @@
 // surface and lists the pixels it leaves to walk from toward some witness; the second
 // (WALKS_FROM_LIST, the variant defining it) decides each of them again toward every witness
 // and takes the walks (src/render/stages/walk_list.rs says why).
+//
+// FROM_WORDS: the variants for a job of one draw that the compute rasterizer drew
+// (src/render/raster/compute/rig.rs), as the scanner's mask reads its views
+// (shadow_mask.comp): they read every view's visibility words in place of the attachments no
+// resolve pass wrote, and the first pass resolves the reference view itself, writing its
+// attachments as raster_resolve.comp would and testing what it wrote. A software rasterizer
+// pays for each pass over the pixels and for every value stored and loaded again.
 #include "../raster/draw.glsl"
 #include "../raster/visibility_word.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0, r32ui) uniform readonly uimage2D range_label;
-layout(set = 0, binding = 1, r32f) uniform readonly image2D range_z;
-layout(set = 0, binding = 2, r32f) uniform readonly image2D range_dz_dx;
-layout(set = 0, binding = 3, r32f) uniform readonly image2D range_dz_dy;
+#ifdef FROM_WORDS
+#define REFERENCE_ACCESS writeonly
+#else
+#define REFERENCE_ACCESS readonly
+#endif
+layout(set = 0, binding = 0, r32ui) uniform REFERENCE_ACCESS uimage2D range_label;
+layout(set = 0, binding = 1, r32f) uniform REFERENCE_ACCESS image2D range_z;
+layout(set = 0, binding = 2, r32f) uniform REFERENCE_ACCESS image2D range_dz_dx;
+layout(set = 0, binding = 3, r32f) uniform REFERENCE_ACCESS image2D range_dz_dy;
 // The witnesses' images, one band of rows each (label, draw index, triangle): the pinhole
 // witnesses' and the directional witnesses'.
 layout(set = 0, binding = 4, rgba32ui) uniform readonly uimage2D witness_visibility;
@@ -41,6 +53,14 @@ layout(set = 0, binding = 7, std430) LOST_BY_ACCESS buffer LostBy { uint lost_by
 #define WALK_PIXELS_BINDING 9
 #define WALK_MAX_GROUPS_ID 6
 #include "walk_list.glsl"
+// FROM_WORDS: the reference view's draw table and visibility words (visibility_word.glsl),
+// and the words of the pinhole witnesses' attachment and of the directional witnesses', rows
+// as their images' (src/render/raster/compute/rig.rs). (Other buffers are bound there
+// otherwise, never read.)
+layout(set = 0, binding = 10, std430) readonly buffer ReferenceDraws { DrawData reference_draws[]; };
+layout(set = 0, binding = 11, std430) readonly buffer ReferenceWords { uint reference_words[]; };
+layout(set = 0, binding = 12, std430) readonly buffer PinholeWitnessWords { uint pinhole_witness_words[]; };
+layout(set = 0, binding = 13, std430) readonly buffer DirectionalWitnessWords { uint directional_witness_words[]; };
 
 // One witness as the mask sees it (src/render/pinhole/witness_mask.rs, WitnessConstants).
 struct WitnessData {
@@ -66,19 +86,18 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Wi
 layout(push_constant, std430) uniform WitnessMask {
     vec4 intrinsics;        // fx, fy, cx, cy of the reference view
     uvec4 region;           // the pixels to test: first column, first row, width, height
+    uvec4 strides;          // FROM_WORDS: pixels a row of the words of the reference view, of
+                            // the pinhole witnesses' attachment and of the directional
+                            // witnesses'
     uint width;             // the reference view's width
     uint witness_count;
     uvec2 witnesses;        // device address of the job's witnesses (Witnesses)
     float facing_tolerance; // the least cosine at which a surface faces a witness (src/exact/)
     float bias_per_depth;   // the depth test's constant bias, model units per unit of depth
     float bias_relative;    // the depth test's f32 rounding allowance, relative
-    uint reference_stride;  // pixels a row of the reference view's words
-    uvec2 reference_words;  // device address of the reference view's visibility words
-                            // (visibility_word.glsl), in the depth test of a job of one
-                            // draw the compute rasterizer drew, whose mesh has hull faces;
-                            // 0 otherwise
-    uvec2 hull_faces;       // device address of that draw's mesh's hull-face bits
     float hull_tolerance;   // how far in front of a hull face a vertex may lie
+    uvec2 hull_faces;       // FROM_WORDS, the depth test: device address of the draw's mesh's
+                            // hull-face bits (0: it has none)
 } m;
 
 // The test, by the codes of ShadowTest (src/shadow.rs).
@@ -93,10 +112,27 @@ layout(constant_id = 5) const uint LINK_EDGE_MASK = 0u;
 // The witness being tested, whose image and draw table the depth test's walk reads.
 WitnessData witness;
 
-// What the witness's image holds at pixel q (within it): label, draw index, triangle.
+#ifdef FROM_WORDS
+// The job's one draw in the reference view, read in main: its labels are the draw's in
+// every view.
+DrawData reference_draw;
+#endif
+
+// What the witness's image holds at pixel q (within it): label, draw index, triangle. From
+// the words (the job's one draw, index 0), the label is read only for the label tests; the
+// depth test needs only whether a triangle was seen there, and gets 1.
 uvec4 occluder_seen(ivec2 q) {
     ivec2 at = q + ivec2(0, witness.band.z);
+#ifdef FROM_WORDS
+    uint triangle = witness.band.w == 0u ? pinhole_witness_words[2u * word_index(m.strides.y, at)]
+                                         : directional_witness_words[2u * word_index(m.strides.z, at)];
+    if (triangle == EMPTY_HALF) {
+        return uvec4(0u);
+    }
+    return uvec4(TEST == TEST_DEPTH ? 1u : triangle_label(reference_draw, triangle), 0u, triangle, 0u);
+#else
     return witness.band.w == 0u ? imageLoad(witness_visibility, at) : imageLoad(directional_visibility, at);
+#endif
 }
 
 // Whether the job drew pixel q of the witness's image: the depth test reads no other (beyond
@@ -238,14 +274,14 @@ uint decided(ReferencePoint r, out Walk walk) {
     return TO_WALK;
 }
 
-// The point a reference pixel saw, from the reference view's attachments (a label of 0 and
-// nothing else where it saw none).
-ReferencePoint reference_point(ivec2 pixel) {
-    ReferencePoint r = ReferencePoint(imageLoad(range_label, pixel).r, vec3(0.0), vec3(0.0), 0.0, NO_NEIGHBOUR);
+// The point a reference pixel saw, from what the reference view holds there (`range`; a
+// label of 0 and nothing else where it saw none), and where the job is of one draw the
+// compute rasterizer drew (FROM_WORDS), the triangle its words hold (`t`).
+ReferencePoint point_of(ivec2 pixel, RangePixel range, uint t) {
+    ReferencePoint r = ReferencePoint(range.label, vec3(0.0), vec3(0.0), 0.0, NO_NEIGHBOUR);
     if (r.label != 0u) {
-        float z = imageLoad(range_z, pixel).r;
-        precise vec3 p = view_point(VIEW_PINHOLE, m.intrinsics, vec2(pixel), z);
-        vec3 n = vec3(-imageLoad(range_dz_dx, pixel).r, -imageLoad(range_dz_dy, pixel).r, 1.0);
+        precise vec3 p = view_point(VIEW_PINHOLE, m.intrinsics, vec2(pixel), range.z);
+        vec3 n = vec3(-range.gradient, 1.0);
         // The hull faces' shortcut (decided) trusts `lit`, which a gradient clamped at ±1e30 (a
         // face along the view's rays: pinhole_range_pixel) no longer points along.
         bool normal_kept = max(abs(n.x), abs(n.y)) < 1e30;
@@ -260,25 +296,65 @@ ReferencePoint reference_point(ivec2 pixel) {
         vec3 ray = pinhole_ray(m.intrinsics, vec2(pixel));
         precise float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
         uint hull_face = NO_NEIGHBOUR;
-        if (TEST == TEST_DEPTH && m.reference_words != uvec2(0u) && normal_kept) {
-            uint t = Words(m.reference_words).word[2u * word_index(m.reference_stride, pixel)];
-            if (on_hull(m.hull_faces, t)) {
-                hull_face = t;
-            }
+#ifdef FROM_WORDS
+        if (TEST == TEST_DEPTH && m.hull_faces != uvec2(0u) && normal_kept && on_hull(m.hull_faces, t)) {
+            hull_face = t;
         }
+#endif
         r = ReferencePoint(r.label, p, lit, steepness, hull_face);
     }
     return r;
 }
+
+#ifdef FROM_WORDS
+// The triangle the reference view's words hold at a pixel (EMPTY_HALF: none).
+uint reference_triangle(ivec2 pixel) {
+    return reference_words[2u * word_index(m.strides.x, pixel)];
+}
+
+// What the reference view holds at a pixel, worked out from its words as
+// raster_resolve.comp's PINHOLE variant works it out (zeros where no triangle covers it).
+RangePixel reference_range(ivec2 pixel, uint t) {
+    return t == EMPTY_HALF ? RangePixel(0u, 0.0, vec2(0.0)) : pinhole_range_pixel(reference_draw, t, vec2(pixel));
+}
+
+// The point a reference pixel saw, from the words, and (`store`) the reference view's
+// attachments written there.
+ReferencePoint reference_point(ivec2 pixel, bool store) {
+    uint t = reference_triangle(pixel);
+    RangePixel range = reference_range(pixel, t);
+    if (store) {
+        imageStore(range_label, pixel, uvec4(range.label));
+        imageStore(range_z, pixel, vec4(range.z));
+        imageStore(range_dz_dx, pixel, vec4(range.gradient.x));
+        imageStore(range_dz_dy, pixel, vec4(range.gradient.y));
+    }
+    return point_of(pixel, range, t);
+}
+#else
+// The point a reference pixel saw, from the reference view's attachments.
+ReferencePoint reference_point(ivec2 pixel, bool store) {
+    uint label = imageLoad(range_label, pixel).r;
+    RangePixel range = RangePixel(label, 0.0, vec2(0.0));
+    if (label != 0u) {
+        range.z = imageLoad(range_z, pixel).r;
+        range.gradient = vec2(imageLoad(range_dz_dx, pixel).r, imageLoad(range_dz_dy, pixel).r);
+    }
+    return point_of(pixel, range, NO_NEIGHBOUR);
+}
+#endif
 
 #ifdef WALKS_FROM_LIST
 // The depth test's second pass: each invocation decides listed pixels again toward every
 // witness, walks toward those the first pass left to a walk, and sets the bits of those a
 // surface hides the point from (the first pass wrote the others' bits and the labels).
 void main() {
+#ifdef FROM_WORDS
+    reference_draw = reference_draws[0];
+#endif
     for (uint i = first_listed(); i < walk_args.w; i += listed_stride()) {
         uint index = walk_pixels[i];
-        ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width));
+        ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width), false);
         uint lost = 0u;
         for (uint k = 0u; k < m.witness_count; k++) {
             witness = Witnesses(m.witnesses).witnesses[k];
@@ -295,12 +371,17 @@ void main() {
 }
 #else
 void main() {
+#ifdef FROM_WORDS
+    // Read while every invocation is still active: a software rasterizer then reads it once
+    // for all of them instead of gathering it per invocation.
+    reference_draw = reference_draws[0];
+#endif
     if (any(greaterThanEqual(gl_GlobalInvocationID.xy, m.region.zw))) {
         return;
     }
     ivec2 pixel = ivec2(m.region.xy + gl_GlobalInvocationID.xy);
     uint index = uint(pixel.y) * m.width + uint(pixel.x);
-    ReferencePoint r = reference_point(pixel);
+    ReferencePoint r = reference_point(pixel, true);
     uint lost = 0u;
     bool to_walk = false;
     if (r.label != 0u) {

@@ -20,11 +20,14 @@ use crate::effects::{Effects, EFFECT_ORDER};
 use crate::error::{Error, Result};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
 use crate::render::pinhole::rig_views;
-use crate::render::pinhole::{PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet};
+use crate::render::pinhole::{
+    MaskWords, PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet,
+};
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
 use crate::render::raster::compute::{
-    ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember, RigCoverage, RigTargets,
+    ComputeRasterPipelines, ComputeTarget, ComputeViews, CoverageGroup, CoverageMember, RigCoverage, RigTarget,
+    RigTargets,
 };
 use crate::render::raster::draw::{record_bands, record_view, Draw, DrawTable, ViewPass};
 use crate::render::stages::effects::{EffectBuffers, EffectJob, EffectPipelines, EffectSensor, EffectShape};
@@ -78,6 +81,8 @@ struct WitnessSlot<'a> {
     walk_list: WalkList,
     bindings: WitnessMaskBindings,
     test: ShadowTest,
+    /// The mask's bindings hold the compute rasterizer's words (`MaskWords`).
+    from_words: bool,
 }
 
 /// What a rig's views are resolved into: the reference view's attachments, and each witness
@@ -85,6 +90,17 @@ struct WitnessSlot<'a> {
 fn rig_targets<'t>(reference: &'t ViewTargets, witnesses: Option<&'t WitnessSlot>) -> RigTargets<'t> {
     let witnesses = witnesses.map_or([None, None], |w| w.targets.each_ref().map(|t| t.as_deref()));
     RigTargets { reference, witnesses }
+}
+
+/// What the witness mask reads of a slot's rig views in place of their attachments, for jobs
+/// of one draw (a rig without a kind of witness has the other's words in their place).
+fn mask_words<'r>(rig: &'r RigCoverage) -> Option<MaskWords<'r>> {
+    let [pinhole, directional] = [0, 1].map(|k| rig.words(RigTarget::Witnesses(k)));
+    Some(MaskWords {
+        reference_draws: rig.reference_draw_table()?,
+        reference: rig.words(RigTarget::Reference)?,
+        witnesses: [pinhole.or(directional)?, directional.or(pinhole)?],
+    })
 }
 
 /// What a slot must hold.
@@ -182,33 +198,51 @@ impl<'a> Slot<'a> {
             }
             _ => None,
         };
-        let witnesses = match (shape.witnesses, &masked) {
-            (Some(set), Some(masked)) => {
+        // The witnesses' attachments, then the words the compute rasterizer draws them in,
+        // then the mask that reads either.
+        let witness_targets = match (shape.witnesses, &masked) {
+            (Some(set), Some(_)) => {
                 let targets = WitnessAttachment::ALL.map(|attachment| {
                     let (w, h) = set.sizes[attachment as usize];
                     let kind = format!("{name} {attachment:?} witness views").to_lowercase();
                     (w > 0 && h > 0).then(|| pool.take(ctx, ViewKind::Shadow, (w, h), &kind)).transpose()
                 });
                 let [pinhole, directional] = targets;
-                let targets = [pinhole?, directional?];
-                let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
-                let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), name)?;
-                let mask = p.pinhole()?.mask(set.test);
-                // A rig without a kind of witness binds the other's images in its place (a
-                // witness set holds one witness at least: the error cannot arise).
-                let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
-                let images = pinhole.or(directional).zip(directional.or(pinhole)).map(|(p, d)| [p, d]);
-                let images = images.ok_or_else(|| Error::Scene("a rig's witness set holds no witness".into()))?;
-                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), (masked, &lost_by, &walk_list))?;
-                Some(WitnessSlot { targets, lost_by, walk_list, bindings, test: set.test })
+                Some((set, [pinhole?, directional?]))
             }
             _ => None,
         };
         let rig = match (shape.rig_compute, raster_pipelines) {
             (Some(max_triangles), Some(rp)) => {
-                let targets = rig_targets(&range, witnesses.as_ref());
+                let witnesses =
+                    witness_targets.as_ref().map_or([None, None], |(_, t)| t.each_ref().map(|t| t.as_deref()));
+                let targets = RigTargets { reference: &range, witnesses };
                 let views = rig_views(shape.witnesses);
                 Some(RigCoverage::new(ctx, rp, targets, &views, max_triangles, name)?)
+            }
+            _ => None,
+        };
+        let witnesses = match (witness_targets, &masked) {
+            (Some((set, targets)), Some(masked)) => {
+                let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
+                let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), name)?;
+                let pinhole_pipelines = p.pinhole()?;
+                let mask = pinhole_pipelines.masks().mask(set.test);
+                // A rig without a kind of witness binds the other's images and words in their
+                // place (a witness set holds one witness at least: the error cannot arise).
+                let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
+                let images = pinhole.or(directional).zip(directional.or(pinhole)).map(|(p, d)| [p, d]);
+                let images = images.ok_or_else(|| Error::Scene("a rig's witness set holds no witness".into()))?;
+                let words = match &rig {
+                    Some(rig) => {
+                        pinhole_pipelines.build_masks_from_words()?;
+                        mask_words(rig)
+                    }
+                    None => None,
+                };
+                let buffers = (masked, &lost_by, &walk_list);
+                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), buffers, words)?;
+                Some(WitnessSlot { targets, lost_by, walk_list, bindings, test: set.test, from_words: words.is_some() })
             }
             _ => None,
         };
@@ -623,41 +657,59 @@ impl<'p> Passes<'p> {
             })
             .into_iter()
             .collect();
+        // A job of one draw that the compute rasterizer draws is tested from its views' words,
+        // and its shadow test writes the reference view's attachments (witness_mask.rs).
+        let words_masks = pipelines.masks_from_words().filter(|_| witnesses.is_some_and(|w| w.from_words));
+        let from_words = match (&slot.rig, job.compute, job.draws, words_masks) {
+            (Some(rig), true, [draw], Some(masks)) => mask_words(rig).map(|words| (words, draw, masks)),
+            _ => None,
+        };
         match (&slot.rig, job.compute) {
             (Some(rig), true) => steps.extend(rig.steps(
                 rig_targets(&slot.range, witnesses),
                 &pinhole.compute_views(job.area),
                 job.draws,
+                from_words.is_some(),
             )),
             _ => steps.push(self.pinhole_draw_step(slot, job, pinhole, pipelines)),
         }
         let shadowed = match (witnesses, &slot.masked) {
             (Some(w), Some(masked)) => {
-                let mut images: Vec<_> = slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
-                images.extend(witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)));
                 let mut buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
-                // A job of one draw on the compute rasterizer, in the depth test: it reads which
-                // triangle each reference pixel saw, for the draw's hull faces.
-                let constants = match (&slot.rig, job.compute, job.draws) {
-                    (Some(rig), true, [draw]) if w.test == ShadowTest::Depth => {
-                        rig.reference_words().zip(draw.mesh.hull_faces()).map(|(words, hull)| {
-                            buffers.push((words.0, Access::ComputeRead));
-                            pinhole.mask.with_hull_faces(words, hull)
-                        })
+                let (images, masks, constants) = match from_words {
+                    Some((words, draw, masks)) => {
+                        // The first pass writes the reference view's attachments; both read
+                        // the words and the reference view's draw table.
+                        let images = slot.range.colour.iter().map(|image| (image, Access::ComputeWrite)).collect();
+                        let [pinhole_words, directional_words] = words.witnesses.map(|(buffer, _)| buffer);
+                        buffers.extend(
+                            [words.reference_draws, words.reference.0, pinhole_words, directional_words]
+                                .map(|buffer| (buffer, Access::ComputeRead)),
+                        );
+                        let hull = draw.mesh.hull_faces().filter(|_| w.test == ShadowTest::Depth);
+                        (images, masks, pinhole.mask.reading_words(&words, hull))
                     }
-                    _ => None,
-                }
-                .unwrap_or(pinhole.mask);
-                // The depth test's second pass reads the reference view and the witnesses'
-                // images as the first does, and the list; it sets labels' and bits' words.
-                let second = pipelines.second_pass(w.test).map(|walks| {
+                    None => {
+                        let mut images: Vec<_> =
+                            slot.range.colour.iter().map(|image| (image, Access::ComputeRead)).collect();
+                        images.extend(
+                            witness_targets().flat_map(|t| &t.colour).map(|image| (image, Access::ComputeRead)),
+                        );
+                        (images, pipelines.masks(), pinhole.mask)
+                    }
+                };
+                // The depth test's second pass reads what the first does (from words, not the
+                // reference view's attachments it wrote), and the list; it sets labels' and
+                // bits' words.
+                let second = masks.second_pass(w.test).map(|walks| {
                     let mut walk_buffers = buffers.clone();
                     walk_buffers.extend(w.walk_list.walked());
+                    let walk_images = if from_words.is_some() { Vec::new() } else { images.clone() };
                     let walk = move |_: &GpuContext, cmd| w.bindings.record_walks(cmd, walks, &w.walk_list, &constants);
-                    Step::new(images.clone(), walk_buffers, walk).timed("shadow mask: walks")
+                    Step::new(walk_images, walk_buffers, walk).timed("shadow mask: walks")
                 });
                 buffers.extend(w.walk_list.appended());
-                let mask = pipelines.mask(w.test);
+                let mask = masks.mask(w.test);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &constants);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));
                 // Jobs without a second pass take a step of nothing in its place, so that in a

@@ -1,12 +1,14 @@
 //! The pipelines of a rig's pinhole views: the reference view's and the witnesses' raster
 //! pipelines (shaders/raster/ with PINHOLE) and the witness mask's, one per shadow test, and
-//! the depth test's second pass (stages/walk_list.rs).
+//! the depth test's second pass (stages/walk_list.rs), reading the views' attachments or the
+//! compute rasterizer's words.
 
 use super::witness_mask::{WitnessMaskBindings, WitnessMaskConstants};
 use crate::error::Result;
 use crate::gpu::shaders::layout::spec::WITNESS_MASK_COMP as spec;
 use crate::gpu::{shaders, ComputePipeline, GpuContext, SetShape};
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
+use crate::render::built_once::built_once;
 use crate::render::raster::draw::Projection;
 use crate::render::raster::draw::ViewPipelines;
 use crate::render::raster::graphics::view_pipelines;
@@ -14,21 +16,30 @@ use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::ViewKind;
 use crate::shadow::ShadowTest;
 use ash::vk;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 pub struct PinholePipelines {
     ctx: Arc<GpuContext>,
     pub reference: ViewPipelines,
     pub witnesses: ViewPipelines,
-    mask_label: ComputePipeline,
-    mask_label_square: ComputePipeline,
-    mask_depth: ComputePipeline,
-    mask_walks: ComputePipeline,
+    /// The mask reading the views' attachments.
+    masks: MaskPipelines,
+    /// The mask reading the compute rasterizer's words (`FROM_WORDS`), built on first use.
+    masks_from_words: OnceLock<MaskPipelines>,
 }
 
-impl PinholePipelines {
-    /// `layout`: the raster pipelines' layout (their push constants), which the renderer owns.
-    pub fn new(ctx: &Arc<GpuContext>, layout: vk::PipelineLayout) -> Result<Self> {
+/// The witness mask's pipelines of one variant: one per shadow test, and the depth test's
+/// second pass.
+pub struct MaskPipelines {
+    label: ComputePipeline,
+    label_square: ComputePipeline,
+    depth: ComputePipeline,
+    walks: ComputePipeline,
+}
+
+impl MaskPipelines {
+    /// The variant whose first pass is `first` and whose depth test's second pass is `walks`.
+    fn new(ctx: &Arc<GpuContext>, (first, walks): (&[u8], &[u8]), variant: &str) -> Result<Self> {
         let mask = |code, test: ShadowTest, name: &str| {
             ComputePipeline::new(
                 ctx,
@@ -44,15 +55,37 @@ impl PinholePipelines {
                     (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
                     (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
                 ],
-                name,
+                &format!("witness mask{variant} ({name})"),
             )
         };
-        let first = shaders::WITNESS_MASK_COMP;
-        let mask_label = mask(first, ShadowTest::Label, "witness mask (label test)")?;
-        let mask_label_square = mask(first, ShadowTest::LabelSquare, "witness mask (2x2 label test)")?;
-        let mask_depth = mask(first, ShadowTest::Depth, "witness mask (depth test)")?;
-        let walks = shaders::WITNESS_MASK_WALKS_COMP;
-        let mask_walks = mask(walks, ShadowTest::Depth, "witness mask (depth test's walks)")?;
+        Ok(Self {
+            label: mask(first, ShadowTest::Label, "label test")?,
+            label_square: mask(first, ShadowTest::LabelSquare, "2x2 label test")?,
+            depth: mask(first, ShadowTest::Depth, "depth test")?,
+            walks: mask(walks, ShadowTest::Depth, "depth test's walks")?,
+        })
+    }
+
+    /// The mask pipeline of `test`.
+    pub fn mask(&self, test: ShadowTest) -> &ComputePipeline {
+        match test {
+            ShadowTest::Label => &self.label,
+            ShadowTest::LabelSquare => &self.label_square,
+            ShadowTest::Depth => &self.depth,
+        }
+    }
+
+    /// The second pass `test` takes, where it takes one: the depth test's walks from the
+    /// pixels the first listed.
+    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
+        (test == ShadowTest::Depth).then_some(&self.walks)
+    }
+}
+
+impl PinholePipelines {
+    /// `layout`: the raster pipelines' layout (their push constants), which the renderer owns.
+    pub fn new(ctx: &Arc<GpuContext>, layout: vk::PipelineLayout) -> Result<Self> {
+        let masks = MaskPipelines::new(ctx, (shaders::WITNESS_MASK_COMP, shaders::WITNESS_MASK_WALKS_COMP), "")?;
         let reference = view_pipelines(ctx, layout, ViewKind::Range, Projection::Pinhole)?;
         let witnesses = match view_pipelines(ctx, layout, ViewKind::Shadow, Projection::Pinhole) {
             Ok(witnesses) => witnesses,
@@ -61,22 +94,26 @@ impl PinholePipelines {
                 return Err(e);
             }
         };
-        Ok(Self { ctx: ctx.clone(), reference, witnesses, mask_label, mask_label_square, mask_depth, mask_walks })
+        Ok(Self { ctx: ctx.clone(), reference, witnesses, masks, masks_from_words: OnceLock::new() })
     }
 
-    /// The mask pipeline of `test`.
-    pub fn mask(&self, test: ShadowTest) -> &ComputePipeline {
-        match test {
-            ShadowTest::Label => &self.mask_label,
-            ShadowTest::LabelSquare => &self.mask_label_square,
-            ShadowTest::Depth => &self.mask_depth,
-        }
+    /// The mask reading the views' attachments.
+    pub fn masks(&self) -> &MaskPipelines {
+        &self.masks
     }
 
-    /// The second pass `test` takes, where it takes one: the depth test's walks from the
-    /// pixels the first listed.
-    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
-        (test == ShadowTest::Depth).then_some(&self.mask_walks)
+    /// The mask reading the compute rasterizer's words, built on first use (by a slot whose
+    /// jobs the compute rasterizer may draw).
+    pub fn build_masks_from_words(&self) -> Result<&MaskPipelines> {
+        built_once(&self.ctx, &self.masks_from_words, || {
+            let code = (shaders::WITNESS_MASK_WORDS_COMP, shaders::WITNESS_MASK_WORDS_WALKS_COMP);
+            MaskPipelines::new(&self.ctx, code, " from words")
+        })
+    }
+
+    /// The mask reading the compute rasterizer's words, where a slot built it.
+    pub fn masks_from_words(&self) -> Option<&MaskPipelines> {
+        self.masks_from_words.get()
     }
 }
 

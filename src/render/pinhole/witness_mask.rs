@@ -1,7 +1,9 @@
 //! The compute pass that tests a pinhole reference view's points against every witness's
 //! image (shaders/stages/witness_mask.comp), by the label test or the depth test (in two
 //! passes: stages/walk_list.rs): what it reads of each witness, its push constants, and its
-//! bindings.
+//! bindings. A job of one draw that the compute rasterizer drew is tested from the views'
+//! visibility words, which no resolve pass turns into attachments first (`FROM_WORDS`, the
+//! scanner's mask's way: stages/shadow_mask.rs).
 
 use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
@@ -104,17 +106,15 @@ fn rows(transform: DMat4) -> [[f32; 4]; 3] {
 pub struct WitnessMaskConstants {
     intrinsics: [f32; 4],
     region: [u32; 4],
+    strides: [u32; 4],
     width: u32,
     witness_count: u32,
     witnesses: [u32; 2],
     facing_tolerance: f32,
     bias_per_depth: f32,
     bias_relative: f32,
-    reference_stride: u32,
-    reference_words: [u32; 2],
-    hull_faces: [u32; 2],
     hull_tolerance: f32,
-    _pad: u32,
+    hull_faces: [u32; 2],
 }
 
 matches_shader_struct!(
@@ -122,16 +122,15 @@ matches_shader_struct!(
     WitnessMask {
         intrinsics,
         region,
+        strides,
         width,
         witness_count,
         witnesses,
         facing_tolerance,
         bias_per_depth,
         bias_relative,
-        reference_stride,
-        reference_words,
-        hull_faces,
-        hull_tolerance
+        hull_tolerance,
+        hull_faces
     }
 );
 
@@ -143,6 +142,7 @@ impl WitnessMaskConstants {
         Self {
             intrinsics: [reference.fx, reference.fy, reference.cx, reference.cy].map(|v| v as f32),
             region: [region.col, region.row, region.width, region.height],
+            strides: [0; 4],
             width: reference.width,
             witness_count: witness_count as u32,
             witnesses: table.map_or([0; 2], Buffer::address_words),
@@ -151,31 +151,41 @@ impl WitnessMaskConstants {
             // depth, the finer axis's.
             bias_per_depth: (DEPTH_BIAS_PIXELS / reference.fx.max(reference.fy)) as f32,
             bias_relative: DEPTH_BIAS_RELATIVE as f32,
-            reference_stride: 0,
-            reference_words: [0; 2],
-            hull_faces: [0; 2],
             hull_tolerance: 0.0,
-            _pad: 0,
+            hull_faces: [0; 2],
         }
     }
 
-    /// The same constants for a job of one draw of a mesh whose reference view the compute
-    /// rasterizer drew into `words`, `stride` pixels a row: the depth test skips its walks from
-    /// the mesh's hull faces (`GpuMesh::hull_faces`), which nothing else in the views can hide.
-    pub fn with_hull_faces(self, (words, stride): (&Buffer, u32), hull: &HullFaces) -> Self {
+    /// The same constants for a job of one draw that the compute rasterizer drew into `words`
+    /// (the mask's `FROM_WORDS` pipelines), and in the depth test, of a mesh with hull faces
+    /// (`GpuMesh::hull_faces`): the depth test then skips its walks from them, which nothing
+    /// else in the views can hide.
+    pub fn reading_words(self, words: &MaskWords, hull: Option<&HullFaces>) -> Self {
+        let strides = [words.reference.1, words.witnesses[0].1, words.witnesses[1].1, 0];
         Self {
-            reference_stride: stride,
-            reference_words: words.address_words(),
-            hull_faces: hull.bits.address_words(),
-            hull_tolerance: hull.tolerance,
+            strides,
+            hull_faces: hull.map_or([0; 2], |hull| hull.bits.address_words()),
+            hull_tolerance: hull.map_or(0.0, |hull| hull.tolerance),
             ..self
         }
     }
 }
 
+/// What the mask's `FROM_WORDS` pipelines read in place of the views' attachments
+/// (raster/compute/rig.rs): the reference view's draw table, and the visibility words, with
+/// their pixels a row, of the reference view and of the pinhole witnesses' attachment and the
+/// directional witnesses' (where a rig has no witness of a kind, the other's, never read
+/// there).
+#[derive(Clone, Copy)]
+pub(crate) struct MaskWords<'b> {
+    pub reference_draws: &'b Buffer,
+    pub reference: (&'b Buffer, u32),
+    pub witnesses: [(&'b Buffer, u32); 2],
+}
+
 /// The mask's descriptor set: the reference view's attachments, the pinhole witnesses'
-/// images and the directional witnesses', then the masked labels, each pixel's witness bits
-/// and the depth test's walk list.
+/// images and the directional witnesses', then the masked labels, each pixel's witness bits,
+/// the depth test's walk list, and what the `FROM_WORDS` pipelines read ([`MaskWords`]).
 pub struct WitnessMaskBindings {
     set: StorageSet,
 }
@@ -183,18 +193,26 @@ pub struct WitnessMaskBindings {
 impl WitnessMaskBindings {
     pub const IMAGES: usize =
         ViewKind::Range.colour_attachments().len() + 2 * ViewKind::Shadow.colour_attachments().len();
-    pub const BUFFERS: usize = 4;
+    pub const BUFFERS: usize = 8;
 
     /// `pipeline`: any of the mask's pipelines (their set layouts are defined alike).
     /// `witnesses`: the pinhole witnesses' attachments and the directional witnesses' (where a
-    /// rig has no witness of a kind, the other's, never read there).
+    /// rig has no witness of a kind, the other's, never read there). `words`: where the slot's
+    /// jobs may be drawn by the compute rasterizer (else other buffers are bound in their
+    /// place, never read).
     pub fn new(
         ctx: &Arc<GpuContext>,
         pipeline: &ComputePipeline,
         (reference, [pinhole, directional]): (&ViewTargets, [&ViewTargets; 2]),
         (masked, lost_by, walk_list): (&Buffer, &Buffer, &WalkList),
+        words: Option<MaskWords>,
     ) -> Result<Self> {
-        matches_shader_bindings!([WITNESS_MASK_COMP, WITNESS_MASK_WALKS_COMP] {
+        matches_shader_bindings!([
+            WITNESS_MASK_COMP,
+            WITNESS_MASK_WALKS_COMP,
+            WITNESS_MASK_WORDS_COMP,
+            WITNESS_MASK_WORDS_WALKS_COMP
+        ] {
             range_label,
             range_z,
             range_dz_dx,
@@ -205,9 +223,24 @@ impl WitnessMaskBindings {
             LostBy,
             WalkArgs,
             WalkPixels,
+            ReferenceDraws,
+            ReferenceWords,
+            PinholeWitnessWords,
+            DirectionalWitnessWords,
         });
         let images: Vec<&Image> = reference.colour.iter().chain(&pinhole.colour).chain(&directional.colour).collect();
-        let buffers = [masked, lost_by, &walk_list.args, &walk_list.pixels];
+        let from_words =
+            words.map_or([masked; 4], |w| [w.reference_draws, w.reference.0, w.witnesses[0].0, w.witnesses[1].0]);
+        let buffers = [
+            masked,
+            lost_by,
+            &walk_list.args,
+            &walk_list.pixels,
+            from_words[0],
+            from_words[1],
+            from_words[2],
+            from_words[3],
+        ];
         let set = StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), "witness mask bindings")?;
         Ok(Self { set })
     }

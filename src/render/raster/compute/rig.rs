@@ -5,7 +5,9 @@
 //! of a scanner view of several objects do (with the ties passes where there are several);
 //! then resolved into the attachments the graphics pipeline draws: the reference view's, and
 //! the witnesses' visibility (label, draw, triangle). The witnesses' shadow test and every pass
-//! after it read them unchanged.
+//! after it read them unchanged; but a job of one draw takes no resolve: its shadow test reads
+//! the words and writes the reference view's attachments itself (pinhole/witness_mask.rs), as
+//! the scanner's mask does.
 //!
 //! A pinhole view's coverage is raster.comp's PINHOLE variant (window coordinates divided by
 //! w as lavapipe divides, depths larger nearer, cull by winding, clipping as the graphics
@@ -143,10 +145,15 @@ impl ComputeRasterPipelines {
 }
 
 impl<'p> RigCoverage<'p> {
-    /// The reference view's words and their pixels a row: the witness mask reads which
-    /// triangle each pixel saw there (render/pinhole/witness_mask.rs, hull faces).
-    pub fn reference_words(&self) -> Option<(&Buffer, u32)> {
-        self.words[words_index(RigTarget::Reference)].as_ref().map(|(buffer, stride)| (buffer, *stride))
+    /// The words of `target` and their pixels a row, where the slot holds that target: the
+    /// witness mask reads them in place of the attachments of a job of one draw.
+    pub fn words(&self, target: RigTarget) -> Option<(&Buffer, u32)> {
+        self.words[words_index(target)].as_ref().map(|(buffer, stride)| (buffer, *stride))
+    }
+
+    /// The reference view's draw table, as each job writes it.
+    pub fn reference_draw_table(&self) -> Option<&Buffer> {
+        self.views.iter().find(|state| state.target == RigTarget::Reference).map(|state| &state.draw_table)
     }
 
     /// A slot's state for views resolved into `views`' targets, each of its projection (the
@@ -235,8 +242,15 @@ impl<'p> RigCoverage<'p> {
     /// A job's passes drawing `views` (in the order this state was made for) of `draws` into
     /// `targets`: their words emptied and tables written, each view's coverage, its large
     /// triangles', the ties passes where the job has several draws, and the resolves (timed as
-    /// `range`).
-    pub fn steps<'s>(&'s self, targets: RigTargets<'s>, views: &[RigView<'s>], draws: &'s [Draw<'s>]) -> Vec<Step<'s>> {
+    /// `range`), unless `resolved_by_mask` (a step of nothing in their place, so that in a run
+    /// every job's later passes fall in the same stage).
+    pub fn steps<'s>(
+        &'s self,
+        targets: RigTargets<'s>,
+        views: &[RigView<'s>],
+        draws: &'s [Draw<'s>],
+        resolved_by_mask: bool,
+    ) -> Vec<Step<'s>> {
         assert!((1..=COVERAGE_MEMBERS).contains(&draws.len()), "1 to {COVERAGE_MEMBERS} draws a rig view");
         assert_eq!(views.len(), self.views.len(), "a job's views are those its slot was made for");
         // Each target's rows that its views resolve, emptied whole.
@@ -367,6 +381,10 @@ impl<'p> RigCoverage<'p> {
                 }
             };
             steps.push(Step::new(Vec::new(), reading_queue(), record_ties).timed("coverage: ties"));
+        }
+        if resolved_by_mask {
+            steps.push(Step::new(Vec::new(), Vec::new(), |_, _| {}));
+            return steps;
         }
         let mut images: Vec<_> = Vec::new();
         for target in [RigTarget::Reference, RigTarget::Witnesses(0), RigTarget::Witnesses(1)] {
