@@ -76,9 +76,10 @@ struct WitnessData {
     uvec2 draws;            // the depth test: device address of its draw table (WitnessDraws),
                             // each draw in its frame at the draw index its image holds
 };
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Witnesses {
-    WitnessData witnesses[];
-};
+// The job's witnesses, in file order, written into the slot's table before the test
+// (src/render/pinhole/witness_mask.rs, WitnessTable): a software rasterizer reads a storage
+// buffer's value at a fraction of the cost of one at a device address.
+layout(set = 0, binding = 14, std430) readonly buffer WitnessTable { WitnessData witness_table[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer WitnessDraws {
     DrawData draws[];
 };
@@ -90,8 +91,7 @@ layout(push_constant, std430) uniform WitnessMask {
                             // the pinhole witnesses' attachment and of the directional
                             // witnesses'
     uint width;             // the reference view's width
-    uint witness_count;
-    uvec2 witnesses;        // device address of the job's witnesses (Witnesses)
+    uint witness_count;     // the witnesses in WitnessTable
     float facing_tolerance; // the least cosine at which a surface faces a witness (src/exact/)
     float bias_per_depth;   // the depth test's constant bias, model units per unit of depth
     float bias_relative;    // the depth test's f32 rounding allowance, relative
@@ -357,7 +357,7 @@ void main() {
         ReferencePoint r = reference_point(ivec2(index % m.width, index / m.width), false);
         uint lost = 0u;
         for (uint k = 0u; k < m.witness_count; k++) {
-            witness = Witnesses(m.witnesses).witnesses[k];
+            witness = witness_table[k];
             Walk walk;
             if (decided(r, walk) == TO_WALK && occluded(walk.s, walk.q, walk.own, walk.scale, walk.bias, walk.central)) {
                 lost |= 1u << k;
@@ -386,7 +386,7 @@ void main() {
     bool to_walk = false;
     if (r.label != 0u) {
         for (uint k = 0u; k < m.witness_count; k++) {
-            witness = Witnesses(m.witnesses).witnesses[k];
+            witness = witness_table[k];
             Walk walk;
             uint verdict = decided(r, walk);
             if (verdict == UNSEEN) {

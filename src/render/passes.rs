@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Access, Buffer, BufferDesc, Encoder, GpuContext, Image, Step, Timestamps};
 use crate::render::pinhole::rig_views;
 use crate::render::pinhole::{
-    MaskWords, PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet,
+    MaskWords, PinholeJob, PinholePipelines, WitnessAttachment, WitnessMaskBindings, WitnessSet, WitnessTable,
 };
 use crate::render::pipelines::Pipelines;
 use crate::render::plan::Views;
@@ -79,6 +79,8 @@ struct WitnessSlot<'a> {
     lost_by: Buffer,
     /// The pixels the depth test's first pass leaves to its second (stages/walk_list.rs).
     walk_list: WalkList,
+    /// Each job's witnesses, as its test reads them.
+    table: WitnessTable,
     bindings: WitnessMaskBindings,
     test: ShadowTest,
     /// The mask's bindings hold the compute rasterizer's words (`MaskWords`).
@@ -226,6 +228,7 @@ impl<'a> Slot<'a> {
             (Some((set, targets)), Some(masked)) => {
                 let lost_by = Buffer::new(ctx, per_pixel(), &format!("{name} witness bits"))?;
                 let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), name)?;
+                let table = WitnessTable::new(ctx, name)?;
                 let pinhole_pipelines = p.pinhole()?;
                 let mask = pinhole_pipelines.masks().mask(set.test);
                 // A rig without a kind of witness binds the other's images and words in their
@@ -241,8 +244,9 @@ impl<'a> Slot<'a> {
                     None => None,
                 };
                 let buffers = (masked, &lost_by, &walk_list);
-                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), buffers, words)?;
-                Some(WitnessSlot { targets, lost_by, walk_list, bindings, test: set.test, from_words: words.is_some() })
+                let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), buffers, words, &table)?;
+                let from_words = words.is_some();
+                Some(WitnessSlot { targets, lost_by, walk_list, table, bindings, test: set.test, from_words })
             }
             _ => None,
         };
@@ -648,12 +652,21 @@ impl<'p> Passes<'p> {
         let pipelines = self.pinhole_pipelines.expect("built for a pass list of pinhole jobs");
         let witnesses = slot.witnesses.as_ref();
         let witness_targets = || witnesses.into_iter().flat_map(|w| w.targets.iter().flatten().map(|t| &**t));
-        // First, the depth test's walk list emptied, for its first pass.
+        // First, the job's witnesses written into the slot's table, and the depth test's walk
+        // list emptied, for the test's first pass.
         let mut steps: Vec<Step> = witnesses
-            .filter(|w| w.test == ShadowTest::Depth)
             .map(|w| {
-                let empty = move |ctx: &GpuContext, cmd| w.walk_list.record_emptying(ctx, cmd);
-                Step::new(Vec::new(), vec![w.walk_list.emptied()], empty)
+                let depth = w.test == ShadowTest::Depth;
+                let table = &pinhole.witness_table;
+                let write = move |ctx: &GpuContext, cmd| {
+                    w.table.record_writing(ctx, cmd, table);
+                    if depth {
+                        w.walk_list.record_emptying(ctx, cmd);
+                    }
+                };
+                let mut written = vec![w.table.written()];
+                written.extend(depth.then(|| w.walk_list.emptied()));
+                Step::new(Vec::new(), written, write)
             })
             .into_iter()
             .collect();
@@ -675,7 +688,8 @@ impl<'p> Passes<'p> {
         }
         let shadowed = match (witnesses, &slot.masked) {
             (Some(w), Some(masked)) => {
-                let mut buffers = vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite)];
+                let mut buffers =
+                    vec![(masked, Access::ComputeWrite), (&w.lost_by, Access::ComputeWrite), w.table.read()];
                 let (images, masks, constants) = match from_words {
                     Some((words, draw, masks)) => {
                         // The first pass writes the reference view's attachments; both read

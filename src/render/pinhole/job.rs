@@ -1,10 +1,10 @@
 //! One job's pinhole views: each draw's constants in the reference view and in every
 //! witness's band, with the depth range and cull mode each view draws it with; and the table
-//! of witnesses the job's shadow test reads, with its directional witnesses' grids and, for
-//! the depth test, each witness's draw table.
+//! of witnesses the job's shadow test reads (written into its slot's before the test), with
+//! its directional witnesses' grids and, for the depth test, each witness's draw table.
 
 use super::directional::{self, DirectionalPlan};
-use super::witness_mask::{WitnessAttachment, WitnessMaskConstants};
+use super::witness_mask::{WitnessAttachment, WitnessConstants, WitnessMaskConstants};
 use super::witness_set::{WitnessImage, WitnessSet};
 use super::Models;
 use crate::error::{Error, Result};
@@ -37,10 +37,11 @@ pub(crate) struct PinholeJob {
     whole: PixelRect,
     reference: ViewDraws,
     witnesses: Vec<WitnessDraws>,
-    /// What the shadow test reads of each witness, where the job's directional witnesses or
-    /// the depth test's draw tables make it the job's own, and those draw tables: `mask` holds
-    /// the table's address (or the witness set's), so the job keeps them alive.
-    _job_table: Option<(Buffer, Option<Buffer>)>,
+    /// What the shadow test reads of each witness, in file order.
+    pub witness_table: Vec<WitnessConstants>,
+    /// The depth test's draw tables, whose addresses `witness_table` holds: the job keeps them
+    /// alive.
+    _draw_tables: Option<Buffer>,
     pub mask: WitnessMaskConstants,
     /// How far, in pixels, the draws' corners may reach from the first pixel of a directional
     /// witness's band (the compute rasterizer takes the job where it is within
@@ -81,7 +82,6 @@ impl PinholeJob {
         };
         let (views, mut table) = witnesses.map_or((&[][..], Vec::new()), |set| (&set.views[..], set.table.clone()));
         let mut witness_draws = Vec::with_capacity(views.len());
-        let mut directional = false;
         // The compute rasterizer clips a pinhole view's triangles to its viewport (raster.comp,
         // clipped_polygon): only a directional witness's band has a reach to bound.
         let mut reach: f64 = 0.0;
@@ -93,7 +93,6 @@ impl PinholeJob {
                 WitnessImage::Directional(image) => {
                     let plan = directional::plan(w.from_reference, (image, w.band), reference, &models);
                     *constants = constants.with_grid(plan.band_grid);
-                    directional = true;
                     let reach_of = |&(centre, radius): &(DVec3, f64)| {
                         plan.grid.reach(plan.from_reference.transform_point3(centre), radius)
                     };
@@ -119,21 +118,14 @@ impl PinholeJob {
                 *constants = constants.with_job(drawn.area, tables.device_address() + k * table_bytes);
             }
         }
-        // A table of its own where its directional witnesses' grids or its draw tables are the
-        // job's; else the set's, the same for every job.
-        let job_table = (directional || walked)
-            .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "a job's witnesses"))
-            .transpose()?
-            .map(|table| (table, draw_tables));
-        let table_buffer =
-            job_table.as_ref().map(|(table, _)| table).or(witnesses.and_then(|set| set.shared_table.as_ref()));
         let reference = view_draws(&reference_drawing, &models, ViewportFrame::around(whole, viewport_half_side))?;
         Ok(Self {
             whole,
             reference,
             witnesses: witness_draws,
-            mask: WitnessMaskConstants::new(&k, area, (table_buffer, views.len())),
-            _job_table: job_table,
+            mask: WitnessMaskConstants::new(&k, area, views.len()),
+            witness_table: table,
+            _draw_tables: draw_tables,
             reach,
         })
     }

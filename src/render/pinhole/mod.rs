@@ -19,7 +19,7 @@ mod witness_set;
 
 pub(crate) use job::PinholeJob;
 pub use pipelines::PinholePipelines;
-pub(crate) use witness_mask::{MaskWords, WitnessAttachment, WitnessMaskBindings};
+pub(crate) use witness_mask::{MaskWords, WitnessAttachment, WitnessMaskBindings, WitnessTable};
 pub(crate) use witness_set::{WitnessLayout, WitnessSet};
 
 use super::memory::rig_render_bytes;

@@ -8,11 +8,11 @@
 use crate::error::Result;
 use crate::exact::FACING_TOLERANCE;
 use crate::gpu::shaders::{matches_shader_bindings, matches_shader_struct};
-use crate::gpu::{Buffer, ComputePipeline, GpuContext, Image, StorageSet};
+use crate::gpu::{Access, Buffer, BufferDesc, ComputePipeline, GpuContext, Image, StorageSet};
 use crate::render::gpu_mesh::HullFaces;
 use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
-use crate::sensor::{Intrinsics, PixelRect};
+use crate::sensor::{Intrinsics, PixelRect, MAX_WITNESSES};
 use crate::shadow::{DEPTH_BIAS_PIXELS, DEPTH_BIAS_RELATIVE};
 use ash::vk;
 use glam::{DMat4, DVec3};
@@ -109,7 +109,6 @@ pub struct WitnessMaskConstants {
     strides: [u32; 4],
     width: u32,
     witness_count: u32,
-    witnesses: [u32; 2],
     facing_tolerance: f32,
     bias_per_depth: f32,
     bias_relative: f32,
@@ -125,7 +124,6 @@ matches_shader_struct!(
         strides,
         width,
         witness_count,
-        witnesses,
         facing_tolerance,
         bias_per_depth,
         bias_relative,
@@ -136,16 +134,14 @@ matches_shader_struct!(
 
 impl WitnessMaskConstants {
     /// Tests the pixels of `region` of a reference view of intrinsics `reference` against the
-    /// witnesses of `table` (a job's, on the device, where the label test runs), `witness_count`
-    /// of them.
-    pub fn new(reference: &Intrinsics, region: PixelRect, (table, witness_count): (Option<&Buffer>, usize)) -> Self {
+    /// first `witness_count` witnesses of the slot's table.
+    pub fn new(reference: &Intrinsics, region: PixelRect, witness_count: usize) -> Self {
         Self {
             intrinsics: [reference.fx, reference.fy, reference.cx, reference.cy].map(|v| v as f32),
             region: [region.col, region.row, region.width, region.height],
             strides: [0; 4],
             width: reference.width,
             witness_count: witness_count as u32,
-            witnesses: table.map_or([0; 2], Buffer::address_words),
             facing_tolerance: FACING_TOLERANCE as f32,
             // The depth test's constant bias: DEPTH_BIAS_PIXELS of a pixel's width at p's
             // depth, the finer axis's.
@@ -183,9 +179,46 @@ pub(crate) struct MaskWords<'b> {
     pub witnesses: [(&'b Buffer, u32); 2],
 }
 
+/// The slot's table of witnesses as the mask reads them (`WitnessTable`): each job writes its
+/// own before its test ([`WitnessTable::record_writing`]), so that the mask reads it from a
+/// binding of the slot's, which a software rasterizer reads at a fraction of the cost of a
+/// table at a device address (docs/performance.md, "A pinhole rig beside the scanner").
+pub(crate) struct WitnessTable {
+    buffer: Buffer,
+}
+
+impl WitnessTable {
+    pub fn new(ctx: &Arc<GpuContext>, name: &str) -> Result<Self> {
+        let bytes = (MAX_WITNESSES * size_of::<WitnessConstants>()) as u64;
+        Ok(Self { buffer: Buffer::new(ctx, BufferDesc::gpu_storage(bytes), &format!("{name} witness table"))? })
+    }
+
+    /// The use the step writing the table makes of it.
+    pub fn written(&self) -> (&Buffer, Access) {
+        (&self.buffer, Access::TransferWrite)
+    }
+
+    /// The use the mask's passes make of it.
+    pub fn read(&self) -> (&Buffer, Access) {
+        (&self.buffer, Access::ComputeRead)
+    }
+
+    /// Records the writing of a job's `witnesses` (at most [`MAX_WITNESSES`]: Sensor::validate).
+    pub fn record_writing(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, witnesses: &[WitnessConstants]) {
+        let witnesses = &witnesses[..witnesses.len().min(MAX_WITNESSES)];
+        if witnesses.is_empty() {
+            return;
+        }
+        // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffer; the
+        // update fits the buffer (MAX_WITNESSES entries, 112 bytes each: under 65,536).
+        unsafe { ctx.device.cmd_update_buffer(cmd, self.buffer.raw, 0, bytemuck::cast_slice(witnesses)) };
+    }
+}
+
 /// The mask's descriptor set: the reference view's attachments, the pinhole witnesses'
 /// images and the directional witnesses', then the masked labels, each pixel's witness bits,
-/// the depth test's walk list, and what the `FROM_WORDS` pipelines read ([`MaskWords`]).
+/// the depth test's walk list, what the `FROM_WORDS` pipelines read ([`MaskWords`]), and the
+/// table of witnesses each job writes before its test ([`WitnessTable`]).
 pub struct WitnessMaskBindings {
     set: StorageSet,
 }
@@ -193,7 +226,7 @@ pub struct WitnessMaskBindings {
 impl WitnessMaskBindings {
     pub const IMAGES: usize =
         ViewKind::Range.colour_attachments().len() + 2 * ViewKind::Shadow.colour_attachments().len();
-    pub const BUFFERS: usize = 8;
+    pub const BUFFERS: usize = 9;
 
     /// `pipeline`: any of the mask's pipelines (their set layouts are defined alike).
     /// `witnesses`: the pinhole witnesses' attachments and the directional witnesses' (where a
@@ -206,6 +239,7 @@ impl WitnessMaskBindings {
         (reference, [pinhole, directional]): (&ViewTargets, [&ViewTargets; 2]),
         (masked, lost_by, walk_list): (&Buffer, &Buffer, &WalkList),
         words: Option<MaskWords>,
+        table: &WitnessTable,
     ) -> Result<Self> {
         matches_shader_bindings!([
             WITNESS_MASK_COMP,
@@ -227,6 +261,7 @@ impl WitnessMaskBindings {
             ReferenceWords,
             PinholeWitnessWords,
             DirectionalWitnessWords,
+            WitnessTable,
         });
         let images: Vec<&Image> = reference.colour.iter().chain(&pinhole.colour).chain(&directional.colour).collect();
         let from_words =
@@ -240,6 +275,7 @@ impl WitnessMaskBindings {
             from_words[1],
             from_words[2],
             from_words[3],
+            &table.buffer,
         ];
         let set = StorageSet::new(ctx, pipeline.set_layout, &images, (&[], &buffers), "witness mask bindings")?;
         Ok(Self { set })

@@ -6,10 +6,9 @@
 use super::directional::DirectionalImage;
 use super::witness_mask::{WitnessAttachment, WitnessConstants};
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, GpuContext};
+use crate::gpu::GpuContext;
 use crate::sensor::{Intrinsics, PixelRect, Sensor, View, WitnessGeometry};
 use crate::shadow::{ShadowSettings, ShadowTest};
-use ash::vk;
 use glam::{DMat4, DQuat, DVec3};
 use std::sync::Arc;
 
@@ -143,13 +142,11 @@ impl WitnessLayout {
 }
 
 /// A rig's witnesses as every job of a submission draws and tests them: their layout, the
-/// shadow test, and the mask's table of them on the device where it is the same for every job
-/// (the label test without directional witnesses: a directional witness's grid, and the depth
-/// test's draw tables, are each job's: job.rs).
+/// shadow test, and the mask's table of them as far as it is the same for every job (a
+/// directional witness's grid, and the depth test's draw tables, are each job's: job.rs).
 pub(crate) struct WitnessSet {
     pub(super) views: Vec<WitnessView>,
     pub(super) table: Vec<WitnessConstants>,
-    pub(super) shared_table: Option<Buffer>,
     /// Width and height of each attachment ([`WitnessAttachment`]), 0 × 0 where no witness's
     /// band lies in it.
     pub sizes: [(u32, u32); 2],
@@ -164,11 +161,7 @@ impl WitnessSet {
             return Ok(None);
         };
         let WitnessLayout { views, table, sizes, test } = layout;
-        let shared = test != ShadowTest::Depth && views.iter().all(|w| matches!(w.image, WitnessImage::Pinhole(_)));
-        let shared_table = shared
-            .then(|| Buffer::with_data(ctx, vk::BufferUsageFlags::STORAGE_BUFFER, &table, "witness table"))
-            .transpose()?;
-        Ok(Some(Self { views, table, shared_table, sizes, test }))
+        Ok(Some(Self { views, table, sizes, test }))
     }
 
     /// Pixels of the attachments that hold every band.
