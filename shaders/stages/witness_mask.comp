@@ -174,13 +174,6 @@ vec3 to_witness(vec3 v, float w) {
     return q;
 }
 
-// Whether triangle t of the job's one draw (draw index 0), on its mesh's convex hull, shows the
-// witness its front on the side `lit`: its stored (outward) normal, in the witness's frame,
-// points that way.
-bool front_toward_witness(uint t, vec3 lit) {
-    return dot(triangle_normal(WitnessDraws(witness.draws).draws[0], t), to_witness(lit, 0.0)) > 0.0;
-}
-
 // What the test decided of a point toward the witness without walking over the surface:
 // seen, not seen, or a walk to take (occluded, with what it takes).
 const uint SEEN = 0u;
@@ -264,10 +257,8 @@ uint decided(ReferencePoint r, out Walk walk) {
     precise vec3 rays = directional ? vec3(0.0, 0.0, 1.0) : -q / length(q);
     vec3 own = ray_slope(to_witness(lit, 0.0), rays);
     // A point on a hull face, in views of its model alone (occluder_walk.glsl), whose front
-    // turns toward the witness.
-    if (r.hull_face != NO_NEIGHBOUR
-        && hull_face_clear(facing, lengths, m.bias_per_depth * p.z, m.hull_tolerance)
-        && front_toward_witness(r.hull_face, lit)) {
+    // turns toward the witness (it faces the witness, and `lit` is its front).
+    if (r.hull_face != NO_NEIGHBOUR && hull_face_clear(facing, lengths, m.bias_per_depth * p.z, m.hull_tolerance)) {
         return SEEN;
     }
     walk = Walk(s, q, own, scale, bias, !directional);
@@ -297,7 +288,11 @@ ReferencePoint point_of(ivec2 pixel, RangePixel range, uint t) {
         precise float steepness = l1_length(n) * l1_length(ray) / abs(dot(n, ray));
         uint hull_face = NO_NEIGHBOUR;
 #ifdef FROM_WORDS
-        if (TEST == TEST_DEPTH && m.hull_faces != uvec2(0u) && normal_kept && on_hull(m.hull_faces, t)) {
+        // Where the reference view sees the face's front: its stored (outward) normal points
+        // along `lit`, which is parallel to it (from its plane's gradient), so that their
+        // product is far from 0 and any frame's rounding gives its sign.
+        if (TEST == TEST_DEPTH && m.hull_faces != uvec2(0u) && normal_kept && on_hull(m.hull_faces, t)
+            && dot(triangle_normal(reference_draw, t), lit) > 0.0) {
             hull_face = t;
         }
 #endif
