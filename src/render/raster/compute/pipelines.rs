@@ -171,9 +171,11 @@ pub struct ComputeRasterPipelines {
     pub(super) single: CoveragePipelines,
     pub(super) grouped: OnceLock<CoveragePipelines>,
     pub(super) ties: OnceLock<CoveragePipelines>,
-    /// A rig's pinhole views' coverage and ties passes (its draws the members), and the
-    /// reference view's resolve, built on first use (rig.rs).
+    /// A rig's pinhole views' coverage and ties passes (its draws the members), its views'
+    /// coverage of a job of one draw, and the reference view's resolve, built on first use
+    /// (rig.rs).
     pub(super) pinhole: OnceLock<CoveragePipelines>,
+    pub(super) pinhole_one_draw: OnceLock<CoveragePipelines>,
     pub(super) pinhole_ties: OnceLock<CoveragePipelines>,
     pub(super) resolve_pinhole: OnceLock<ComputePipeline>,
     /// The range view's resolve where its words hold one draw, and where they hold several;
@@ -201,6 +203,7 @@ impl ComputeRasterPipelines {
             grouped: OnceLock::new(),
             ties: OnceLock::new(),
             pinhole: OnceLock::new(),
+            pinhole_one_draw: OnceLock::new(),
             pinhole_ties: OnceLock::new(),
             resolve_pinhole: OnceLock::new(),
             resolve: resolve(ViewKind::Range, shaders::RASTER_RESOLVE_COMP, false, "compute raster resolve")?,

@@ -79,13 +79,30 @@ struct ViewState<'p> {
 
 /// One coverage dispatch's views (one, or two of the same projection: the second as the
 /// shader's shadow view, so that each triangle is read once for both), its buffers and
-/// bindings, and its pipelines: coverage (small triangles, large) and, where the slot's jobs
-/// have several draws, the ties passes.
+/// bindings, and its pipelines (small triangles, large): coverage of a job of one draw, and
+/// where the slot's jobs may have several draws, coverage of their members and the ties
+/// passes.
 struct RunState<'p> {
     views: Vec<usize>,
     run: CoverageRun,
+    one_draw: (&'p ComputePipeline, &'p ComputePipeline),
+    several: Option<SeveralDraws<'p>>,
+}
+
+/// A dispatch's pipelines for jobs of several draws: coverage and the ties passes.
+struct SeveralDraws<'p> {
     nearest: (&'p ComputePipeline, &'p ComputePipeline),
-    ties: Option<(&'p ComputePipeline, &'p ComputePipeline)>,
+    ties: (&'p ComputePipeline, &'p ComputePipeline),
+}
+
+impl<'p> RunState<'p> {
+    /// The coverage pipelines (small triangles, large) of a job of `draws` draws.
+    fn nearest(&self, draws: usize) -> (&'p ComputePipeline, &'p ComputePipeline) {
+        if draws == 1 {
+            return self.one_draw;
+        }
+        self.several.as_ref().expect("a slot for jobs of several draws has their pipelines").nearest
+    }
 }
 
 /// A slot's state for a rig's views on the compute rasterizer: the words of the reference view
@@ -107,7 +124,7 @@ fn words_index(target: RigTarget) -> usize {
 
 impl ComputeRasterPipelines {
     /// The coverage pipelines of a rig's views of `projection` (`kind`: the nearest, or the
-    /// ties passes), built on first use.
+    /// ties passes) whose members are a job's draws, built on first use.
     fn rig_coverage(&self, projection: Projection, kind: Coverage) -> Result<&CoveragePipelines> {
         let cell = match (projection, kind) {
             (Projection::Orthographic, Coverage::Nearest) => &self.grouped,
@@ -116,6 +133,19 @@ impl ComputeRasterPipelines {
             (Projection::Pinhole, Coverage::Ties) => &self.pinhole_ties,
         };
         self.built_for(cell, (kind, projection))
+    }
+
+    /// The coverage pipelines of a rig's views of `projection` for a job of one draw: one
+    /// member, whose constants a software rasterizer then reads once for all the invocations it
+    /// runs together (at an index it cannot prove the same for all, it gathers them invocation
+    /// by invocation: raster.comp, MEMBERS), built on first use.
+    fn rig_coverage_of_one_draw(&self, projection: Projection) -> Result<&CoveragePipelines> {
+        match projection {
+            Projection::Orthographic => Ok(&self.single),
+            Projection::Pinhole => built_once(&self.ctx, &self.pinhole_one_draw, || {
+                CoveragePipelines::new(&self.ctx, 1, Coverage::Nearest, Projection::Pinhole)
+            }),
+        }
     }
 
     /// The resolve of a rig's pinhole reference view, built on first use.
@@ -221,19 +251,22 @@ impl<'p> RigCoverage<'p> {
             .map(|(r, run_views)| {
                 let projection = views[run_views[0]].1;
                 let both = run_views.len() == 2;
-                let coverage = pipelines.rig_coverage(projection, Coverage::Nearest)?;
+                let one_draw = pipelines.rig_coverage_of_one_draw(projection)?;
                 let first = view_words(run_views[0])?;
                 let second = if both { view_words(run_views[1])? } else { first };
                 let bound: [&Buffer; 2 * COVERAGE_MEMBERS] =
                     std::array::from_fn(|k| if k < COVERAGE_MEMBERS { first } else { second });
-                let layout = coverage.tiled.range.set_layout;
+                let layout = one_draw.tiled.range.set_layout;
                 let large_bytes = large_queue_bytes(queued, run_views.len() as u64);
                 let run = CoverageRun::binding(ctx, layout, bound, large_bytes, &format!("{name} rig coverage {r}"))?;
-                let ties = several_draws
-                    .then(|| pipelines.rig_coverage(projection, Coverage::Ties))
-                    .transpose()?
-                    .map(|ties| (ties.tiled.covering(both), &ties.large));
-                Ok(RunState { views: run_views, run, nearest: (coverage.tiled.covering(both), &coverage.large), ties })
+                let of = |pipelines: &'p CoveragePipelines| (pipelines.tiled.covering(both), &pipelines.large);
+                let several = if several_draws {
+                    let nearest = of(pipelines.rig_coverage(projection, Coverage::Nearest)?);
+                    Some(SeveralDraws { nearest, ties: of(pipelines.rig_coverage(projection, Coverage::Ties)?) })
+                } else {
+                    None
+                };
+                Ok(RunState { views: run_views, run, one_draw: of(one_draw), several })
             })
             .collect::<Result<_>>()?;
         Ok(Self { words, views: view_states, runs })
@@ -356,12 +389,12 @@ impl<'p> RigCoverage<'p> {
         let slices = draws.len() as u32;
         let cover = move |_: &GpuContext, cmd| {
             for run in &self.runs {
-                run.run.set.dispatch_slices(cmd, run.nearest.0, &[], coverage_groups, slices);
+                run.run.set.dispatch_slices(cmd, run.nearest(draws.len()).0, &[], coverage_groups, slices);
             }
         };
         let large = move |_: &GpuContext, cmd| {
             for run in &self.runs {
-                run.run.set.dispatch_indirect(cmd, run.nearest.1, &[], &run.run.large_args);
+                run.run.set.dispatch_indirect(cmd, run.nearest(draws.len()).1, &[], &run.run.large_args);
             }
         };
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
@@ -375,7 +408,8 @@ impl<'p> RigCoverage<'p> {
             // they need no barrier between them.
             let record_ties = move |_: &GpuContext, cmd| {
                 for run in &self.runs {
-                    let (small, large) = run.ties.expect("a slot for jobs of several draws has ties passes");
+                    let several = run.several.as_ref().expect("a slot for jobs of several draws has their pipelines");
+                    let (small, large) = several.ties;
                     run.run.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
                     run.run.set.dispatch_indirect(cmd, large, &[], &run.run.large_args);
                 }
