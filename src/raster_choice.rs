@@ -53,12 +53,15 @@ impl Crossover {
     /// points: docs/performance-history.md.
     pub const GPU: Crossover = Crossover { min_triangles: 1_500, min_density: 0.0, sparse_below: 0.004 };
 
-    /// A CPU device's for a rig's views (src/render/raster/compute/rig.rs), where the compute
-    /// rasterizer also resolves every view into its attachments (the scanner's shadow mask does
-    /// that as it tests), so that a sparse model's many pixels cost it more: `bench_verify --
-    /// --rigs` (its model swapped) and `bench_bop` on lavapipe, compute against graphics in the
-    /// same run, slower at 0.0009 and 0.0025 triangles per footprint pixel (the box, 0.44–0.77×)
-    /// and at 0.0196 (cylinder:48, 0.77–0.89×), faster at 0.047 (sphere:16, 1.09–1.18×), 0.20
+    /// A CPU device's for a rig's views (src/render/raster/compute/rig.rs) but those of one
+    /// object in the depth test: there the compute rasterizer's label test reads a label
+    /// through the mesh at every witness pixel it reads, and the views of several objects are
+    /// resolved into their attachments before the test, so that a sparse model's many pixels
+    /// cost it more. `bench_verify -- --rigs` (its model swapped) and `bench_bop` on lavapipe,
+    /// compute against graphics in the same run: slower at 0.0009 and 0.0025 triangles per
+    /// footprint pixel (the box, 0.44–0.77× before a job of one object read the words; 0.71–0.75×
+    /// in the label test after) and even at 0.0196 (cylinder:48, 0.77–0.89× before; 0.79–1.04×
+    /// after), faster at 0.047 (sphere:16, 1.09–1.18× before; 1.59–1.77× after), 0.20
     /// (sphere:32, 1.24–1.79×), 0.9 (a 3,990-triangle sphere at 640×480, 1.09–1.24×) and 2.06
     /// (sphere:100, 1.75–4×): the bound lies near the geometric mean of the nearest two.
     pub const CPU_RIG: Crossover = Crossover { min_triangles: 0, min_density: 0.03, sparse_below: 0.0 };
@@ -73,12 +76,17 @@ impl Crossover {
     }
 
     /// The crossover for a rig's views on a CPU device (`is_cpu`) or a GPU (the scanner's
-    /// until rigs are measured on one).
-    pub fn for_rig(is_cpu: bool) -> Self {
-        if is_cpu {
-            Self::CPU_RIG
-        } else {
-            Self::GPU
+    /// until rigs are measured on one). A CPU device takes the scanner's for the views of one
+    /// object in the depth test (`depth_test_of_one_object`), which the compute rasterizer
+    /// tests from its words as it tests the scanner's: faster than the graphics pipeline at
+    /// every density measured, down to the box (0.0025 triangles per footprint pixel:
+    /// 1.72–1.73×; cylinder:48, 0.0196: 1.57–2.30×; `bench_verify -- --rigs` with its model
+    /// swapped, lavapipe); else [`Crossover::CPU_RIG`].
+    pub fn for_rig(is_cpu: bool, depth_test_of_one_object: bool) -> Self {
+        match (is_cpu, depth_test_of_one_object) {
+            (false, _) => Self::GPU,
+            (true, true) => Self::CPU,
+            (true, false) => Self::CPU_RIG,
         }
     }
 
@@ -180,17 +188,29 @@ mod tests {
             (101_760, 65_536, true),    // sphere:320 filling 256²
             (101_760, 1_048_576, true), // sphere:320 filling 1024², 0.1: 12.24–13.16×
         ];
-        // A rig's views on a CPU device (lavapipe, 2026-11-28).
+        // A rig's views on a CPU device (lavapipe, 2026-11-28; the label test of one object
+        // and views of several, 2026-11-29).
         let cpu_rig = [
             (12, 13_300, false),  // box, BOP's 640×480, 0.0009: 0.63–0.77×
-            (12, 4_761, false),   // box, 0.0025: 0.44–0.75×
-            (192, 9_801, false),  // cylinder:48, 0.0196: 0.77–0.89×
+            (12, 4_761, false),   // box, 0.0025: 0.44–0.75×; the label test 0.71–0.75×
+            (192, 9_801, false),  // cylinder:48, 0.0196: 0.77–0.89×; the label test 0.79–1.04×
             (224, 4_761, true),   // sphere:16, 0.047: 1.09–1.18×
             (960, 4_761, true),   // sphere:32, 0.20: 1.24–1.79×
             (3_990, 4_400, true), // BOP's sphere, 0.9: 1.09–1.24×
             (9_800, 4_761, true), // sphere:100, 2.06: 1.75–4×
         ];
-        let rules = [(Crossover::CPU, &cpu[..]), (Crossover::GPU, &gpu[..]), (Crossover::CPU_RIG, &cpu_rig[..])];
+        // The depth test of one object under a rig on a CPU device (lavapipe, 2026-11-29).
+        let cpu_rig_depth = [
+            (12, 4_761, true),  // box, 0.0025: 1.72–1.73×
+            (192, 9_801, true), // cylinder:48, 0.0196: 1.57–2.30×
+            (224, 4_761, true), // sphere:16, 0.047: 3.12–3.71×
+        ];
+        let rules = [
+            (Crossover::CPU, &cpu[..]),
+            (Crossover::GPU, &gpu[..]),
+            (Crossover::CPU_RIG, &cpu_rig[..]),
+            (Crossover::for_rig(true, true), &cpu_rig_depth[..]),
+        ];
         for (crossover, points) in rules {
             for &(triangles, pixels, faster) in points {
                 assert_eq!(
@@ -202,8 +222,9 @@ mod tests {
         }
         assert_eq!(Crossover::for_device(true), Crossover::CPU);
         assert_eq!(Crossover::for_device(false), Crossover::GPU);
-        assert_eq!(Crossover::for_rig(true), Crossover::CPU_RIG);
-        assert_eq!(Crossover::for_rig(false), Crossover::GPU);
+        assert_eq!(Crossover::for_rig(true, false), Crossover::CPU_RIG);
+        assert_eq!(Crossover::for_rig(false, true), Crossover::GPU);
+        assert_eq!(Crossover::for_rig(false, false), Crossover::GPU);
         assert_eq!(Crossover::CPU.to_string(), "at least 0.0001 triangles per footprint pixel");
         assert_eq!(Crossover::GPU.to_string(), "at least 1500 triangles, or under 0.004 triangles per footprint pixel");
     }

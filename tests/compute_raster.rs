@@ -668,10 +668,12 @@ fn both_rasterizers_draw_identical_rigs() {
     }
 }
 
-/// `auto` under a rig follows the rigs' crossover (`Renderer::rig_crossover`): on a CPU device
-/// the graphics pipeline for the Kinect rig's box alone (12 triangles over some 14,000 pixels,
-/// which the scanner's rule would give the compute rasterizer), the compute rasterizer for a
-/// dense ball (a GPU takes its own rule, compute for both), the images the same either way.
+/// `auto` under a rig follows the rigs' crossover (`Renderer::rig_crossover`): on a CPU device,
+/// in the label test, the graphics pipeline for the Kinect rig's box alone (12 triangles over
+/// some 14,000 pixels, which the scanner's rule would give the compute rasterizer) and the
+/// compute rasterizer for a dense ball; in the depth test, the compute rasterizer for the box
+/// alone too, as the scanner's rule gives it (a GPU takes its own rule, compute for all); the
+/// images the same either way.
 #[test]
 fn auto_under_a_rig_follows_the_rigs_crossover() {
     let rigs = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
@@ -682,8 +684,15 @@ fn auto_under_a_rig_follows_the_rigs_crossover() {
     let dense = builtin_mesh("builtin:sphere:100").unwrap().scaled(0.1, &Default::default()).unwrap();
     ball.objects[0].mesh = Arc::new(dense);
     ball.objects[0].pose = DMat4::from_translation(DVec3::new(0.0, 0.0, 0.8));
+    let mut boxed_depth = boxed.clone();
+    boxed_depth.shadow.mode = ShadowMode::Depth;
     let cpu = AUTO.renderer().context().is_cpu();
-    for (name, scene, on_cpu) in [("the box", &boxed, Raster::Graphics), ("a ball", &ball, Raster::Compute)] {
+    let cases = [
+        ("the box", &boxed, Raster::Graphics),
+        ("a ball", &ball, Raster::Compute),
+        ("the box in the depth test", &boxed_depth, Raster::Compute),
+    ];
+    for (name, scene, on_cpu) in cases {
         let auto = render_with(&AUTO, scene);
         let expected = if cpu { on_cpu } else { Raster::Compute };
         assert_eq!(auto.raster, Some(expected), "{name}");

@@ -18,6 +18,7 @@ use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::Ledger;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
+use rangesynth::shadow::ShadowMode;
 use rangesynth::untrusted::quoted;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -276,7 +277,11 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
     match renderer.raster() {
         Raster::Auto => println!(
             "raster: auto (compute for models of {}, where the device has it; else graphics): {}",
-            if s.scanner().is_some() { renderer.crossover() } else { renderer.rig_crossover() },
+            if s.scanner().is_some() {
+                renderer.crossover()
+            } else {
+                renderer.rig_crossover(settings.shadow.mode == ShadowMode::Depth)
+            },
             rasterized(results)
         ),
         raster => println!("raster: {}: {}", raster.as_str(), rasterized(results)),

@@ -181,9 +181,10 @@ impl Renderer {
         Crossover::for_device(self.ctx.is_cpu())
     }
 
-    /// Where `auto` takes the compute rasterizer for a rig's views on this renderer's device.
-    pub fn rig_crossover(&self) -> Crossover {
-        Crossover::for_rig(self.ctx.is_cpu())
+    /// Where `auto` takes the compute rasterizer for a rig's views on this renderer's device,
+    /// those of one object in the depth test or others (`Crossover::for_rig`).
+    pub fn rig_crossover(&self, depth_test_of_one_object: bool) -> Crossover {
+        Crossover::for_rig(self.ctx.is_cpu(), depth_test_of_one_object)
     }
 
     /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the

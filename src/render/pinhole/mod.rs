@@ -29,7 +29,7 @@ use super::{GpuMesh, RenderOutput, Renderer, Source, Views, FOOTPRINT_MARGIN};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::sensor::{Pinhole, Sensor, View};
-use crate::shadow::ShadowMode;
+use crate::shadow::{ShadowMode, ShadowTest};
 use glam::DVec3;
 use std::sync::Arc;
 use witness_set::WitnessImage;
@@ -153,7 +153,8 @@ impl Renderer {
             .map(|(w, h)| u64::from(w) * u64::from(h))
             .max()
             .unwrap_or(0);
-        let crossover = self.rig_crossover();
+        let depth_test = witnesses.is_some_and(|set| set.test == ShadowTest::Depth);
+        let crossover = self.rig_crossover(depth_test && draws.len() == 1);
         self.computes_past(crossover, draws.len(), (triangles, largest), (footprint_pixels, job.reach), view_pixels)
     }
 

@@ -1,13 +1,15 @@
 //! A rig's views on the compute rasterizer (docs/rasterizers.md, "How the compute rasterizer
 //! works"): the pinhole reference view and every witness's band, covered two of the same
 //! projection a dispatch (each triangle read once for both, as the scanner's range and shadow
-//! views are), the dispatch's members the job's draws, sharing each view's words as the draws
-//! of a scanner view of several objects do (with the ties passes where there are several);
-//! then resolved into the attachments the graphics pipeline draws: the reference view's, and
-//! the witnesses' visibility (label, draw, triangle). The witnesses' shadow test and every pass
-//! after it read them unchanged; but a job of one draw takes no resolve: its shadow test reads
-//! the words and writes the reference view's attachments itself (pinhole/witness_mask.rs), as
-//! the scanner's mask does.
+//! views are). A job of one draw is covered by the pipelines of one member, as the scanner's
+//! jobs are (a software rasterizer reads their constants once for all its invocations), and
+//! takes no resolve: its shadow test reads the words and writes the reference view's
+//! attachments itself (pinhole/witness_mask.rs), as the scanner's mask does. A job of several
+//! draws makes them the dispatch's members, sharing each view's words as the draws of a
+//! scanner view of several objects do (with the ties passes), then resolves its views into the
+//! attachments the graphics pipeline draws: the reference view's, and the witnesses'
+//! visibility (label, draw, triangle), which the shadow test and every pass after it read
+//! unchanged.
 //!
 //! A pinhole view's coverage is raster.comp's PINHOLE variant (window coordinates divided by
 //! w as lavapipe divides, depths larger nearer, cull by winding, clipping as the graphics
