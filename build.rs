@@ -65,6 +65,7 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster/raster.comp", "raster_large_ties.comp.spv", &["LARGE_TRIANGLES", "TIES"]),
     ("raster/raster.comp", "raster_pinhole.comp.spv", &["PINHOLE"]),
     ("raster/raster.comp", "raster_pinhole_large.comp.spv", &["PINHOLE", "LARGE_TRIANGLES"]),
+    ("raster/raster.comp", "raster_pinhole_large_clipped.comp.spv", &["PINHOLE", "LARGE_TRIANGLES", "CLIPPED"]),
     ("raster/raster.comp", "raster_pinhole_ties.comp.spv", &["PINHOLE", "TIES"]),
     ("raster/raster.comp", "raster_pinhole_large_ties.comp.spv", &["PINHOLE", "LARGE_TRIANGLES", "TIES"]),
     ("raster/raster_resolve.comp", "raster_resolve.comp.spv", &[]),

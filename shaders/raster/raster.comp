@@ -115,10 +115,15 @@ layout(set = 0, binding = 8, std430) buffer ShadowWords3 { uint64_t words[]; } s
 // The queue of large (triangle, member, view) entries: the view's bit (QUEUE_VIEW_BIT), then
 // the member's bits (from MEMBER_SHIFT), above the triangle's index (meshes have fewer than
 // 2^MEMBER_SHIFT triangles: src/mesh/adjacency.rs), with room for every triangle of every
-// member in every view; and its indirect dispatch's (x, y, z), x its length up to MAX_GROUPS,
-// then its length.
+// member in every view. PINHOLE: the triangles the clipper cuts (a pinhole view's, not
+// `unclipped`) are queued from the queue's end, the others from its start, so that the large
+// triangles' pass of the others holds no clipping code, which a software rasterizer would run
+// for every queued triangle whether it clips or not, and CLIPPED's takes the rest. Each part's
+// indirect dispatch (x, y, z), x its length up to MAX_GROUPS, then its length (large_args: the
+// start's; clipped_args: the end's), and both parts' together (all_args, which the ties passes
+// take: LargeArgs in src/render/raster/compute/).
 layout(set = 0, binding = 9, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 large_args; };
+layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 large_args; uvec4 clipped_args; uvec4 all_args; };
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -485,28 +490,48 @@ void cover_large(uint t, Setup s) {
     }
 }
 
+// Queued entry i of the part a pass takes: the start's (large_args.w entries), the end's
+// (CLIPPED: clipped_args.w), or (TIES) both, the start's first.
+uint queued_entry(uint i) {
+#ifdef CLIPPED
+    return large[large.length() - 1u - i];
+#else
+    return i < large_args.w ? large[i] : large[large.length() - 1u - (i - large_args.w)];
+#endif
+}
+
+#ifdef CLIPPED
+#define QUEUED clipped_args.w
+#elif defined(TIES)
+#define QUEUED all_args.w
+#else
+#define QUEUED large_args.w
+#endif
+
 void main() {
-    // The workgroups stride over the queue, which may be longer than a dispatch's groups.
-    for (uint queued = gl_WorkGroupID.x; queued < large_args.w; queued += gl_NumWorkGroups.x) {
-        uint entry = large[queued];
+    // The workgroups stride over their part of the queue, which may be longer than a
+    // dispatch's groups.
+    for (uint queued = gl_WorkGroupID.x; queued < QUEUED; queued += gl_NumWorkGroups.x) {
+        uint entry = queued_entry(queued);
         uint v = entry >> QUEUE_VIEW_BIT, t = untagged(entry);
         uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & (COVERAGE_MEMBERS - 1u);
         DrawData d = member_draw(member, v);
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
         ViewTriangle in_view = to_view_triangle(d, read_triangle(d, t, normal, third_z));
-#ifdef PINHOLE
-        // Whole where the clipper keeps it whole (the common case, and far cheaper on a
-        // software rasterizer than the polygon's arrays); else what the clipper keeps of it,
-        // fanned into triangles (clipped_polygon).
+#if defined(PINHOLE) && (defined(CLIPPED) || defined(TIES))
+        // What the clipper keeps of it (clipped_polygon), fanned into triangles; the ties pass
+        // takes both parts of the queue, those the clipper keeps whole as they are.
+#ifdef TIES
         if (unclipped(d, in_view)) {
             cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));
-        } else {
-            vec3 polygon[8];
-            int corners = clipped_polygon(d, in_view, polygon);
-            for (int k = 1; k + 1 < corners; k++) {
-                cover_large(t, set_up(member, v, d, members[member], in_view, polygon[0], polygon[k], polygon[k + 1]));
-            }
+            continue;
+        }
+#endif
+        vec3 polygon[8];
+        int corners = clipped_polygon(d, in_view, polygon);
+        for (int k = 1; k + 1 < corners; k++) {
+            cover_large(t, set_up(member, v, d, members[member], in_view, polygon[0], polygon[k], polygon[k + 1]));
         }
 #else
         cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));
@@ -514,13 +539,25 @@ void main() {
     }
 }
 #else
-// Queues (t, its member, its view): the queue has room for every triangle of every member in
-// every view.
-void queue_large(uint t, Setup s) {
-    uint at = atomicAdd(large_args.w, 1u);
-    large[at] = t | (s.member << MEMBER_SHIFT) | (s.view << QUEUE_VIEW_BIT);
-    if (at < MAX_GROUPS) {
-        atomicAdd(large_args.x, 1u);
+// Queues (t, its member, its view), from the queue's end where the clipper cuts it
+// (`clipped`, PINHOLE): the queue has room for every triangle of every member in every view.
+void queue_large(uint t, Setup s, bool clipped) {
+    uint entry = t | (s.member << MEMBER_SHIFT) | (s.view << QUEUE_VIEW_BIT);
+    if (clipped) {
+        uint at = atomicAdd(clipped_args.w, 1u);
+        large[large.length() - 1u - at] = entry;
+        if (at < MAX_GROUPS) {
+            atomicAdd(clipped_args.x, 1u);
+        }
+    } else {
+        uint at = atomicAdd(large_args.w, 1u);
+        large[at] = entry;
+        if (at < MAX_GROUPS) {
+            atomicAdd(large_args.x, 1u);
+        }
+    }
+    if (atomicAdd(all_args.w, 1u) < MAX_GROUPS) {
+        atomicAdd(all_args.x, 1u);
     }
 }
 
@@ -636,7 +673,7 @@ void cover_pinhole(uint member, uint view, DrawData d, Member constants, uint t,
     }
 #ifndef TIES
     else if (coverage == COVERED_LARGE) {
-        queue_large(t, s);
+        queue_large(t, s, !unclipped(d, v));
     }
 #endif
 }
@@ -652,7 +689,7 @@ void cover(uint member, uint v, DrawData d, Member constants, uint t, MeshTriang
     }
 #ifndef TIES
     else if (coverage == COVERED_LARGE) {
-        queue_large(t, s);
+        queue_large(t, s, false);
     }
 #endif
 }

@@ -148,9 +148,22 @@ impl StorageSet {
         constants: &[u8],
         args: &Buffer,
     ) {
+        self.dispatch_indirect_at(cmd, pipeline, constants, (args, 0));
+    }
+
+    /// As [`StorageSet::dispatch_indirect`], the command at `offset` in `args` (a multiple
+    /// of 4 within it).
+    pub fn dispatch_indirect_at(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &ComputePipeline,
+        constants: &[u8],
+        (args, offset): (&Buffer, u64),
+    ) {
         self.bind(cmd, pipeline, constants);
-        // SAFETY: cmd is recording with the pipeline and set bound; args holds the command.
-        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, args.raw, 0) };
+        // SAFETY: cmd is recording with the pipeline and set bound; args holds the command at
+        // offset.
+        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, args.raw, offset) };
     }
 
     fn bind(&self, cmd: vk::CommandBuffer, pipeline: &ComputePipeline, constants: &[u8]) {

@@ -2,8 +2,8 @@
 //! ([`CoverageGroup`]), and of one job's several draws.
 
 use super::layout::{
-    cull_sign, large_queue_bytes, CoverageUniforms, MemberConstants, RasterView, COVERAGE_MEMBERS, DEAL_BLOCK,
-    DEAL_STRIPES, MAX_GROUPS, VISIBILITY_WORD_BYTES,
+    cull_sign, large_queue_bytes, CoverageUniforms, LargeArgs, MemberConstants, RasterView, COVERAGE_MEMBERS,
+    DEAL_BLOCK, DEAL_STRIPES, MAX_GROUPS, VISIBILITY_WORD_BYTES,
 };
 use super::pipelines::{fits_one_tile, ComputeRasterPipelines, Coverage, CoveragePipelines};
 use super::views::ComputeViews;
@@ -192,8 +192,7 @@ impl CoverageGroup {
                 for (words, offset, size) in emptied {
                     d.cmd_fill_buffer(cmd, words.raw, offset, size, EMPTY_HALF);
                 }
-                // No workgroups, an empty queue: (x, y, z, length).
-                d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                d.cmd_update_buffer(cmd, buffers.large_args.raw, 0, bytemuck::bytes_of(&LargeArgs::EMPTY));
                 d.cmd_update_buffer(cmd, buffers.uniforms.raw, 0, bytemuck::bytes_of(&uniforms));
             }
         };
@@ -211,17 +210,19 @@ impl CoverageGroup {
         let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
         let one_tile =
             covered.iter().all(|(_, member)| fits_one_tile(member.draw.mesh.longest_edge, member.finest_pitch));
-        let passes = |pipelines: &'s CoveragePipelines| -> Result<_> {
+        // The first passes' large triangles are the queue's start (an orthographic view's
+        // triangles are never clipped); the ties passes' the whole queue.
+        let passes = |pipelines: &'s CoveragePipelines, args: u64| -> Result<_> {
             let small = pipelines.small(one_tile)?;
             let small = small.covering(both);
             let cover =
                 move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
             let large = move |_: &GpuContext, cmd| {
-                buffers.set.dispatch_indirect(cmd, &pipelines.large, &[], &buffers.large_args)
+                buffers.set.dispatch_indirect_at(cmd, &pipelines.large, &[], (&buffers.large_args, args))
             };
             Ok((cover, large))
         };
-        let (cover, large) = passes(coverage)?;
+        let (cover, large) = passes(coverage, LargeArgs::START)?;
         // The ties passes read the queue and its dispatch as the first passes left them.
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
         let mut steps = vec![
@@ -232,7 +233,7 @@ impl CoverageGroup {
         if self.shared_words {
             // Both ties passes only raise the words' tagged triangles (their depths stay), so
             // they need no barrier between them.
-            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?)?;
+            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?, LargeArgs::ALL)?;
             let ties = move |ctx: &GpuContext, cmd| {
                 cover_ties(ctx, cmd);
                 large_ties(ctx, cmd);
@@ -279,7 +280,7 @@ impl CoverageRun {
         let large = Buffer::new(ctx, BufferDesc::gpu_storage(large_bytes.max(4)), &format!("{name} large triangles"))?;
         let args = BufferDesc {
             usage: BufferDesc::gpu_storage(0).usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-            ..BufferDesc::gpu_storage(16)
+            ..BufferDesc::gpu_storage(size_of::<LargeArgs>() as u64)
         };
         let large_args = Buffer::new(ctx, args, &format!("{name} large-triangle dispatch"))?;
         let uniform = BufferDesc {
@@ -288,7 +289,8 @@ impl CoverageRun {
         };
         let uniforms = Buffer::new(ctx, uniform, &format!("{name} draws and members"))?;
         matches_shader_bindings!([RASTER_COMP, RASTER_LARGE_COMP, RASTER_TIES_COMP, RASTER_LARGE_TIES_COMP,
-            RASTER_PINHOLE_COMP, RASTER_PINHOLE_LARGE_COMP, RASTER_PINHOLE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_COMP] {
+            RASTER_PINHOLE_COMP, RASTER_PINHOLE_LARGE_COMP, RASTER_PINHOLE_LARGE_CLIPPED_COMP,
+            RASTER_PINHOLE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_COMP] {
             Coverage,
             range_words0,
             range_words1,

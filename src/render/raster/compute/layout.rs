@@ -74,6 +74,30 @@ pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
     triangles.saturating_mul(views).saturating_mul(4)
 }
 
+/// The large triangles' queue's indirect dispatches (`LargeArgs`, shaders/raster/raster.comp),
+/// each (x, y, z, length): the queue's start's part; its end's, a pinhole view's triangles
+/// the clipper cuts, which a pipeline of their own covers so that the other holds no clipping
+/// code (a software rasterizer runs a shader's every instruction whatever its branches); and
+/// both parts together, which the ties passes take.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct LargeArgs {
+    large_args: [u32; 4],
+    clipped_args: [u32; 4],
+    all_args: [u32; 4],
+}
+
+matches_shader_struct!(LargeArgs, LargeArgs { large_args, clipped_args, all_args });
+
+impl LargeArgs {
+    /// An empty queue: no workgroups in any dispatch.
+    pub const EMPTY: Self = Self { large_args: [0, 1, 1, 0], clipped_args: [0, 1, 1, 0], all_args: [0, 1, 1, 0] };
+    /// Where each dispatch's arguments lie in the buffer: the start's part, the end's, both.
+    pub const START: u64 = std::mem::offset_of!(Self, large_args) as u64;
+    pub const CLIPPED: u64 = std::mem::offset_of!(Self, clipped_args) as u64;
+    pub const ALL: u64 = std::mem::offset_of!(Self, all_args) as u64;
+}
+
 /// How far from a view's first pixel, in pixels, a draw's corners may lie for the compute
 /// rasterizer to render it (`Renderer::computes`; beyond, the graphics pipeline does): 2^21.
 /// Snapped to 1/256 pixel, the corners lie within 2^29 + 128 units of a box's first pixel

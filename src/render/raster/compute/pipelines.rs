@@ -26,7 +26,11 @@ pub(super) struct CoveragePipelines {
     /// first use.
     pub(super) tiled: SmallTriangles,
     pub(super) one_tile: OnceLock<SmallTriangles>,
+    /// The large triangles' coverage: of the queue's start (`Nearest`; a pinhole view's
+    /// triangles the clipper keeps whole), or of the whole queue (`Ties`); and of a pinhole
+    /// view's triangles the clipper cuts, queued from its end (`Nearest`).
     pub(super) large: ComputePipeline,
+    pub(super) clipped: Option<ComputePipeline>,
     pub(super) ctx: Arc<GpuContext>,
     pub(super) members: u32,
     pub(super) kind: Coverage,
@@ -70,10 +74,19 @@ impl CoveragePipelines {
             (Coverage::Ties, Pinhole) => shaders::RASTER_PINHOLE_LARGE_TIES_COMP,
         };
         let name = format!("compute raster coverage ({}large triangles)", projection_name(projection));
+        let clipped = match (kind, projection) {
+            (Coverage::Nearest, Pinhole) => {
+                let code = shaders::RASTER_PINHOLE_LARGE_CLIPPED_COMP;
+                let name = "compute raster coverage (pinhole view, clipped large triangles)";
+                Some(covering(ctx, (members, kind), code, (2, true), name)?)
+            }
+            _ => None,
+        };
         Ok(Self {
             tiled: SmallTriangles::new(ctx, (members, kind, projection), true)?,
             one_tile: OnceLock::new(),
             large: covering(ctx, (members, kind), large, (2, true), &name)?,
+            clipped,
             ctx: ctx.clone(),
             members,
             kind,

@@ -20,8 +20,8 @@
 
 use super::coverage::CoverageRun;
 use super::layout::{
-    cull_sign, large_queue_bytes, CoverageUniforms, MemberConstants, RasterView, COVERAGE_MEMBERS, DEAL_BLOCK,
-    DEAL_STRIPES, MAX_GROUPS, VISIBILITY_WORD_BYTES,
+    cull_sign, large_queue_bytes, CoverageUniforms, LargeArgs, MemberConstants, RasterView, COVERAGE_MEMBERS,
+    DEAL_BLOCK, DEAL_STRIPES, MAX_GROUPS, VISIBILITY_WORD_BYTES,
 };
 use super::pipelines::{ComputeRasterPipelines, Coverage, CoveragePipelines};
 use crate::error::Result;
@@ -87,19 +87,36 @@ struct ViewState<'p> {
 struct RunState<'p> {
     views: Vec<usize>,
     run: CoverageRun,
-    one_draw: (&'p ComputePipeline, &'p ComputePipeline),
+    one_draw: CoveragePasses<'p>,
     several: Option<SeveralDraws<'p>>,
 }
 
 /// A dispatch's pipelines for jobs of several draws: coverage and the ties passes.
 struct SeveralDraws<'p> {
-    nearest: (&'p ComputePipeline, &'p ComputePipeline),
-    ties: (&'p ComputePipeline, &'p ComputePipeline),
+    nearest: CoveragePasses<'p>,
+    ties: CoveragePasses<'p>,
+}
+
+/// The pipelines of a dispatch's coverage: small triangles, large ones (the queue's start, or
+/// for the ties passes all of it), and where its views are pinhole views, the large triangles
+/// the clipper cuts (the queue's end).
+#[derive(Clone, Copy)]
+struct CoveragePasses<'p> {
+    small: &'p ComputePipeline,
+    large: &'p ComputePipeline,
+    clipped: Option<&'p ComputePipeline>,
+}
+
+impl<'p> CoveragePasses<'p> {
+    /// The passes of `pipelines` covering one view, or (`both`) two.
+    fn of(pipelines: &'p CoveragePipelines, both: bool) -> Self {
+        Self { small: pipelines.tiled.covering(both), large: &pipelines.large, clipped: pipelines.clipped.as_ref() }
+    }
 }
 
 impl<'p> RunState<'p> {
-    /// The coverage pipelines (small triangles, large) of a job of `draws` draws.
-    fn nearest(&self, draws: usize) -> (&'p ComputePipeline, &'p ComputePipeline) {
+    /// The coverage passes of a job of `draws` draws.
+    fn nearest(&self, draws: usize) -> CoveragePasses<'p> {
         if draws == 1 {
             return self.one_draw;
         }
@@ -261,14 +278,14 @@ impl<'p> RigCoverage<'p> {
                 let layout = one_draw.tiled.range.set_layout;
                 let large_bytes = large_queue_bytes(queued, run_views.len() as u64);
                 let run = CoverageRun::binding(ctx, layout, bound, large_bytes, &format!("{name} rig coverage {r}"))?;
-                let of = |pipelines: &'p CoveragePipelines| (pipelines.tiled.covering(both), &pipelines.large);
                 let several = if several_draws {
-                    let nearest = of(pipelines.rig_coverage(projection, Coverage::Nearest)?);
-                    Some(SeveralDraws { nearest, ties: of(pipelines.rig_coverage(projection, Coverage::Ties)?) })
+                    let nearest = CoveragePasses::of(pipelines.rig_coverage(projection, Coverage::Nearest)?, both);
+                    let ties = CoveragePasses::of(pipelines.rig_coverage(projection, Coverage::Ties)?, both);
+                    Some(SeveralDraws { nearest, ties })
                 } else {
                     None
                 };
-                Ok(RunState { views: run_views, run, one_draw: of(one_draw), several })
+                Ok(RunState { views: run_views, run, one_draw: CoveragePasses::of(one_draw, both), several })
             })
             .collect::<Result<_>>()?;
         Ok(Self { words, views: view_states, runs })
@@ -368,7 +385,7 @@ impl<'p> RigCoverage<'p> {
                     d.cmd_fill_buffer(cmd, buffer.raw, offset, size, EMPTY_HALF);
                 }
                 for (run, uniforms) in &uniform_blocks {
-                    d.cmd_update_buffer(cmd, run.run.large_args.raw, 0, bytemuck::cast_slice(&[0u32, 1, 1, 0]));
+                    d.cmd_update_buffer(cmd, run.run.large_args.raw, 0, bytemuck::bytes_of(&LargeArgs::EMPTY));
                     d.cmd_update_buffer(cmd, run.run.uniforms.raw, 0, bytemuck::bytes_of(uniforms));
                 }
                 for (table, entries) in &tables {
@@ -391,12 +408,19 @@ impl<'p> RigCoverage<'p> {
         let slices = draws.len() as u32;
         let cover = move |_: &GpuContext, cmd| {
             for run in &self.runs {
-                run.run.set.dispatch_slices(cmd, run.nearest(draws.len()).0, &[], coverage_groups, slices);
+                run.run.set.dispatch_slices(cmd, run.nearest(draws.len()).small, &[], coverage_groups, slices);
             }
         };
         let large = move |_: &GpuContext, cmd| {
             for run in &self.runs {
-                run.run.set.dispatch_indirect(cmd, run.nearest(draws.len()).1, &[], &run.run.large_args);
+                // The triangles the clipper keeps whole, then those it cuts: both only keep the
+                // nearer in the words, in any order.
+                let passes = run.nearest(draws.len());
+                let args = &run.run.large_args;
+                run.run.set.dispatch_indirect_at(cmd, passes.large, &[], (args, LargeArgs::START));
+                if let Some(clipped) = passes.clipped {
+                    run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::CLIPPED));
+                }
             }
         };
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
@@ -411,9 +435,9 @@ impl<'p> RigCoverage<'p> {
             let record_ties = move |_: &GpuContext, cmd| {
                 for run in &self.runs {
                     let several = run.several.as_ref().expect("a slot for jobs of several draws has their pipelines");
-                    let (small, large) = several.ties;
-                    run.run.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
-                    run.run.set.dispatch_indirect(cmd, large, &[], &run.run.large_args);
+                    let ties = several.ties;
+                    run.run.set.dispatch_slices(cmd, ties.small, &[], coverage_groups, slices);
+                    run.run.set.dispatch_indirect_at(cmd, ties.large, &[], (&run.run.large_args, LargeArgs::ALL));
                 }
             };
             steps.push(Step::new(Vec::new(), reading_queue(), record_ties).timed("coverage: ties"));
