@@ -68,6 +68,11 @@ const SHADERS: &[(&str, &str, &[&str])] = &[
     ("raster/raster.comp", "raster_pinhole_large_clipped.comp.spv", &["PINHOLE", "LARGE_TRIANGLES", "CLIPPED"]),
     ("raster/raster.comp", "raster_pinhole_ties.comp.spv", &["PINHOLE", "TIES"]),
     ("raster/raster.comp", "raster_pinhole_large_ties.comp.spv", &["PINHOLE", "LARGE_TRIANGLES", "TIES"]),
+    (
+        "raster/raster.comp",
+        "raster_pinhole_large_ties_clipped.comp.spv",
+        &["PINHOLE", "LARGE_TRIANGLES", "TIES", "CLIPPED"],
+    ),
     ("raster/raster_resolve.comp", "raster_resolve.comp.spv", &[]),
     ("raster/raster_resolve.comp", "raster_resolve_shadow.comp.spv", &["SHADOW_VIEW"]),
     ("raster/raster_resolve.comp", "raster_resolve_pinhole.comp.spv", &["PINHOLE"]),

@@ -115,15 +115,20 @@ layout(set = 0, binding = 8, std430) buffer ShadowWords3 { uint64_t words[]; } s
 // The queue of large (triangle, member, view) entries: the view's bit (QUEUE_VIEW_BIT), then
 // the member's bits (from MEMBER_SHIFT), above the triangle's index (meshes have fewer than
 // 2^MEMBER_SHIFT triangles: src/mesh/adjacency.rs), with room for every triangle of every
-// member in every view. PINHOLE: the triangles the clipper cuts (a pinhole view's, not
-// `unclipped`) are queued from the queue's end, the others from its start, so that the large
-// triangles' pass of the others holds no clipping code, which a software rasterizer would run
-// for every queued triangle whether it clips or not, and CLIPPED's takes the rest. Each part's
-// indirect dispatch (x, y, z), x its length up to MAX_GROUPS, then its length (large_args: the
-// start's; clipped_args: the end's), and both parts' together (all_args, which the ties passes
-// take: LargeArgs in src/render/raster/compute/).
+// member in every view. PINHOLE: the triangles the clipper may cut (cover_pinhole) are queued
+// from the queue's end, the others from its start, so that the large triangles' passes of the
+// others hold no clipping code, which a software rasterizer would run for every queued
+// triangle whether it clips or not, and CLIPPED's take the rest. Each part's indirect dispatch
+// (x, y, z), x its length up to MAX_GROUPS, then its length: the start's, then the end's
+// (LargeArgs in src/render/raster/compute/).
 layout(set = 0, binding = 9, std430) buffer Large { uint large[]; };
-layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 large_args; uvec4 clipped_args; uvec4 all_args; };
+layout(set = 0, binding = 10, std430) buffer LargeArgs { uvec4 queue_parts[2]; };
+const uint QUEUE_START = 0u, QUEUE_END = 1u;
+
+// Where the queue's entry i of a part lies: from its start, or from its end.
+uint queued_at(uint part, uint i) {
+    return part == QUEUE_START ? i : large.length() - 1u - i;
+}
 
 // Corners nearer than this to the centre of their box's first pixel (1/256 pixel: 32 pixels;
 // their box then spans at most 33) keep every edge function in the box below 2^30.
@@ -271,18 +276,6 @@ float inside_clip_plane(DrawData d, int k, vec3 p) {
     precise vec4 clip = pinhole_clip_position(d, p);
     float along = k == 0 ? clip.z : (k < 3 ? clip.x : clip.y);
     precise float inside = k == 0 || (k & 1) == 1 ? clip.w - along : clip.w + along;
-    return inside;
-}
-
-// Whether every corner of a pinhole view's triangle lies inside every clipping plane, so that
-// the clipper keeps it whole.
-bool unclipped(DrawData d, ViewTriangle v) {
-    bool inside = true;
-    for (int k = 0; k < 5; k++) {
-        for (int i = 0; i < 3; i++) {
-            inside = inside && inside_clip_plane(d, k, v.corner[i]) >= 0.0;
-        }
-    }
     return inside;
 }
 
@@ -490,44 +483,27 @@ void cover_large(uint t, Setup s) {
     }
 }
 
-// Queued entry i of the part a pass takes: the start's (large_args.w entries), the end's
-// (CLIPPED: clipped_args.w), or (TIES) both, the start's first.
-uint queued_entry(uint i) {
+// The part of the queue this pass takes: the triangles the clipper may cut (CLIPPED), or the
+// others.
 #ifdef CLIPPED
-    return large[large.length() - 1u - i];
+const uint PART = QUEUE_END;
 #else
-    return i < large_args.w ? large[i] : large[large.length() - 1u - (i - large_args.w)];
-#endif
-}
-
-#ifdef CLIPPED
-#define QUEUED clipped_args.w
-#elif defined(TIES)
-#define QUEUED all_args.w
-#else
-#define QUEUED large_args.w
+const uint PART = QUEUE_START;
 #endif
 
 void main() {
     // The workgroups stride over their part of the queue, which may be longer than a
     // dispatch's groups.
-    for (uint queued = gl_WorkGroupID.x; queued < QUEUED; queued += gl_NumWorkGroups.x) {
-        uint entry = queued_entry(queued);
+    for (uint queued = gl_WorkGroupID.x; queued < queue_parts[PART].w; queued += gl_NumWorkGroups.x) {
+        uint entry = large[queued_at(PART, queued)];
         uint v = entry >> QUEUE_VIEW_BIT, t = untagged(entry);
         uint member = MEMBERS == 1u ? 0u : (entry >> MEMBER_SHIFT) & (COVERAGE_MEMBERS - 1u);
         DrawData d = member_draw(member, v);
         float third_z;
         vec3 normal = mesh_normal_by_words(d, t, third_z);
         ViewTriangle in_view = to_view_triangle(d, read_triangle(d, t, normal, third_z));
-#if defined(PINHOLE) && (defined(CLIPPED) || defined(TIES))
-        // What the clipper keeps of it (clipped_polygon), fanned into triangles; the ties pass
-        // takes both parts of the queue, those the clipper keeps whole as they are.
-#ifdef TIES
-        if (unclipped(d, in_view)) {
-            cover_large(t, set_up(member, v, d, members[member], in_view, in_view.corner[0], in_view.corner[1], in_view.corner[2]));
-            continue;
-        }
-#endif
+#ifdef CLIPPED
+        // What the clipper keeps of it (clipped_polygon), fanned into triangles.
         vec3 polygon[8];
         int corners = clipped_polygon(d, in_view, polygon);
         for (int k = 1; k + 1 < corners; k++) {
@@ -539,25 +515,14 @@ void main() {
     }
 }
 #else
-// Queues (t, its member, its view), from the queue's end where the clipper cuts it
+// Queues (t, its member, its view), from the queue's end where the clipper may cut it
 // (`clipped`, PINHOLE): the queue has room for every triangle of every member in every view.
 void queue_large(uint t, Setup s, bool clipped) {
-    uint entry = t | (s.member << MEMBER_SHIFT) | (s.view << QUEUE_VIEW_BIT);
-    if (clipped) {
-        uint at = atomicAdd(clipped_args.w, 1u);
-        large[large.length() - 1u - at] = entry;
-        if (at < MAX_GROUPS) {
-            atomicAdd(clipped_args.x, 1u);
-        }
-    } else {
-        uint at = atomicAdd(large_args.w, 1u);
-        large[at] = entry;
-        if (at < MAX_GROUPS) {
-            atomicAdd(large_args.x, 1u);
-        }
-    }
-    if (atomicAdd(all_args.w, 1u) < MAX_GROUPS) {
-        atomicAdd(all_args.x, 1u);
+    uint part = clipped ? QUEUE_END : QUEUE_START;
+    uint i = atomicAdd(queue_parts[part].w, 1u);
+    large[queued_at(part, i)] = t | (s.member << MEMBER_SHIFT) | (s.view << QUEUE_VIEW_BIT);
+    if (i < MAX_GROUPS) {
+        atomicAdd(queue_parts[part].x, 1u);
     }
 }
 
@@ -658,6 +623,18 @@ void cover_here(uint t, Setup s) {
 }
 
 #ifdef PINHOLE
+// Whether a set-up triangle may reach past the viewport's sides, where the clipper cuts it: a
+// snapped corner past 1 − 2⁻¹⁰ of the viewport's half side from its centre, or not finite. The
+// margin is far wider than the rounding that parts window coordinates from the clipper's clip
+// coordinates (inside_clip_plane), so that every triangle the clipper cuts is found; one found
+// that it keeps whole is kept whole by clipped_polygon too, and covered alike.
+bool may_reach_past_viewport(DrawData d, Setup s) {
+    vec2 centre = d.viewport_centre * 256.0;
+    vec2 farthest = max(max(abs(s.a - centre), abs(s.b - centre)), abs(s.c - centre));
+    float bound = d.viewport_half_side * 256.0 * (1.0 - 1.0 / 1024.0);
+    return !all(lessThanEqual(farthest, vec2(bound)));
+}
+
 // Covers triangle t of a member's pinhole view `view` (`v` its corners and normal there), or queues
 // it for the large triangles' pass, which clips it as the graphics pipeline's clipper does
 // (clipped_polygon): where it is large or far, and where the near plane cuts it (rare: a model
@@ -673,7 +650,7 @@ void cover_pinhole(uint member, uint view, DrawData d, Member constants, uint t,
     }
 #ifndef TIES
     else if (coverage == COVERED_LARGE) {
-        queue_large(t, s, !unclipped(d, v));
+        queue_large(t, s, cut || may_reach_past_viewport(d, s));
     }
 #endif
 }

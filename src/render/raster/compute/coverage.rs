@@ -210,19 +210,19 @@ impl CoverageGroup {
         let slices = covered.last().map_or(0, |&(m, _)| m as u32 + 1);
         let one_tile =
             covered.iter().all(|(_, member)| fits_one_tile(member.draw.mesh.longest_edge, member.finest_pitch));
-        // The first passes' large triangles are the queue's start (an orthographic view's
-        // triangles are never clipped); the ties passes' the whole queue.
-        let passes = |pipelines: &'s CoveragePipelines, args: u64| -> Result<_> {
+        // An orthographic view's large triangles are all at the queue's start (the clipper
+        // never cuts them).
+        let passes = |pipelines: &'s CoveragePipelines| -> Result<_> {
             let small = pipelines.small(one_tile)?;
             let small = small.covering(both);
             let cover =
                 move |_: &GpuContext, cmd| buffers.set.dispatch_slices(cmd, small, &[], coverage_groups, slices);
             let large = move |_: &GpuContext, cmd| {
-                buffers.set.dispatch_indirect_at(cmd, &pipelines.large, &[], (&buffers.large_args, args))
+                buffers.set.dispatch_indirect_at(cmd, &pipelines.large, &[], (&buffers.large_args, LargeArgs::START))
             };
             Ok((cover, large))
         };
-        let (cover, large) = passes(coverage, LargeArgs::START)?;
+        let (cover, large) = passes(coverage)?;
         // The ties passes read the queue and its dispatch as the first passes left them.
         let reading_queue = || uses(Access::ComputeRead, Access::IndirectAndComputeRead);
         let mut steps = vec![
@@ -233,7 +233,7 @@ impl CoverageGroup {
         if self.shared_words {
             // Both ties passes only raise the words' tagged triangles (their depths stay), so
             // they need no barrier between them.
-            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?, LargeArgs::ALL)?;
+            let (cover_ties, large_ties) = passes(pipelines.built(&pipelines.ties, Coverage::Ties)?)?;
             let ties = move |ctx: &GpuContext, cmd| {
                 cover_ties(ctx, cmd);
                 large_ties(ctx, cmd);
@@ -290,7 +290,7 @@ impl CoverageRun {
         let uniforms = Buffer::new(ctx, uniform, &format!("{name} draws and members"))?;
         matches_shader_bindings!([RASTER_COMP, RASTER_LARGE_COMP, RASTER_TIES_COMP, RASTER_LARGE_TIES_COMP,
             RASTER_PINHOLE_COMP, RASTER_PINHOLE_LARGE_COMP, RASTER_PINHOLE_LARGE_CLIPPED_COMP,
-            RASTER_PINHOLE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_COMP] {
+            RASTER_PINHOLE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_COMP, RASTER_PINHOLE_LARGE_TIES_CLIPPED_COMP] {
             Coverage,
             range_words0,
             range_words1,

@@ -75,27 +75,24 @@ pub(crate) fn large_queue_bytes(triangles: u64, views: u64) -> u64 {
 }
 
 /// The large triangles' queue's indirect dispatches (`LargeArgs`, shaders/raster/raster.comp),
-/// each (x, y, z, length): the queue's start's part; its end's, a pinhole view's triangles
-/// the clipper cuts, which a pipeline of their own covers so that the other holds no clipping
-/// code (a software rasterizer runs a shader's every instruction whatever its branches); and
-/// both parts together, which the ties passes take.
+/// each (x, y, z, length): the queue's start's part, and its end's, a pinhole view's
+/// triangles the clipper may cut, which passes of their own cover so that the others hold no
+/// clipping code (a software rasterizer runs a shader's every instruction whatever its
+/// branches).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub(super) struct LargeArgs {
-    large_args: [u32; 4],
-    clipped_args: [u32; 4],
-    all_args: [u32; 4],
+    queue_parts: [[u32; 4]; 2],
 }
 
-matches_shader_struct!(LargeArgs, LargeArgs { large_args, clipped_args, all_args });
+matches_shader_struct!(LargeArgs, LargeArgs { queue_parts });
 
 impl LargeArgs {
-    /// An empty queue: no workgroups in any dispatch.
-    pub const EMPTY: Self = Self { large_args: [0, 1, 1, 0], clipped_args: [0, 1, 1, 0], all_args: [0, 1, 1, 0] };
-    /// Where each dispatch's arguments lie in the buffer: the start's part, the end's, both.
-    pub const START: u64 = std::mem::offset_of!(Self, large_args) as u64;
-    pub const CLIPPED: u64 = std::mem::offset_of!(Self, clipped_args) as u64;
-    pub const ALL: u64 = std::mem::offset_of!(Self, all_args) as u64;
+    /// An empty queue: no workgroups in either dispatch.
+    pub const EMPTY: Self = Self { queue_parts: [[0, 1, 1, 0]; 2] };
+    /// Where each dispatch's arguments lie in the buffer: the start's part, the end's.
+    pub const START: u64 = std::mem::offset_of!(Self, queue_parts) as u64;
+    pub const CLIPPED: u64 = Self::START + size_of::<[u32; 4]>() as u64;
 }
 
 /// How far from a view's first pixel, in pixels, a draw's corners may lie for the compute

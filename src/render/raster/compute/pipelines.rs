@@ -26,9 +26,9 @@ pub(super) struct CoveragePipelines {
     /// first use.
     pub(super) tiled: SmallTriangles,
     pub(super) one_tile: OnceLock<SmallTriangles>,
-    /// The large triangles' coverage: of the queue's start (`Nearest`; a pinhole view's
-    /// triangles the clipper keeps whole), or of the whole queue (`Ties`); and of a pinhole
-    /// view's triangles the clipper cuts, queued from its end (`Nearest`).
+    /// The large triangles' coverage: of the queue's start (a pinhole view's triangles the
+    /// clipper keeps whole), and of a pinhole view's triangles the clipper may cut, queued
+    /// from its end.
     pub(super) large: ComputePipeline,
     pub(super) clipped: Option<ComputePipeline>,
     pub(super) ctx: Arc<GpuContext>,
@@ -75,13 +75,12 @@ impl CoveragePipelines {
         };
         let name = format!("compute raster coverage ({}large triangles)", projection_name(projection));
         let clipped = match (kind, projection) {
-            (Coverage::Nearest, Pinhole) => {
-                let code = shaders::RASTER_PINHOLE_LARGE_CLIPPED_COMP;
-                let name = "compute raster coverage (pinhole view, clipped large triangles)";
-                Some(covering(ctx, (members, kind), code, (2, true), name)?)
-            }
-            _ => None,
+            (_, Orthographic) => None,
+            (Coverage::Nearest, Pinhole) => Some(shaders::RASTER_PINHOLE_LARGE_CLIPPED_COMP),
+            (Coverage::Ties, Pinhole) => Some(shaders::RASTER_PINHOLE_LARGE_TIES_CLIPPED_COMP),
         };
+        let clipped_name = "compute raster coverage (pinhole view, large triangles the clipper may cut)";
+        let clipped = clipped.map(|code| covering(ctx, (members, kind), code, (2, true), clipped_name)).transpose()?;
         Ok(Self {
             tiled: SmallTriangles::new(ctx, (members, kind, projection), true)?,
             one_tile: OnceLock::new(),

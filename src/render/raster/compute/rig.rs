@@ -97,9 +97,9 @@ struct SeveralDraws<'p> {
     ties: CoveragePasses<'p>,
 }
 
-/// The pipelines of a dispatch's coverage: small triangles, large ones (the queue's start, or
-/// for the ties passes all of it), and where its views are pinhole views, the large triangles
-/// the clipper cuts (the queue's end).
+/// The pipelines of a dispatch's coverage: small triangles, large ones (the queue's start), and
+/// where its views are pinhole views, the large triangles the clipper may cut (the queue's
+/// end).
 #[derive(Clone, Copy)]
 struct CoveragePasses<'p> {
     small: &'p ComputePipeline,
@@ -435,9 +435,12 @@ impl<'p> RigCoverage<'p> {
             let record_ties = move |_: &GpuContext, cmd| {
                 for run in &self.runs {
                     let several = run.several.as_ref().expect("a slot for jobs of several draws has their pipelines");
-                    let ties = several.ties;
+                    let (ties, args) = (several.ties, &run.run.large_args);
                     run.run.set.dispatch_slices(cmd, ties.small, &[], coverage_groups, slices);
-                    run.run.set.dispatch_indirect_at(cmd, ties.large, &[], (&run.run.large_args, LargeArgs::ALL));
+                    run.run.set.dispatch_indirect_at(cmd, ties.large, &[], (args, LargeArgs::START));
+                    if let Some(clipped) = ties.clipped {
+                        run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::CLIPPED));
+                    }
                 }
             };
             steps.push(Step::new(Vec::new(), reading_queue(), record_ties).timed("coverage: ties"));
