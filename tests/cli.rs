@@ -83,6 +83,38 @@ fn refused_in(d: &Path, name: &str, body: &str) -> String {
     stderr
 }
 
+/// `render` under a rig names the rule `auto` followed (`Renderer::rig_crossover`): on a CPU
+/// device the scanner's for one object in the depth test, the rigs' own for a rig without
+/// witnesses (no test on the GPU), as the renderer applies them.
+#[test]
+fn render_under_a_rig_names_the_crossover_it_followed() {
+    let d = dir("rig_crossover");
+    let rig = |witnesses: &str| {
+        format!(
+            "[sensor]\nkind = \"pinhole\"\nwidth = 48\nheight = 40\nfx = 50\nfy = 50\ncx = 23.5\ncy = 19.5\n{witnesses}\
+             [shadow]\nmode = \"depth\"\n[[object]]\nmodel = \"builtin:box\"\npose = [[1.0, 0.0, 0.0, 0.0], \
+             [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 4.0], [0.0, 0.0, 0.0, 1.0]]\n"
+        )
+    };
+    let projector = "[[sensor.witness]]\nname = \"projector\"\nkind = \"directional\"\ndirection = [0.6, 0.0, -0.8]\n";
+    for (name, witnesses) in [("with a witness", projector), ("without witnesses", "")] {
+        let scene = write_scene(&d, &rig(witnesses));
+        let out_dir = d.join(name.replace(' ', "_"));
+        let out =
+            rangesynth(&["--raster", "auto", "render", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        assert!(out.status.success(), "{name}: {stdout}\n{stderr}");
+        let line = stdout.lines().find(|l| l.starts_with("raster: ")).expect("a raster line");
+        let cpu = stdout.lines().any(|l| l.starts_with("device: ") && l.contains("llvmpipe"));
+        let rule = match (cpu, witnesses.is_empty()) {
+            (false, _) => "at least 1500 triangles",
+            (true, false) => "at least 0.0001 triangles per footprint pixel",
+            (true, true) => "at least 0.03 triangles per footprint pixel",
+        };
+        assert!(line.contains(rule), "{name}: {line}");
+    }
+}
+
 #[test]
 fn bad_scenes_are_refused_with_a_clear_message() {
     let object = "[[object]]\nmodel = \"builtin:box\"\n";

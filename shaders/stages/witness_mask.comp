@@ -71,8 +71,8 @@ struct WitnessData {
                             // (`columns` applied), a directional one's x0, y0, dx, dy
     uvec4 band;             // its image's width, height, first row, and attachment (0: the
                             // pinhole witnesses', 1: the directional witnesses')
-    uvec4 drawn;            // the depth test: the pixels of its image the job drew (first
-                            // column, first row, width, height; rows from the band's first)
+    uvec4 drawn;            // the pixels of its image the job drew (first column, first row,
+                            // width, height; rows from the band's first): occluder_holds
     uvec2 draws;            // the depth test: device address of its draw table (WitnessDraws),
                             // each draw in its frame at the draw index its image holds
 };
@@ -118,12 +118,23 @@ WitnessData witness;
 DrawData reference_draw;
 #endif
 
+// Whether the job drew pixel q of the witness's image: the depth test reads no other (beyond
+// it, an attachment the jobs of a batch share holds an earlier job's triangles), nor any test
+// from the words (whose triangles there may be another mesh's).
+bool occluder_holds(ivec2 q) {
+    ivec4 drawn = ivec4(witness.drawn);
+    return all(greaterThanEqual(q, drawn.xy)) && all(lessThan(q, drawn.xy + drawn.zw));
+}
+
 // What the witness's image holds at pixel q (within it): label, draw index, triangle. From
 // the words (the job's one draw, index 0), the label is read only for the label tests; the
 // depth test needs only whether a triangle was seen there, and gets 1.
 uvec4 occluder_seen(ivec2 q) {
     ivec2 at = q + ivec2(0, witness.band.z);
 #ifdef FROM_WORDS
+    if (!occluder_holds(q)) {
+        return uvec4(0u);
+    }
     uint triangle = witness.band.w == 0u ? pinhole_witness_words[2u * word_index(m.strides.y, at)]
                                          : directional_witness_words[2u * word_index(m.strides.z, at)];
     if (triangle == EMPTY_HALF) {
@@ -133,13 +144,6 @@ uvec4 occluder_seen(ivec2 q) {
 #else
     return witness.band.w == 0u ? imageLoad(witness_visibility, at) : imageLoad(directional_visibility, at);
 #endif
-}
-
-// Whether the job drew pixel q of the witness's image: the depth test reads no other (beyond
-// it, an attachment the jobs of a batch share holds an earlier job's triangles).
-bool occluder_holds(ivec2 q) {
-    ivec4 drawn = ivec4(witness.drawn);
-    return all(greaterThanEqual(q, drawn.xy)) && all(lessThan(q, drawn.xy + drawn.zw));
 }
 
 // Whether pixel q lies on the witness's image.

@@ -173,7 +173,7 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         (_, Raster::Auto) if s.scanner().is_none() => println!(
             "raster: {} (a rig's pinhole views; auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
             out.raster.map_or("none", Raster::as_str),
-            renderer.rig_crossover(scene.shadow.mode == ShadowMode::Depth && scene.objects.len() == 1)
+            renderer.rig_crossover(s, scene.shadow.mode, scene.objects.len())
         ),
         _ if s.scanner().is_none() => {
             println!("raster: {} (a rig's pinhole views)", out.raster.map_or("none", Raster::as_str))

@@ -18,7 +18,6 @@ use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::Ledger;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
-use rangesynth::shadow::ShadowMode;
 use rangesynth::untrusted::quoted;
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
@@ -280,7 +279,7 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
             if s.scanner().is_some() {
                 renderer.crossover()
             } else {
-                renderer.rig_crossover(settings.shadow.mode == ShadowMode::Depth)
+                renderer.rig_crossover(s, settings.shadow.mode, 1)
             },
             rasterized(results)
         ),

@@ -181,10 +181,13 @@ impl Renderer {
         Crossover::for_device(self.ctx.is_cpu())
     }
 
-    /// Where `auto` takes the compute rasterizer for a rig's views on this renderer's device,
-    /// those of one object in the depth test or others (`Crossover::for_rig`).
-    pub fn rig_crossover(&self, depth_test_of_one_object: bool) -> Crossover {
-        Crossover::for_rig(self.ctx.is_cpu(), depth_test_of_one_object)
+    /// Where `auto` takes the compute rasterizer for a rig's views on this renderer's device:
+    /// views of `objects` objects under `sensor` in shadow mode `mode` (`Crossover::for_rig`,
+    /// which tells the depth test of one object from the rest; the depth test runs on the GPU
+    /// where the rig has witnesses).
+    pub fn rig_crossover(&self, sensor: &Sensor, mode: ShadowMode, objects: usize) -> Crossover {
+        let depth_test = mode == ShadowMode::Depth && !sensor.witnesses.is_empty();
+        Crossover::for_rig(self.ctx.is_cpu(), depth_test && objects == 1)
     }
 
     /// Refuses a range view of `width`×`height` whose 4-byte-a-pixel storage buffers (the

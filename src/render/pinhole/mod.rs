@@ -27,6 +27,7 @@ use super::raster::compute::{RigTarget, COVERAGE_MEMBERS};
 use super::raster::draw::{Draw, Projection};
 use super::{GpuMesh, RenderOutput, Renderer, Source, Views, FOOTPRINT_MARGIN};
 use crate::error::{Error, Result};
+use crate::render::Crossover;
 use crate::scene::Scene;
 use crate::sensor::{Pinhole, Sensor, View};
 use crate::shadow::{ShadowMode, ShadowTest};
@@ -154,7 +155,7 @@ impl Renderer {
             .max()
             .unwrap_or(0);
         let depth_test = witnesses.is_some_and(|set| set.test == ShadowTest::Depth);
-        let crossover = self.rig_crossover(depth_test && draws.len() == 1);
+        let crossover = Crossover::for_rig(self.ctx.is_cpu(), depth_test && draws.len() == 1);
         self.computes_past(crossover, draws.len(), (triangles, largest), (footprint_pixels, job.reach), view_pixels)
     }
 

@@ -86,8 +86,8 @@ impl WitnessConstants {
     }
 
     /// The witness with the pixels of its image a job draws, `area` of the attachment (the
-    /// depth test reads no other), and its draw table for that job, which the depth test walks:
-    /// at the device address `draws`.
+    /// depth test reads no other, nor any test from the words), and its draw table for that
+    /// job, which the depth test walks: at the device address `draws` (0 for the label tests).
     pub fn with_job(self, area: PixelRect, draws: u64) -> Self {
         let row = area.row.saturating_sub(self.band[2]);
         Self { drawn: [area.col, row, area.width, area.height], draws: [draws as u32, (draws >> 32) as u32], ..self }
@@ -203,14 +203,15 @@ impl WitnessTable {
         (&self.buffer, Access::ComputeRead)
     }
 
-    /// Records the writing of a job's `witnesses` (at most [`MAX_WITNESSES`]: Sensor::validate).
+    /// Records the writing of a job's `witnesses`, which the mask's constants count (at most
+    /// [`MAX_WITNESSES`], which `Sensor::validate` refuses beyond, as `WitnessLayout` does).
     pub fn record_writing(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, witnesses: &[WitnessConstants]) {
-        let witnesses = &witnesses[..witnesses.len().min(MAX_WITNESSES)];
+        assert!(witnesses.len() <= MAX_WITNESSES, "a rig's witnesses were counted when it was read");
         if witnesses.is_empty() {
             return;
         }
         // SAFETY: cmd is recording; the step's barrier ordered earlier uses of the buffer; the
-        // update fits the buffer (MAX_WITNESSES entries, 112 bytes each: under 65,536).
+        // update fits the buffer (MAX_WITNESSES entries of 128 bytes: under 65,536).
         unsafe { ctx.device.cmd_update_buffer(cmd, self.buffer.raw, 0, bytemuck::cast_slice(witnesses)) };
     }
 }

@@ -46,7 +46,7 @@ pub(crate) struct CoverageGroup {
 /// What one run of slots' coverage dispatches use.
 pub(super) struct CoverageRun {
     /// The queue of large (triangle, member, view) entries, room for every triangle of every
-    /// member in every view, and its indirect dispatch's (x, y, z), then its length.
+    /// member in every view, and its parts' indirect dispatches ([`LargeArgs`]).
     pub(super) large: Buffer,
     pub(super) large_args: Buffer,
     /// The members' draws and constants ([`CoverageUniforms`]), written before each coverage

@@ -92,7 +92,7 @@ impl LargeArgs {
     pub const EMPTY: Self = Self { queue_parts: [[0, 1, 1, 0]; 2] };
     /// Where each dispatch's arguments lie in the buffer: the start's part, the end's.
     pub const START: u64 = std::mem::offset_of!(Self, queue_parts) as u64;
-    pub const CLIPPED: u64 = Self::START + size_of::<[u32; 4]>() as u64;
+    pub const END: u64 = Self::START + size_of::<[u32; 4]>() as u64;
 }
 
 /// How far from a view's first pixel, in pixels, a draw's corners may lie for the compute

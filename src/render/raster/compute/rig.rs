@@ -3,8 +3,9 @@
 //! projection a dispatch (each triangle read once for both, as the scanner's range and shadow
 //! views are). A job of one draw is covered by the pipelines of one member, as the scanner's
 //! jobs are (a software rasterizer reads their constants once for all its invocations), and
-//! takes no resolve: its shadow test reads the words and writes the reference view's
-//! attachments itself (pinhole/witness_mask.rs), as the scanner's mask does. A job of several
+//! where the witnesses' shadow test runs (modes `label` and `depth`) takes no resolve: the
+//! test reads the words and writes the reference view's attachments itself
+//! (pinhole/witness_mask.rs), as the scanner's mask does. A job of several
 //! draws makes them the dispatch's members, sharing each view's words as the draws of a
 //! scanner view of several objects do (with the ties passes), then resolves its views into the
 //! attachments the graphics pipeline draws: the reference view's, and the witnesses'
@@ -419,7 +420,7 @@ impl<'p> RigCoverage<'p> {
                 let args = &run.run.large_args;
                 run.run.set.dispatch_indirect_at(cmd, passes.large, &[], (args, LargeArgs::START));
                 if let Some(clipped) = passes.clipped {
-                    run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::CLIPPED));
+                    run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::END));
                 }
             }
         };
@@ -439,7 +440,7 @@ impl<'p> RigCoverage<'p> {
                     run.run.set.dispatch_slices(cmd, ties.small, &[], coverage_groups, slices);
                     run.run.set.dispatch_indirect_at(cmd, ties.large, &[], (args, LargeArgs::START));
                     if let Some(clipped) = ties.clipped {
-                        run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::CLIPPED));
+                        run.run.set.dispatch_indirect_at(cmd, clipped, &[], (args, LargeArgs::END));
                     }
                 }
             };
