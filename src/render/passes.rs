@@ -81,10 +81,9 @@ struct WitnessSlot<'a> {
     walk_list: WalkList,
     /// Each job's witnesses, as its test reads them.
     table: WitnessTable,
+    /// Where the slot holds a [`RigCoverage`], its words too (`MaskWords`).
     bindings: WitnessMaskBindings,
     test: ShadowTest,
-    /// The mask's bindings hold the compute rasterizer's words (`MaskWords`).
-    from_words: bool,
 }
 
 /// What a rig's views are resolved into: the reference view's attachments, and each witness
@@ -230,7 +229,7 @@ impl<'a> Slot<'a> {
                 let walk_list = WalkList::new(ctx, u64::from(w) * u64::from(h), name)?;
                 let table = WitnessTable::new(ctx, name)?;
                 let pinhole_pipelines = p.pinhole()?;
-                let mask = pinhole_pipelines.masks().mask(set.test);
+                let mask = pinhole_pipelines.masks().for_test(set.test);
                 // A rig without a kind of witness binds the other's images and words in their
                 // place (a witness set holds one witness at least: the error cannot arise).
                 let [pinhole, directional] = [&targets[0], &targets[1]].map(|t| t.as_deref());
@@ -245,8 +244,7 @@ impl<'a> Slot<'a> {
                 };
                 let buffers = (masked, &lost_by, &walk_list);
                 let bindings = WitnessMaskBindings::new(ctx, mask, (&range, images), buffers, words, &table)?;
-                let from_words = words.is_some();
-                Some(WitnessSlot { targets, lost_by, walk_list, table, bindings, test: set.test, from_words })
+                Some(WitnessSlot { targets, lost_by, walk_list, table, bindings, test: set.test })
             }
             _ => None,
         };
@@ -670,11 +668,11 @@ impl<'p> Passes<'p> {
             })
             .into_iter()
             .collect();
-        // A job of one draw that the compute rasterizer draws is tested from its views' words,
-        // and its shadow test writes the reference view's attachments (witness_mask.rs).
-        let words_masks = pipelines.masks_from_words().filter(|_| witnesses.is_some_and(|w| w.from_words));
-        let from_words = match (&slot.rig, job.compute, job.draws, words_masks) {
-            (Some(rig), true, [draw], Some(masks)) => mask_words(rig).map(|words| (words, draw, masks)),
+        // A job of one draw that the compute rasterizer draws is tested from its views' words
+        // (which the slot's witness bindings hold where it holds them), and its shadow test
+        // writes the reference view's attachments (witness_mask.rs).
+        let from_words = match (&slot.rig, witnesses, job.compute, job.draws, pipelines.masks_from_words()) {
+            (Some(rig), Some(_), true, [draw], Some(masks)) => mask_words(rig).map(|words| (words, draw, masks)),
             _ => None,
         };
         match (&slot.rig, job.compute) {
@@ -723,7 +721,7 @@ impl<'p> Passes<'p> {
                     Step::new(walk_images, walk_buffers, walk).timed("shadow mask: walks")
                 });
                 buffers.extend(w.walk_list.appended());
-                let mask = masks.mask(w.test);
+                let mask = masks.for_test(w.test);
                 let test = move |_: &GpuContext, cmd| w.bindings.record(cmd, mask, &constants);
                 steps.push(Step::new(images, buffers, test).timed("shadow mask"));
                 // Jobs without a second pass take a step of nothing in its place, so that in a

@@ -12,7 +12,8 @@ use crate::render::raster::draw::Projection;
 use crate::render::raster::draw::{DrawConstants, ViewPipelines};
 use crate::render::raster::graphics::view_pipelines;
 use crate::render::stages::effects::EffectPipelines;
-use crate::render::stages::shadow_mask::{MaskPipelines, MaskVariant};
+use crate::render::stages::mask_pipelines::MaskPipelines;
+use crate::render::stages::shadow_mask::{mask_pipelines, MaskVariant};
 use crate::render::targets::{check_formats, ViewKind};
 use ash::vk;
 use std::sync::{Arc, OnceLock};
@@ -32,7 +33,7 @@ impl Pipelines {
     pub fn new(ctx: &Arc<GpuContext>) -> Result<Self> {
         check_formats(ctx)?;
         let d = &ctx.device;
-        let mask = MaskPipelines::new(ctx, MaskVariant::Attachments)?;
+        let mask = mask_pipelines(ctx, MaskVariant::Attachments)?;
         let mut p = Self {
             ctx: ctx.clone(),
             raster_layout: vk::PipelineLayout::null(),

@@ -12,6 +12,7 @@ use crate::render::built_once::built_once;
 use crate::render::raster::draw::Projection;
 use crate::render::raster::draw::ViewPipelines;
 use crate::render::raster::graphics::view_pipelines;
+use crate::render::stages::mask_pipelines::MaskPipelines;
 use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::ViewKind;
 use crate::shadow::ShadowTest;
@@ -28,64 +29,37 @@ pub struct PinholePipelines {
     masks_from_words: OnceLock<MaskPipelines>,
 }
 
-/// The witness mask's pipelines of one variant: one per shadow test, and the depth test's
-/// second pass.
-pub struct MaskPipelines {
-    label: ComputePipeline,
-    label_square: ComputePipeline,
-    depth: ComputePipeline,
-    walks: ComputePipeline,
-}
-
-impl MaskPipelines {
-    /// The variant whose first pass is `first` and whose depth test's second pass is `walks`.
-    fn new(ctx: &Arc<GpuContext>, (first, walks): (&[u8], &[u8]), variant: &str) -> Result<Self> {
-        let mask = |code, test: ShadowTest, name: &str| {
-            ComputePipeline::new(
-                ctx,
-                SetShape::storage(WitnessMaskBindings::IMAGES, WitnessMaskBindings::BUFFERS),
-                size_of::<WitnessMaskConstants>(),
-                code,
-                &[
-                    (spec::TEST, test as u32),
-                    (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
-                    (spec::TEST_DEPTH, ShadowTest::Depth as u32),
-                    (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
-                    (spec::LINK_SAME_WAY, LINK_SAME_WAY),
-                    (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
-                    (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
-                ],
-                &format!("witness mask{variant} ({name})"),
-            )
-        };
-        Ok(Self {
-            label: mask(first, ShadowTest::Label, "label test")?,
-            label_square: mask(first, ShadowTest::LabelSquare, "2x2 label test")?,
-            depth: mask(first, ShadowTest::Depth, "depth test")?,
-            walks: mask(walks, ShadowTest::Depth, "depth test's walks")?,
-        })
-    }
-
-    /// The mask pipeline of `test`.
-    pub fn mask(&self, test: ShadowTest) -> &ComputePipeline {
-        match test {
-            ShadowTest::Label => &self.label,
-            ShadowTest::LabelSquare => &self.label_square,
-            ShadowTest::Depth => &self.depth,
-        }
-    }
-
-    /// The second pass `test` takes, where it takes one: the depth test's walks from the
-    /// pixels the first listed.
-    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
-        (test == ShadowTest::Depth).then_some(&self.walks)
-    }
+/// The witness mask's pipelines (mask_pipelines.rs) of the first pass's code `first` and the
+/// depth test's second pass's `walks`, named as the `variant`.
+fn witness_mask_pipelines(
+    ctx: &Arc<GpuContext>,
+    (first, walks): (&[u8], &[u8]),
+    variant: &str,
+) -> Result<MaskPipelines> {
+    MaskPipelines::new(first, Some(walks), |code, test, name| {
+        ComputePipeline::new(
+            ctx,
+            SetShape::storage(WitnessMaskBindings::IMAGES, WitnessMaskBindings::BUFFERS),
+            size_of::<WitnessMaskConstants>(),
+            code,
+            &[
+                (spec::TEST, test as u32),
+                (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
+                (spec::TEST_DEPTH, ShadowTest::Depth as u32),
+                (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
+                (spec::LINK_SAME_WAY, LINK_SAME_WAY),
+                (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
+                (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
+            ],
+            &format!("witness mask{variant} ({name})"),
+        )
+    })
 }
 
 impl PinholePipelines {
     /// `layout`: the raster pipelines' layout (their push constants), which the renderer owns.
     pub fn new(ctx: &Arc<GpuContext>, layout: vk::PipelineLayout) -> Result<Self> {
-        let masks = MaskPipelines::new(ctx, (shaders::WITNESS_MASK_COMP, shaders::WITNESS_MASK_WALKS_COMP), "")?;
+        let masks = witness_mask_pipelines(ctx, (shaders::WITNESS_MASK_COMP, shaders::WITNESS_MASK_WALKS_COMP), "")?;
         let reference = view_pipelines(ctx, layout, ViewKind::Range, Projection::Pinhole)?;
         let witnesses = match view_pipelines(ctx, layout, ViewKind::Shadow, Projection::Pinhole) {
             Ok(witnesses) => witnesses,
@@ -107,7 +81,7 @@ impl PinholePipelines {
     pub fn build_masks_from_words(&self) -> Result<&MaskPipelines> {
         built_once(&self.ctx, &self.masks_from_words, || {
             let code = (shaders::WITNESS_MASK_WORDS_COMP, shaders::WITNESS_MASK_WORDS_WALKS_COMP);
-            MaskPipelines::new(&self.ctx, code, " from words")
+            witness_mask_pipelines(&self.ctx, code, " from words")
         })
     }
 

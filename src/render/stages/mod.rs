@@ -6,5 +6,6 @@
 
 pub(crate) mod effects;
 pub(crate) mod host_view;
+pub(crate) mod mask_pipelines;
 pub(crate) mod shadow_mask;
 pub(crate) mod walk_list;

@@ -24,6 +24,7 @@ use crate::gpu::{shaders, Buffer, ComputePipeline, GpuContext, Image, SetShape, 
 use crate::mesh::{LINK_EDGE_MASK, LINK_INDEX_SHIFT, LINK_SAME_WAY};
 use crate::render::gpu_mesh::HullFaces;
 use crate::render::plan::Views;
+use crate::render::stages::mask_pipelines::MaskPipelines;
 use crate::render::stages::walk_list::WalkList;
 use crate::render::targets::{ViewKind, ViewTargets};
 use crate::sensor::{PixelRect, Scanner, ViewGrid};
@@ -125,70 +126,35 @@ pub enum MaskVariant {
     WordsForScoring,
 }
 
-/// The mask pipelines of one [`MaskVariant`], one per [`ShadowTest`], the test a
-/// specialization constant, and for the variants reading words the depth test's second pass
-/// (the shader's variant WALKS_FROM_LIST). Their descriptor-set layouts are defined
-/// identically, so one set serves them all. A software rasterizer such as lavapipe runs both sides of a branch on a
-/// uniform value, so each test gets a pipeline of its own rather than a branch on a push
-/// constant.
-pub struct MaskPipelines {
-    label: ComputePipeline,
-    label_square: ComputePipeline,
-    depth: ComputePipeline,
-    walks: Option<ComputePipeline>,
-}
-
-impl MaskPipelines {
-    pub fn new(ctx: &Arc<GpuContext>, variant: MaskVariant) -> Result<Self> {
-        let (code, source) = match variant {
-            MaskVariant::Attachments => (shaders::SHADOW_MASK_COMP, ""),
-            MaskVariant::Words => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words"),
-            MaskVariant::WordsForScoring => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words, for scoring"),
-        };
-        let write_label_and_gradient = u32::from(variant != MaskVariant::WordsForScoring);
-        let pipeline = |code, test: ShadowTest, name: &str| {
-            ComputePipeline::new(
-                ctx,
-                SetShape::storage(MaskBindings::IMAGES, MaskBindings::BUFFERS),
-                size_of::<MaskConstants>(),
-                code,
-                &[
-                    (spec::TEST, test as u32),
-                    (spec::TEST_LABEL, ShadowTest::Label as u32),
-                    (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
-                    (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
-                    (spec::LINK_SAME_WAY, LINK_SAME_WAY),
-                    (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
-                    (spec::WRITE_LABEL_AND_GRADIENT, write_label_and_gradient),
-                    (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
-                ],
-                &format!("{name}{source}"),
-            )
-        };
-        let walks = (variant != MaskVariant::Attachments)
-            .then(|| pipeline(shaders::SHADOW_MASK_WALKS_COMP, ShadowTest::Depth, "shadow mask (depth test's walks)"))
-            .transpose()?;
-        Ok(Self {
-            label: pipeline(code, ShadowTest::Label, "shadow mask (label test)")?,
-            label_square: pipeline(code, ShadowTest::LabelSquare, "shadow mask (2x2 label test)")?,
-            depth: pipeline(code, ShadowTest::Depth, "shadow mask (depth test)")?,
-            walks,
-        })
-    }
-
-    pub fn for_test(&self, test: ShadowTest) -> &ComputePipeline {
-        match test {
-            ShadowTest::Label => &self.label,
-            ShadowTest::LabelSquare => &self.label_square,
-            ShadowTest::Depth => &self.depth,
-        }
-    }
-
-    /// The second pass `test` takes, where it takes one: the depth test's walks from the
-    /// pixels the first listed, in the variants reading words.
-    pub fn second_pass(&self, test: ShadowTest) -> Option<&ComputePipeline> {
-        self.walks.as_ref().filter(|_| test == ShadowTest::Depth)
-    }
+/// The mask pipelines of one [`MaskVariant`] (mask_pipelines.rs), with the depth test's
+/// second pass (the shader's variant WALKS_FROM_LIST) for the variants reading words.
+pub fn mask_pipelines(ctx: &Arc<GpuContext>, variant: MaskVariant) -> Result<MaskPipelines> {
+    let (code, source) = match variant {
+        MaskVariant::Attachments => (shaders::SHADOW_MASK_COMP, ""),
+        MaskVariant::Words => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words"),
+        MaskVariant::WordsForScoring => (shaders::SHADOW_MASK_WORDS_COMP, ", from visibility words, for scoring"),
+    };
+    let write_label_and_gradient = u32::from(variant != MaskVariant::WordsForScoring);
+    let walks = (variant != MaskVariant::Attachments).then_some(shaders::SHADOW_MASK_WALKS_COMP);
+    MaskPipelines::new(code, walks, |code, test, name| {
+        ComputePipeline::new(
+            ctx,
+            SetShape::storage(MaskBindings::IMAGES, MaskBindings::BUFFERS),
+            size_of::<MaskConstants>(),
+            code,
+            &[
+                (spec::TEST, test as u32),
+                (spec::TEST_LABEL, ShadowTest::Label as u32),
+                (spec::TEST_LABEL_SQUARE, ShadowTest::LabelSquare as u32),
+                (spec::LINK_INDEX_SHIFT, LINK_INDEX_SHIFT),
+                (spec::LINK_SAME_WAY, LINK_SAME_WAY),
+                (spec::LINK_EDGE_MASK, LINK_EDGE_MASK),
+                (spec::WRITE_LABEL_AND_GRADIENT, write_label_and_gradient),
+                (spec::MAX_GROUPS, WalkList::MAX_GROUPS),
+            ],
+            &format!("shadow mask ({name}){source}"),
+        )
+    })
 }
 
 /// What the variant reading visibility words reads besides the shadow view's draw table: the

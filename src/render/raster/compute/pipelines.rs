@@ -8,7 +8,8 @@ use crate::error::Result;
 use crate::gpu::{shaders, ComputePipeline, GpuContext, SetShape};
 use crate::render::built_once::built_once;
 use crate::render::raster::draw::Projection;
-use crate::render::stages::shadow_mask::{MaskPipelines, MaskVariant};
+use crate::render::stages::mask_pipelines::MaskPipelines;
+use crate::render::stages::shadow_mask::{mask_pipelines, MaskVariant};
 use crate::render::targets::ViewKind;
 use std::sync::{Arc, OnceLock};
 
@@ -231,8 +232,8 @@ impl ComputeRasterPipelines {
                 true,
                 "compute raster resolve (shadow view, several draws)",
             )?,
-            mask: MaskPipelines::new(ctx, MaskVariant::Words)?,
-            mask_for_scoring: MaskPipelines::new(ctx, MaskVariant::WordsForScoring)?,
+            mask: mask_pipelines(ctx, MaskVariant::Words)?,
+            mask_for_scoring: mask_pipelines(ctx, MaskVariant::WordsForScoring)?,
         })
     }
 
