@@ -32,6 +32,7 @@ impl ComputePipeline {
         constants: &[(u32, u32)],
         name: &str,
     ) -> Result<Self> {
+        shape.check_fits(push_size, &ctx.limits, name)?;
         let d = &ctx.device;
         let bindings: Vec<_> = shape
             .types()
