@@ -109,6 +109,28 @@ impl Default for Ledger {
     }
 }
 
+/// Bytes a [`Ledger`] holds for a call, given back when it is dropped ([`Ledger::hold`]).
+#[must_use = "the bytes are given back as soon as the guard is dropped"]
+pub struct Held<'l> {
+    ledger: &'l Ledger,
+    bytes: u64,
+}
+
+impl Held<'_> {
+    /// Takes `bytes` more for `what`, or refuses them as [`Ledger::charge`] does.
+    pub fn grow(&mut self, what: impl fmt::Display, bytes: u64) -> Result<()> {
+        self.ledger.charge(what, bytes)?;
+        self.bytes += bytes;
+        Ok(())
+    }
+}
+
+impl Drop for Held<'_> {
+    fn drop(&mut self) {
+        self.ledger.release(self.bytes);
+    }
+}
+
 impl Ledger {
     pub fn new(budget: MemoryBudget) -> Self {
         Self { budget, held: AtomicU64::new(0), inputs: Mutex::new(Vec::new()) }
@@ -147,6 +169,13 @@ impl Ledger {
                 Err(now) => held = now,
             }
         }
+    }
+
+    /// Takes `bytes` for `what` as [`Ledger::charge`] does, until the guard it returns is
+    /// dropped: what a call holds while it runs (the Python bindings' poses).
+    pub fn hold(&self, what: impl fmt::Display, bytes: u64) -> Result<Held<'_>> {
+        self.charge(what, bytes)?;
+        Ok(Held { ledger: self, bytes })
     }
 
     /// Gives back `bytes` that [`Ledger::charge`] took and the run no longer holds: one image
@@ -243,6 +272,25 @@ mod tests {
         assert_eq!((ledger.held(), ledger.available()), (1000, 0));
         let e = ledger.check("one more byte", 1).unwrap_err().to_string();
         assert!(e.starts_with("one more byte needs about 1 bytes"), "{e}");
+    }
+
+    #[test]
+    fn what_a_call_holds_is_given_back_when_it_ends() {
+        let ledger = Ledger::new(MemoryBudget::new(1000));
+        ledger.charge("the scene", 300).unwrap();
+        {
+            let _poses = ledger.hold("1 poses", 500).unwrap();
+            assert_eq!(ledger.held(), 800);
+            let e = ledger.check("their verifications", 201).unwrap_err().to_string();
+            assert!(e.contains("on top of the 800 bytes the run already holds"), "{e}");
+            assert!(ledger.hold("2 poses", 701).is_err());
+            assert_eq!(ledger.held(), 800, "a refused hold takes nothing");
+            let mut results = ledger.hold("1 verification", 100).unwrap();
+            results.grow("its counts", 100).unwrap();
+            let e = results.grow("more counts", 1).unwrap_err().to_string();
+            assert!(e.starts_with("more counts needs about 1 bytes on top of the 1000 bytes"), "{e}");
+        }
+        assert_eq!(ledger.held(), 300, "the call's bytes are given back, the run's kept");
     }
 
     /// The budget is inclusive: a need of exactly the budget passes, one byte more does not.

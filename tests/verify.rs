@@ -547,6 +547,63 @@ fn a_batch_keeps_the_slots_the_memory_budget_holds() {
     }
 }
 
+/// A call that gathers its verifications (`Verifier::verify`) holds them to the memory budget,
+/// as everything else a run holds: where even the least each verification holds would not
+/// fit, it is refused before anything runs, by a figure naming them; where their counts grow
+/// past it (a model of a surface a triangle holds a count and an area a surface), it stops at
+/// the first chunk past it, rather than gathering without bound until the host runs out.
+#[test]
+fn a_call_gathering_its_verifications_holds_them_to_the_budget() {
+    let sensor = test_sensor(20.0);
+    let (_, sensed) = sensed(sensor);
+    let settings = VerifySettings { chunk_size: 8, ..settings(sensor, ShadowMode::Depth) };
+    const BUDGET: u64 = 16 << 20;
+    let verifier = Verifier::new(test_renderer(None).with_memory_budget(MemoryBudget::new(BUDGET))).expect("verifier");
+    let refusal = |hypotheses: &[Hypothesis]| match verifier.verify(&sensed, &settings, hypotheses, &mut |_| {}) {
+        Err(rangesynth::Error::TooLarge { what, .. }) => what,
+        other => panic!("{} hypotheses gathered within 16 MiB: {:?}", hypotheses.len(), other.map(|v| v.len())),
+    };
+    // More verifications than 16 MiB holds even bare.
+    let step = verifier.model("builtin:step", Path::new(".")).expect("model");
+    let many = (BUDGET / Verification::LEAST_HELD_BYTES + 1) as usize;
+    let what = refusal(&turning(&step, many, 1e-6, &[(1, 1)]));
+    assert_eq!(what, format!("holding the verifications of {many} hypotheses"));
+    // The sphere's 9,800 triangles, each a surface of its own: 157 KB of counts a verification
+    // on the host, so 1,400 take 220 MB, though the plan's counts (2 × 64 MiB at most) and
+    // slots fit 192 MiB.
+    let verifier =
+        Verifier::new(test_renderer(None).with_memory_budget(MemoryBudget::new(12 * BUDGET))).expect("verifier");
+    let refusal = |hypotheses: &[Hypothesis]| match verifier.verify(&sensed, &settings, hypotheses, &mut |_| {}) {
+        Err(rangesynth::Error::TooLarge { what, .. }) => what,
+        other => panic!("{} hypotheses gathered within 192 MiB: {:?}", hypotheses.len(), other.map(|v| v.len())),
+    };
+    let sphere = verifier.model("builtin:sphere:100", Path::new(".")).expect("model");
+    let mesh = &sphere.mesh;
+    let positions = (0..mesh.positions.len() as u32).map(|v| mesh.vertex(v).to_array()).collect();
+    let surfaces = mesh.triangles.len() as u32;
+    let faceted = rangesynth::mesh::Mesh::new(
+        "faceted sphere",
+        positions,
+        mesh.triangles.clone(),
+        (1..=surfaces).collect(),
+        (1..=surfaces).map(|s| format!("facet {s}")).collect(),
+    )
+    .expect("mesh");
+    let faceted = verifier.model_of_mesh(Arc::new(faceted)).expect("model");
+    let what = refusal(&turning(&faceted, 1400, 0.001, &[(1, 1)]));
+    let gathered: usize = what
+        .strip_prefix("holding the verifications of ")
+        .and_then(|rest| rest.strip_suffix(" hypotheses"))
+        .and_then(|count| count.parse().ok())
+        .unwrap_or_else(|| panic!("refused for something else: {what}"));
+    assert!((8..1400).contains(&gathered) && gathered.is_multiple_of(8), "stopped at {gathered} hypotheses");
+    // And a verification that fits is verified under the same budget.
+    assert_eq!(
+        verifier.verify(&sensed, &settings, &turning(&faceted, 8, 0.01, &[(1, 1)]), &mut |_| {}).unwrap().len(),
+        8
+    );
+}
+
 /// A verifier that times its stages (`Verifier::with_stage_times`) reports the GPU time of
 /// each stage it ran, by name, once: the rasters, masks and scores with the graphics
 /// pipeline; the coverage's three, masks and scores with the compute rasterizer. One that does

@@ -460,6 +460,12 @@ fn verify_with<'py>(
     let sensed = SensedImage::new(&image, &sensor).map_err(raised)?;
     let model = ModelArg::of(model)?;
     let model = py.detach(|| model.load(verifier)).map_err(raised)?;
+    // The call's poses, held to the budget before any is copied.
+    let count = pose_count(py, poses)?;
+    let surfaces = model.mesh.surface_count() as usize;
+    let ledger = verifier.renderer().ledger();
+    let pose_bytes = (count as u64).saturating_mul(held_bytes_a_pose(bindings.len(), surfaces));
+    let _held = ledger.hold(format_args!("{count} poses"), pose_bytes).map_err(raised)?;
     let poses = array::<f64, numpy::Ix3>(py, poses, "float64", "poses")?;
     let hypotheses: Vec<Hypothesis> = poses_of(&poses)?
         .into_iter()
@@ -487,7 +493,30 @@ fn verify_with<'py>(
             result.map_err(raised)?;
         }
     }
-    verification_arrays(py, &done, &sensed, model.mesh.surface_count() as usize)
+    verification_arrays(py, &done, &sensed, surfaces)
+}
+
+/// How many poses an array-like holds (its first dimension), read before it is converted.
+fn pose_count(py: Python<'_>, poses: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let shape: Vec<usize> = py
+        .import("numpy")?
+        .call_method1("shape", (poses,))
+        .and_then(|shape| shape.extract())
+        .map_err(|e| raised(format!("poses is not an array of float64: {e}")))?;
+    Ok(shape.first().copied().unwrap_or(0))
+}
+
+/// Host bytes a pose of a call takes besides its verification (which `Verifier::verify`
+/// holds to the budget itself): the pose as float64 (where it is converted) and as the
+/// crate's matrix, its hypothesis (its id, its `bindings`), and its row of the output arrays
+/// (thirteen numbers, a count a surface of the model's `surfaces`, its overlaps' array and its
+/// rejection's text, each at least a Python object).
+fn held_bytes_a_pose(bindings: usize, surfaces: usize) -> u64 {
+    const PYTHON_OBJECT: usize = 64;
+    let id = u64::MAX.to_string().len();
+    let hypothesis = size_of::<Hypothesis>() + id + bindings * size_of::<(u32, u32)>();
+    let row = (13 + surfaces) * size_of::<u64>() + 2 * PYTHON_OBJECT;
+    (2 * size_of::<DMat4>() + hypothesis + row) as u64
 }
 
 /// A verifier on one device, made once and reused; usable from several threads, the GIL

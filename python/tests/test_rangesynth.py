@@ -244,6 +244,18 @@ def test_a_batch_of_1024_poses_equals_1024_single_calls(tmp_path):
     assert np.array_equal(batch["s"], single)
 
 
+def test_a_call_holds_its_poses_to_the_budget_before_copying_any(tmp_path):
+    # A million poses as a view of one (128 bytes), which the call would copy, hypothesis by
+    # hypothesis, into about a gigabyte: refused under 64 MiB, naming them, before any copy.
+    sensed = sensed_dict(tmp_path)
+    verifier = rangesynth.Verifier(memory_budget="64M")
+    million = np.broadcast_to(np.eye(4), (1_000_000, 4, 4))
+    with pytest.raises(rangesynth.Error, match="1000000 poses needs about"):
+        verifier.verify(sensed, "builtin:box", million, [(1, 1)])
+    # The refusal held nothing: a call that fits runs under the same budget.
+    assert verifier.verify(sensed, "builtin:box", million[:2], [(1, 1)])["s"].shape == (2,)
+
+
 def test_a_renderer_kept_for_many_calls_does_not_hold_each_scene_against_its_budget(tmp_path):
     # Each call's scene is charged for that call alone: 100 renders of a scene whose parse the
     # budget holds a few times over fit a 1 MiB budget.

@@ -86,6 +86,13 @@ pub struct Counts {
 }
 
 impl Counts {
+    /// Bytes its lists hold on the heap.
+    pub(crate) fn heap_bytes(&self) -> u64 {
+        (self.surface_population.capacity() * size_of::<u64>()
+            + self.overlap.capacity() * size_of::<((u32, u32), u64)>()
+            + self.surface_area_units.capacity() * size_of::<u64>()) as u64
+    }
+
     /// N_s: synthetic valid pixels.
     pub fn synthetic_valid(&self) -> u64 {
         self.surface_population.iter().sum()

@@ -31,6 +31,15 @@ pub struct Scores {
     pub bindings: Vec<BindingDetail>,
 }
 
+impl Scores {
+    /// Bytes its texts and bindings hold on the heap.
+    pub(crate) fn heap_bytes(&self) -> u64 {
+        let texts = self.rejected.iter().chain(&self.notes).map(String::capacity).sum::<usize>();
+        (texts + self.notes.capacity() * size_of::<String>() + self.bindings.capacity() * size_of::<BindingDetail>())
+            as u64
+    }
+}
+
 /// The numbers behind one binding's factors in s2, s3 and s4.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BindingDetail {

@@ -93,6 +93,23 @@ pub struct Verification {
     pub raster: Option<Raster>,
 }
 
+impl Verification {
+    /// The fewest bytes one holds: with no surfaces, bindings or notes.
+    pub const LEAST_HELD_BYTES: u64 = size_of::<Verification>() as u64;
+
+    /// Bytes it holds on the host, its lists and texts included: what a call that keeps every
+    /// verification it returns ([`Verifier::verify`]) holds to the memory budget.
+    pub fn held_bytes(&self) -> u64 {
+        let unshadowed =
+            self.unshadowed.as_ref().map_or(0, |(counts, scores)| counts.heap_bytes() + scores.heap_bytes());
+        Self::LEAST_HELD_BYTES
+            + self.id.capacity() as u64
+            + self.counts.heap_bytes()
+            + self.scores.heap_bytes()
+            + unshadowed
+    }
+}
+
 /// What a batch's checks settle for its recording.
 #[derive(Clone, Copy)]
 struct BatchPlan {
@@ -364,7 +381,11 @@ impl Verifier {
     }
 
     /// Scores every hypothesis against the sensed image, in order. `progress` is told how many
-    /// hypotheses are done after each chunk.
+    /// hypotheses are done after each chunk. The verifications it gathers are held to the
+    /// memory budget while it runs, with what the run holds (the slots it plans fit beside
+    /// them): refused before anything runs where even the least each can hold would not fit,
+    /// and stopped at the first chunk past it (a model of many surfaces holds counts a
+    /// surface). [`Verifier::verify_each`] hands them on instead, holding a few chunks'.
     pub fn verify(
         &self,
         sensed: &SensedImage,
@@ -372,8 +393,13 @@ impl Verifier {
         hypotheses: &[Hypothesis],
         progress: &mut dyn FnMut(usize),
     ) -> Result<Vec<Verification>> {
+        let holding = |count: usize| format!("holding the verifications of {count} hypotheses");
+        let least = (hypotheses.len() as u64).saturating_mul(Verification::LEAST_HELD_BYTES);
+        let mut held = self.renderer.ledger().hold(holding(hypotheses.len()), least)?;
         let mut results = Vec::with_capacity(hypotheses.len());
         self.verify_each(sensed, settings, hypotheses, &mut |chunk| {
+            let more: u64 = chunk.iter().map(|v| v.held_bytes() - Verification::LEAST_HELD_BYTES).sum();
+            held.grow(holding(results.len() + chunk.len()), more)?;
             results.extend(chunk);
             progress(results.len());
             Ok(())
