@@ -421,6 +421,34 @@ fn bad_bop_input_is_refused_by_name() {
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["000001.png"]);
 }
 
+/// `bop` reads a scene's depth images, cameras, ground truth and models as it reaches them,
+/// after its output is started: none of them may be its output, however late it was read,
+/// and the scores file is not written.
+#[test]
+fn bop_never_writes_over_a_file_of_its_dataset() {
+    let truth = at(0.0, 0.0, 1000.0);
+    let root = dataset("protected", &[(1, square(295..=344, 215..=264, 1000), vec![truth])]);
+    let results = root.join("results.csv");
+    std::fs::write(&results, format!("scene_id,im_id,obj_id,score,R,t,time\n{}\n", row(1, truth).fields.join(",")))
+        .unwrap();
+    for target in [
+        "test/000001/depth/000001.png",
+        "test/000001/scene_camera.json",
+        "test/000001/scene_gt.json",
+        "models/obj_000001.ply",
+        "models/models_info.json",
+        "results.csv",
+    ] {
+        let path = root.join(target);
+        let before = std::fs::read(&path).unwrap();
+        let run = bop_command(&root, &results, &path, &[]);
+        let stderr = text(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{target}: {stderr}");
+        assert!(stderr.contains("this output is one of the run's inputs"), "{target}: {stderr}");
+        assert_eq!(std::fs::read(&path).unwrap(), before, "{target} changed");
+    }
+}
+
 /// The shadow mode the rig's images are made in is checked before any row: modes `depth` and
 /// `label` without a device to draw on are refused by name.
 #[test]

@@ -4,6 +4,8 @@
 //! file repeats.
 
 use crate::error::{Error, Result};
+use crate::limits::Ledger;
+use crate::untrusted::quoted;
 use glam::{DMat3, DMat4, DVec3};
 use std::path::Path;
 
@@ -48,12 +50,19 @@ pub fn pose_from_bop(r: &[f64], t: &[f64]) -> std::result::Result<DMat4, String>
 
 /// Numbers separated by spaces.
 fn numbers(text: &str) -> std::result::Result<Vec<f64>, String> {
-    text.split_whitespace().map(|v| v.parse::<f64>().map_err(|_| format!("{v:?} is not a number"))).collect()
+    text.split_whitespace().map(|v| v.parse::<f64>().map_err(|_| format!("{} is not a number", quoted(v)))).collect()
 }
 
+/// Bytes a row keeps besides its fields' text: its ids, pose and lists.
+pub const ROW_BYTES: u64 = 160;
+
 /// Reads a results file's text: its rows in order, each refused with the file, the row (from
-/// 1, the header not counted), its ids where they were read, and the field.
-pub fn parse_results(path: &Path, text: &str) -> Result<Vec<ResultRow>> {
+/// 1, the header not counted), its ids where they were read, and the field. Charged to
+/// `ledger` as it reads: what the CSV reader holds of a row while it reads it (as long as the
+/// text, at most) for the parse, then each row's [`ROW_BYTES`] and fields before it is kept.
+/// A score or time must be a finite number (BOP writes -1 for a time not measured).
+pub fn parse_results(path: &Path, text: &str, ledger: &Ledger) -> Result<Vec<ResultRow>> {
+    let _reading = ledger.hold(format_args!("reading the rows of {}", path.display()), text.len() as u64)?;
     let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
     let header = reader.headers().map_err(|e| Error::file(path, format!("unreadable header: {e}")))?;
     if header.iter().map(str::trim).ne(RESULTS_HEADER) {
@@ -73,7 +82,10 @@ pub fn parse_results(path: &Path, text: &str) -> Result<Vec<ResultRow>> {
         let field = |i: usize| record.get(i).unwrap_or("").trim();
         let id = |i: usize| -> Result<u32> {
             field(i).parse().map_err(|_| {
-                Error::file(path, format!("row {row}: {} = {:?} is not a whole number", RESULTS_HEADER[i], field(i)))
+                Error::file(
+                    path,
+                    format!("row {row}: {} = {} is not a whole number", RESULTS_HEADER[i], quoted(field(i))),
+                )
             })
         };
         let (scene_id, im_id, obj_id) = (id(0)?, id(1)?, id(2)?);
@@ -81,13 +93,15 @@ pub fn parse_results(path: &Path, text: &str) -> Result<Vec<ResultRow>> {
             Error::file(path, format!("row {row} (scene {scene_id}, image {im_id}, object {obj_id}): {reason}"))
         };
         for i in [3, 6] {
-            if field(i).parse::<f64>().is_err() {
-                return Err(at(format!("{} = {:?} is not a number", RESULTS_HEADER[i], field(i))));
+            if !field(i).parse::<f64>().is_ok_and(f64::is_finite) {
+                return Err(at(format!("{} = {} is not a finite number", RESULTS_HEADER[i], quoted(field(i)))));
             }
         }
         let r = numbers(field(4)).map_err(|e| at(format!("R: {e}")))?;
         let t = numbers(field(5)).map_err(|e| at(format!("t: {e}")))?;
         let pose = pose_from_bop(&r, &t).map_err(at)?;
+        let fields_bytes = record.iter().map(str::len).sum::<usize>() as u64;
+        ledger.charge(format_args!("the rows of {}", path.display()), ROW_BYTES + fields_bytes)?;
         rows.push(ResultRow { scene_id, im_id, obj_id, pose, fields: record.iter().map(str::to_string).collect() });
     }
     Ok(rows)
@@ -102,13 +116,28 @@ mod tests {
     #[test]
     fn a_row_reads_as_its_pose_and_keeps_its_fields() {
         let text = format!("{HEADER}1,3,5,0.9,0 -1 0 1 0 0 0 0 1,10 20 30,0.25\n");
-        let rows = parse_results(Path::new("r.csv"), &text).unwrap();
+        let rows = parse_results(Path::new("r.csv"), &text, &Ledger::default()).unwrap();
         assert_eq!(rows.len(), 1);
         let row = &rows[0];
         assert_eq!((row.scene_id, row.im_id, row.obj_id), (1, 3, 5));
         // R maps x to y: the second row of R is (1, 0, 0).
         assert!((row.pose.transform_point3(DVec3::X) - DVec3::new(10.0, 21.0, 30.0)).length() < 1e-12);
         assert_eq!(row.fields[4], "0 -1 0 1 0 0 0 0 1");
+    }
+
+    /// The parse is charged as it reads: the CSV reader's record, as long as the text at most,
+    /// and each row kept (its fields and [`ROW_BYTES`]); a budget one byte short refuses it.
+    #[test]
+    fn reading_the_rows_is_charged_as_it_goes() {
+        let text = format!("{HEADER}1,3,5,0.9,1 0 0 0 1 0 0 0 1,10 20 30,-1\n");
+        let fields = "1350.91 0 0 0 1 0 0 0 110 20 30-1".len() as u64;
+        let needed = text.len() as u64 + ROW_BYTES + fields;
+        let ledger = Ledger::new(crate::limits::MemoryBudget::new(needed));
+        parse_results(Path::new("r.csv"), &text, &ledger).unwrap();
+        assert_eq!(ledger.held(), ROW_BYTES + fields, "the reader's record is given back, the rows kept");
+        let ledger = Ledger::new(crate::limits::MemoryBudget::new(needed - 1));
+        let e = parse_results(Path::new("r.csv"), &text, &ledger).unwrap_err().to_string();
+        assert!(e.starts_with("the rows of r.csv needs about"), "{e}");
     }
 
     #[test]
@@ -120,13 +149,20 @@ mod tests {
             ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0,1\n", "t must be 3 finite numbers"),
             ("1,x,3,0.5,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "row 1: im_id = \"x\""),
             ("1,2,3,high,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "score = \"high\""),
+            ("1,2,3,NaN,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "score = \"NaN\" is not a finite number"),
+            ("1,2,3,inf,1 0 0 0 1 0 0 0 1,0 0 0,1\n", "score = \"inf\" is not a finite number"),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0 0,nan\n", "time = \"nan\" is not a finite number"),
+            ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0 0,1e999\n", "time = \"1e999\" is not a finite number"),
             ("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0 NaN,1\n", "t must be 3 finite numbers"),
             ("1,2,3,0.5,1 0 0 0 -1 0 0 0 -1,0 0 0,1\n1,2,3\n", "row 2"),
         ];
+        let long = format!("1,2,3,0.5,1 0 0 0 1 0 0 0 1,0 0 0,{}\n", "\u{1b}".repeat(100_000));
+        let cases = cases.into_iter().chain([(long.as_str(), "time = \"\\u{1b}")]);
         for (body, expected) in cases {
             let text = if body.starts_with("scene,") { body.to_string() } else { format!("{HEADER}{body}") };
-            let e = parse_results(Path::new("r.csv"), &text).unwrap_err().to_string();
+            let e = parse_results(Path::new("r.csv"), &text, &Ledger::default()).unwrap_err().to_string();
             assert!(e.contains(expected) && e.contains("r.csv"), "{body:?}: expected {expected:?} in {e}");
+            assert!(e.len() < 1000, "{} bytes of message", e.len());
         }
     }
 }

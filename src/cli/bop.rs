@@ -87,10 +87,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     let settings =
         BopSettings { rig: rig.sensor.scaled(args.rig_scale), delta: args.delta, shadow: ShadowSettings::of(mode) };
     let text = read_input_text(&args.results, "results file", &ledger)?;
-    let mut rows = parse_results(&args.results, &text)?;
-    // Each row's fields, as read, and its pose.
-    let row_bytes = rows.iter().map(|r| 160 + r.fields.iter().map(String::len).sum::<usize>() as u64).sum();
-    ledger.charge(format_args!("the rows of {}", args.results.display()), row_bytes)?;
+    let mut rows = parse_results(&args.results, &text, &ledger)?;
     if let Some(path) = &args.targets {
         let targets: Vec<Target> = parse_json(&read_input_text(path, "targets file", &ledger)?)
             .with_context(|| format!("targets {}", path.display()))?;
@@ -115,7 +112,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
         false => ProgressBar::hidden(),
     };
     let start = std::time::Instant::now();
-    let mut pending = PendingFile::new(&args.out)?;
+    let mut pending = PendingFile::new(&args.out)?.guarding_inputs(&ledger);
     let mut out = csv::Writer::from_writer(pending.file());
     let written = |e: csv::Error| anyhow::anyhow!("writing {}: {e}", args.out.display());
     out.write_record(RESULTS_HEADER.iter().chain(&SCORE_COLUMNS)).map_err(written)?;

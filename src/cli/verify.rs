@@ -174,7 +174,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
         ProgressBar::hidden()
     };
     let start = std::time::Instant::now();
-    let mut pending = PendingFile::new(&args.out)?;
+    let mut pending = PendingFile::new(&args.out)?.guarding_inputs(&ledger);
     let mut out = BufWriter::new(pending.file());
     let mut rows = Vec::with_capacity(hypotheses.len());
     // Each chunk's records written as it comes (Verifier::verify_each): a few chunks' results

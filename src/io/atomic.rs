@@ -41,11 +41,15 @@ use std::fs::{File, FileType};
 use std::io::{ErrorKind, Write};
 use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// An output being written; nothing appears at `path` until [`PendingFile::commit`].
 pub struct PendingFile {
     temp: tempfile::NamedTempFile,
     path: PathBuf,
+    /// The run whose inputs it may not replace, checked again at the commit
+    /// ([`PendingFile::guarding_inputs`]).
+    run: Option<Arc<Ledger>>,
 }
 
 impl PendingFile {
@@ -64,7 +68,16 @@ impl PendingFile {
         // Like a file created in place (tempfile's default is private, 0600).
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
         let temp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
-        Ok(Self { temp, path: path.to_path_buf() })
+        Ok(Self { temp, path: path.to_path_buf(), run: None })
+    }
+
+    /// Refuses, at the commit, to replace any file `run` has read by then
+    /// ([`refuse_overwriting_inputs`]): a run that reads its inputs as it goes (`bop` reads each
+    /// scene's depth images, cameras and models as it reaches them) writes its output after
+    /// reading all of them, and a check when the output starts sees only those read before.
+    pub fn guarding_inputs(mut self, run: &Arc<Ledger>) -> Self {
+        self.run = Some(run.clone());
+        self
     }
 
     /// The file to write into.
@@ -82,6 +95,9 @@ impl PendingFile {
             .map_err(|e| Error::io(&path, e))?;
         // What `path` is may have changed while the file was written.
         refuse_unless_regular(&path)?;
+        if let Some(run) = &self.run {
+            refuse_overwriting_inputs([path.as_path()], run)?;
+        }
         self.temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
         Ok(())
     }
