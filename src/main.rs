@@ -5,6 +5,7 @@
 mod cli;
 
 use clap::Parser;
+use cli::console::note;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -20,7 +21,7 @@ fn main() -> ExitCode {
             // defence, so that no input reaches the terminal raw.
             let message = format!("{e:#}");
             let lines: Vec<String> = message.lines().map(|line| rangesynth::untrusted::escaped(line, 2000)).collect();
-            eprintln!("error: {}", lines.join("\n"));
+            note!("error: {}", lines.join("\n"));
             ExitCode::FAILURE
         }
     }

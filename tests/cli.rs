@@ -383,7 +383,17 @@ fn verify_keeps_the_slots_and_chunks_asked_for_with_the_same_scores() {
     let three_slots = scores("3", "1");
     assert_eq!(three_slots, scores("1", "2"));
     assert_eq!(three_slots, scores("1", "4"));
-    for (flag, bad) in [("--slots", "0"), ("--slots", "65"), ("--slots", "many"), ("--chunks-in-flight", "5")] {
+    let bad_values = [
+        ("--slots", "0"),
+        ("--slots", "65"),
+        ("--slots", "many"),
+        ("--chunks-in-flight", "5"),
+        ("--memory-budget", "0"),
+        ("--memory-budget", "abc"),
+        ("--memory-budget", "1e30G"),
+        ("--memory-budget", "16E"),
+    ];
+    for (flag, bad) in bad_values {
         let out = verify(&hyps, &exr, &d.join("s.jsonl"), &[flag, bad]);
         let stderr = text(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{flag} {bad}: {stderr}");

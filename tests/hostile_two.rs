@@ -232,6 +232,17 @@ fn errors_name_the_hypothesis_and_escape_what_they_quote() {
     let out = verify(&hyps, &exr, &d.join("s.jsonl"));
     let e = refused(&out, "far hypothesis", "hypothesis \"far\\u{1b}[2J\\naway\": ");
     assert!(!e.contains('\u{1b}') && e.trim_end().lines().count() == 1, "raw input reached the terminal: {e:?}");
+    // A run that succeeds prints its ranking with the ids escaped and cut too.
+    let ids = ["clear\u{1b}[2J", "\u{202e}reversed", &"long".repeat(25_000)];
+    let list: Vec<serde_json::Value> =
+        ids.iter().map(|id| serde_json::json!({"id": id, "model": "builtin:box", "pose": pose(0.0)})).collect();
+    let hyps = write(d.join("ids.json"), serde_json::json!({"hypotheses": list}).to_string());
+    let out = verify(&hyps, &exr, &d.join("ids.jsonl"));
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(stdout.contains("clear\\u{1b}[2J") && stdout.contains("\\u{202e}reversed"), "{stdout}");
+    assert!(!stdout.contains(['\u{1b}', '\u{202e}']), "raw input reached the terminal: {stdout:?}");
+    assert!(stdout.lines().all(|line| line.len() < 1000), "an id printed whole: {stdout:?}");
     // A bad budget setting is named once, as the setting it is.
     let out = rangesynth_command()
         .env("RANGESYNTH_MEMORY_BUDGET", "4X")

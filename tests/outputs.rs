@@ -369,3 +369,24 @@ fn a_render_into_the_working_directory_replaces_it_and_keeps_its_other_files() {
         assert_eq!(names(&d), ["work"], "round {round}");
     }
 }
+
+/// A report that cannot be written is an error that names it, not a panic (exit 101): stdout
+/// on a full device (/dev/full's numbers, made here) fails each command with exit code 1;
+/// stderr on one leaves a failing run's exit code 1, with nothing said.
+#[test]
+fn a_report_that_cannot_be_written_fails_the_run_by_name() {
+    let d = dir("full");
+    let full = d.join("full");
+    // SAFETY: a valid NUL-terminated path; mknod only creates the node.
+    let rc = unsafe { libc::mknod(c_path(&full).as_ptr(), libc::S_IFCHR | 0o666, libc::makedev(1, 7)) };
+    assert_eq!(rc, 0, "mknod {}: {}", full.display(), std::io::Error::last_os_error());
+    let to_full = || std::fs::OpenOptions::new().write(true).open(&full).unwrap();
+    let box_scene = scene(&d, "box.toml", "builtin:box");
+    let out =
+        rangesynth().args(["render", s(&box_scene), "--out", s(&d.join("set"))]).stdout(to_full()).output().unwrap();
+    refused(&out, "render's summary", &["writing to standard output"]);
+    let mut missing = rangesynth();
+    missing.args(["render", s(&d.join("missing.toml")), "--out", s(&d.join("x"))]);
+    let out = missing.stdout(Stdio::null()).stderr(to_full()).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "a refusal with stderr full: {:?}", out.status);
+}

@@ -737,14 +737,20 @@ fn render_writes_a_bop_depth_png_for_a_pinhole_sensor() {
     }
     assert!(values.contains(&0) && image.reason.unwrap().contains(&Reason::Shadow.code()));
     std::fs::write(d.join("scanner.toml"), "[sensor]\nkind = \"orthographic\"\nwidth = 8\nheight = 8\npitch = [0.1, 0.1]\norigin = [0, 0]\ntheta_deg = 0\n").unwrap();
-    for (scene, scale, expected) in [
-        ("scanner.toml", "0.001", "orthographic"),
-        ("rig.toml", "0", "must be positive"),
-        ("rig.toml", "0.00001", "outside a depth PNG's 1 to 65535"),
-    ] {
+    for (scene, scale, expected) in
+        [("scanner.toml", "0.001", "orthographic"), ("rig.toml", "0.00001", "outside a depth PNG's 1 to 65535")]
+    {
         let out = render(scene, scale, "refused");
         common::cli::refused(&out, scene, expected);
         assert!(!d.join("refused").exists(), "{scene} {scale}: nothing written");
+    }
+    // A scale that is no positive number is a usage error, as any option's bad value is.
+    for scale in ["0", "NaN", "inf", "deep"] {
+        let out = render("rig.toml", scale, "refused");
+        let stderr = common::cli::text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{scale}: {stderr}");
+        assert!(stderr.contains("--depth-png") && !stderr.contains("panicked"), "{scale}: {stderr}");
+        assert!(!d.join("refused").exists(), "{scale}: nothing written");
     }
 }
 

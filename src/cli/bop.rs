@@ -3,6 +3,7 @@
 //! docs/bop.md), written as the input's columns followed by the scores', in input order,
 //! atomically.
 
+use super::console::report;
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -128,8 +129,8 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     pending.commit()?;
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    println!("scored {} rows in {seconds:.2} s ({:.1} rows/s)", rows.len(), rows.len() as f64 / seconds.max(1e-9));
-    println!("wrote {}", args.out.display());
+    report!("scored {} rows in {seconds:.2} s ({:.1} rows/s)", rows.len(), rows.len() as f64 / seconds.max(1e-9))?;
+    report!("wrote {}", args.out.display())?;
     match &renderer {
         Some(renderer) => super::check_device(renderer),
         None => Ok(()),

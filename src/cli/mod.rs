@@ -5,12 +5,14 @@
 
 mod accuracy;
 mod bop;
+pub(crate) mod console;
 mod experiment;
 mod shard;
 mod verify;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use console::{note, report};
 use rangesynth::effects::Reason;
 use rangesynth::gpu::{CacheLoad, ContextOptions};
 use rangesynth::io::refuse_overwriting_inputs;
@@ -41,8 +43,8 @@ pub struct Cli {
     validation: bool,
     /// Refuse work that would need more memory than this, e.g. 8G (also
     /// RANGESYNTH_MEMORY_BUDGET; default 4G).
-    #[arg(long, global = true, value_name = "SIZE")]
-    memory_budget: Option<String>,
+    #[arg(long, global = true, value_name = "SIZE", value_parser = memory_budget)]
+    memory_budget: Option<MemoryBudget>,
     /// Render with the graphics pipeline or the compute rasterizer, which renders views of up
     /// to four objects (every verify hypothesis) and leaves the others to the graphics
     /// pipeline; auto (the default) takes the compute rasterizer where the device has it and
@@ -64,7 +66,7 @@ enum Command {
         out: PathBuf,
         /// Also write depth.png, BOP's depth image: each valid pixel's depth along the optical
         /// axis / SCALE as a uint16, 0 elsewhere (pinhole sensors).
-        #[arg(long, value_name = "SCALE")]
+        #[arg(long, value_name = "SCALE", value_parser = depth_scale)]
         depth_png: Option<f64>,
     },
     /// Render the embedded demo scene (a stepped block and a cylinder on a table) into DIR.
@@ -85,14 +87,29 @@ enum Command {
     Experiment(experiment::ExperimentArgs),
 }
 
+/// `--memory-budget`'s value, read as clap reads an option's, so that a bad one is a usage
+/// error (exit code 2) like any other option's.
+fn memory_budget(text: &str) -> std::result::Result<MemoryBudget, String> {
+    text.parse().map_err(|e: rangesynth::Error| match e {
+        rangesynth::Error::Setting { reason, .. } => reason,
+        other => other.to_string(),
+    })
+}
+
+/// `--depth-png`'s scale: a positive, finite number, or a usage error.
+fn depth_scale(text: &str) -> std::result::Result<f64, String> {
+    let scale: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    rangesynth::io::check_depth_scale(scale).map(|()| scale).map_err(|_| "it must be positive and finite".into())
+}
+
 pub fn run(cli: Cli) -> Result<()> {
     let mut options = ContextOptions::from_env();
     options.validation |= cli.validation;
     if cli.device.is_some() {
         options.device = cli.device;
     }
-    let budget = match &cli.memory_budget {
-        Some(text) => MemoryBudget::parse_setting(text, "--memory-budget")?,
+    let budget = match cli.memory_budget {
+        Some(budget) => budget,
         None => MemoryBudget::from_env()?,
     };
     // One account for the whole run: its inputs, what is parsed from them, and each step's
@@ -120,14 +137,14 @@ pub fn run(cli: Cli) -> Result<()> {
     let output = renderer.render(&scene)?;
     let written = write_render_set(set, &scene, &output, depth_png)?;
     print_summary(&renderer, &scene, &output)?;
-    println!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    report!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))?;
     check_device(&renderer)
 }
 
 /// Tells the user about triangles the model lost (they are dropped, not rendered).
 fn warn_degenerate(mesh: &Mesh) {
     if mesh.dropped_degenerate > 0 {
-        eprintln!("warning: {}: dropped {} degenerate triangle(s)", escaped(&mesh.name, 200), mesh.dropped_degenerate);
+        note!("warning: {}: dropped {} degenerate triangle(s)", escaped(&mesh.name, 200), mesh.dropped_degenerate);
     }
 }
 
@@ -137,10 +154,10 @@ fn check_device(renderer: &Renderer) -> Result<()> {
     let cache = renderer.context().pipeline_cache_report();
     let path = cache.path.as_deref().map_or(String::new(), |p| escaped(&p.display().to_string(), 200));
     if let CacheLoad::Ignored(why) = &cache.load {
-        eprintln!("note: the pipeline cache {path} was not used ({why}); its pipelines were built anew");
+        note!("note: the pipeline cache {path} was not used ({why}); its pipelines were built anew");
     }
     if let Some(Err(why)) = &cache.last_save {
-        eprintln!(
+        note!(
             "warning: the pipeline cache {path} could not be written: {why}; the next run builds its pipelines again"
         );
     }
@@ -164,26 +181,26 @@ fn witnesses_text(s: &Sensor) -> String {
 
 fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Result<()> {
     let s = &scene.sensor;
-    println!("device: {}", renderer.context().device_name());
+    report!("device: {}", renderer.context().device_name())?;
     match (scene.shadow.mode, renderer.raster()) {
-        (ShadowMode::Exact, _) => println!("raster: none (shadow mode exact casts rays on the CPU)"),
+        (ShadowMode::Exact, _) => report!("raster: none (shadow mode exact casts rays on the CPU)")?,
         _ if s.scanner().is_none() && out.raster.is_none() => {
-            println!("raster: none (this rig's rays are cast on the CPU)")
+            report!("raster: none (this rig's rays are cast on the CPU)")?
         }
-        (_, Raster::Auto) if s.scanner().is_none() => println!(
+        (_, Raster::Auto) if s.scanner().is_none() => report!(
             "raster: {} (a rig's pinhole views; auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
             out.raster.map_or("none", Raster::as_str),
             renderer.rig_crossover(s, scene.shadow.mode, scene.objects.len())
-        ),
+        )?,
         _ if s.scanner().is_none() => {
-            println!("raster: {} (a rig's pinhole views)", out.raster.map_or("none", Raster::as_str))
+            report!("raster: {} (a rig's pinhole views)", out.raster.map_or("none", Raster::as_str))?
         }
-        (_, Raster::Auto) => println!(
+        (_, Raster::Auto) => report!(
             "raster: {} (auto: compute for up to {COVERAGE_MEMBERS} objects of {})",
             out.raster.map_or("none", Raster::as_str),
             renderer.crossover()
-        ),
-        _ => println!("raster: {}", out.raster.map_or("none", Raster::as_str)),
+        )?,
+        _ => report!("raster: {}", out.raster.map_or("none", Raster::as_str))?,
     }
     let view = match s.reference {
         View::Orthographic(o) => format!("{}×{} at pitch {}×{}", o.width, o.height, o.pitch[0], o.pitch[1]),
@@ -194,14 +211,14 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         _ => format!("{}×{}", s.width(), s.height()),
     };
     let witnesses = witnesses_text(s);
-    println!(
+    report!(
         "image: {view}, {witnesses}, shadow mode {}{}",
         scene.shadow.mode.as_str(),
         if out.shadow_pass { "" } else { " (no shadow pass)" }
-    );
+    )?;
     let with_effects = !scene.effects.is_empty();
     if with_effects {
-        println!("effects: {}", scene.effects.passes().map(|e| e.pass_name()).collect::<Vec<_>>().join(", "));
+        report!("effects: {}", scene.effects.passes().map(|e| e.pass_name()).collect::<Vec<_>>().join(", "))?;
     }
     let effects_column = if with_effects { format!(" {:>9}", "effects") } else { String::new() };
     // A column per witness of a rig other than the scanner (whose one is `shadowed`): the
@@ -210,10 +227,14 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
     let witness_names: Vec<String> = s.witnesses[..witness_columns].iter().map(|w| escaped(&w.name, 24)).collect();
     let widths: Vec<usize> = witness_names.iter().map(|name| name.chars().count().max(9)).collect();
     let witness_header: String = witness_names.iter().zip(&widths).map(|(name, &w)| format!(" {name:>w$}")).collect();
-    println!(
+    report!(
         "{:>6}  {:<28} {:<12} {:>8} {:>9}{effects_column}{witness_header}",
-        "label", "model", "surface", "valid", "shadowed"
-    );
+        "label",
+        "model",
+        "surface",
+        "valid",
+        "shadowed"
+    )?;
     // One pass over the pixels and one over the labels: [valid, shadowed, lost to an effect,
     // lost by each witness] per label.
     let bases = scene.label_bases()?;
@@ -244,7 +265,7 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
                 let lost = if with_effects { format!(" {lost:>9}") } else { String::new() };
                 let by_witness: String = p[3..].iter().zip(&widths).map(|(n, &w)| format!(" {n:>w$}")).collect();
                 let surface = escaped(name, 40);
-                println!("{label:>6}  {model:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}{by_witness}");
+                report!("{label:>6}  {model:<28} {surface:<12} {valid:>8} {shadowed:>9}{lost}{by_witness}")?;
             }
         }
     }
@@ -255,7 +276,7 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
             .filter(|&(_, n)| n > 0)
             .map(|(r, n)| format!("{} {n}", r.name()))
             .collect();
-        println!("pixels lost: {}", if lost.is_empty() { "none".to_string() } else { lost.join(", ") });
+        report!("pixels lost: {}", if lost.is_empty() { "none".to_string() } else { lost.join(", ") })?;
     }
     let passes: Vec<String> = out
         .timings
@@ -264,10 +285,10 @@ fn print_summary(renderer: &Renderer, scene: &Scene, out: &RenderOutput) -> Resu
         .map(|t| format!("{} {}", t.name, t.ms.map_or("-".to_string(), |ms| format!("{ms:.2} ms"))))
         .collect();
     for t in out.timings.iter().filter(|t| t.on_cpu) {
-        println!("CPU time: {} {:.2} ms", t.name, t.ms.unwrap_or(0.0));
+        report!("CPU time: {} {:.2} ms", t.name, t.ms.unwrap_or(0.0))?;
     }
     if !passes.is_empty() {
-        println!("GPU time per pass: {}", passes.join(", "));
+        report!("GPU time per pass: {}", passes.join(", "))?;
     }
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! slice finishes, so beyond the parsed input only a small summary row per hypothesis is kept;
 //! the lines go to a temporary file that replaces `--out` only once it is complete.
 
+use super::console::report;
 use super::shard::Shard;
 use super::{check_device, warn_degenerate};
 use anyhow::{Context, Result};
@@ -18,7 +19,7 @@ use rangesynth::io::{read_range_image, refuse_overwriting_inputs, PendingFile};
 use rangesynth::limits::Ledger;
 use rangesynth::render::{Raster, COVERAGE_MEMBERS, MAX_SLOTS};
 use rangesynth::sensor::Sensor;
-use rangesynth::untrusted::quoted;
+use rangesynth::untrusted::{escaped, quoted};
 use rangesynth::verify::{
     Hypothesis, HypothesisFile, Record, SensedImage, Verification, Verifier, VerifySettings, MAX_CHUNK,
     MAX_CHUNKS_IN_FLIGHT,
@@ -193,8 +194,8 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     drop(out);
     pending.commit()?;
     bar.finish_and_clear();
-    print_summary(&verifier, &settings, &rows, args.top, start.elapsed().as_secs_f64());
-    println!("wrote {}", args.out.display());
+    print_summary(&verifier, &settings, &rows, args.top, start.elapsed().as_secs_f64())?;
+    report!("wrote {}", args.out.display())?;
     check_device(verifier.renderer())
 }
 
@@ -270,11 +271,17 @@ fn rasterized(results: &[SummaryRow]) -> String {
     parts.join(", ")
 }
 
-fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[SummaryRow], top: usize, seconds: f64) {
+fn print_summary(
+    verifier: &Verifier,
+    settings: &VerifySettings,
+    results: &[SummaryRow],
+    top: usize,
+    seconds: f64,
+) -> Result<()> {
     let (s, renderer) = (&settings.sensor, verifier.renderer());
-    println!("device: {}", renderer.context().device_name());
+    report!("device: {}", renderer.context().device_name())?;
     match renderer.raster() {
-        Raster::Auto => println!(
+        Raster::Auto => report!(
             "raster: auto (compute for models of {}, where the device has it; else graphics): {}",
             if s.scanner().is_some() {
                 renderer.crossover()
@@ -282,25 +289,25 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
                 renderer.rig_crossover(s, settings.shadow.mode, 1)
             },
             rasterized(results)
-        ),
-        raster => println!("raster: {}: {}", raster.as_str(), rasterized(results)),
+        )?,
+        raster => report!("raster: {}: {}", raster.as_str(), rasterized(results))?,
     }
     if renderer.may_compute() {
         let n = renderer.hypotheses_per_dispatch();
-        println!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" });
+        report!("compute rasterizer: up to {n} hypothes{} a coverage dispatch", if n == 1 { "is" } else { "es" })?;
     }
     let (slots, chunks) = (verifier.slots(), verifier.chunks_in_flight());
-    println!(
+    report!(
         "batches: up to {slots} hypothes{} side by side (slots), up to {chunks} chunk{} in flight (fewer where the \
          memory budget holds fewer)",
         if slots == 1 { "is" } else { "es" },
         if chunks == 1 { "" } else { "s" }
-    );
+    )?;
     if !settings.effects.is_empty() {
-        println!("effects: {}", effects_text(&settings.effects));
+        report!("effects: {}", effects_text(&settings.effects))?;
     }
     let witnesses = super::witnesses_text(s);
-    println!(
+    report!(
         "{} hypotheses against a {}×{} image, {witnesses}, shadow mode {}, τ = {}: {:.2} s ({:.1} per second)",
         results.len(),
         s.width(),
@@ -309,13 +316,21 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
         settings.tolerance,
         seconds,
         results.len() as f64 / seconds.max(1e-9)
-    );
+    )?;
     let mut ranked: Vec<&SummaryRow> = results.iter().collect();
     ranked.sort_by(|a, b| b.scores[0].total_cmp(&a.scores[0]));
-    println!(
+    report!(
         "{:>4}  {:<20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}  unshadowed s / rejected",
-        "rank", "id", "s", "s1", "s2", "s3", "s4", "s5", "s6"
-    );
+        "rank",
+        "id",
+        "s",
+        "s1",
+        "s2",
+        "s3",
+        "s4",
+        "s5",
+        "s6"
+    )?;
     for (rank, v) in ranked.iter().take(top).enumerate() {
         let extra = match (&v.rejected, v.unshadowed) {
             (Some(reason), _) => reason.clone(),
@@ -323,14 +338,15 @@ fn print_summary(verifier: &Verifier, settings: &VerifySettings, results: &[Summ
             (None, None) => String::new(),
         };
         let [s, s1, s2, s3, s4, s5, s6] = v.scores;
-        println!(
+        report!(
             "{:>4}  {:<20} {s:>10.4e} {s1:>6.3} {s2:>6.3} {s3:>6.3} {s4:>6.3} {s5:>6.3} {s6:>6.3}  {extra}",
             rank + 1,
-            v.id,
-        );
+            escaped(&v.id, 40),
+        )?;
     }
     let rejected = results.iter().filter(|v| v.rejected.is_some()).count();
     if rejected > 0 {
-        println!("{rejected} of {} hypotheses rejected", results.len());
+        report!("{rejected} of {} hypotheses rejected", results.len())?;
     }
+    Ok(())
 }
