@@ -5,15 +5,22 @@
 //! components are optional and equal red when left out), so it is only given text this file
 //! has checked: each `newmtl` line, and each `Kd` line rewritten with its three components.
 //! Colours given as a spectral file (`Kd spectral …`) or in CIE XYZ (`Kd xyz …`), and every
-//! other statement, are left out: they do not change a reflectivity the product reads.
+//! other statement, are left out: they do not change a reflectivity the product reads. A `Kd`
+//! of any other form, or whose components are not fractions in [0, 1] (a reflectance is one;
+//! `nan`, `inf`, `-5`), is refused, naming the library, its line and its material: taken
+//! as given or left out, it would change the image without a word.
 
 use super::text_lines;
-use crate::error::{guard_parser, Result};
+use crate::error::{guard_parser, Error, Result};
+use crate::untrusted::quoted;
+use std::path::Path;
 
-/// The `newmtl` and `Kd` statements of MTL text, normalised for tobj.
-pub(super) fn checked_library(text: &str) -> String {
+/// The `newmtl` and `Kd` statements of MTL text, normalised for tobj; `path` names the
+/// library in a refusal.
+pub(super) fn checked_library(text: &str, path: &Path) -> Result<String> {
     let mut checked = String::new();
-    for line in text_lines(text.trim_start_matches('\u{feff}')) {
+    let mut material = String::new();
+    for (n, line) in text_lines(text.trim_start_matches('\u{feff}')).enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
         let mut words = line.splitn(2, char::is_whitespace);
         match (words.next(), words.next().map(str::trim).filter(|rest| !rest.is_empty())) {
@@ -21,19 +28,22 @@ pub(super) fn checked_library(text: &str) -> String {
                 checked.push_str("newmtl ");
                 checked.push_str(name);
                 checked.push('\n');
+                material = name.to_string();
             }
-            (Some("Kd"), Some(rest)) => {
-                if let Some([r, g, b]) = rgb(rest) {
-                    checked.push_str(&format!("Kd {r:?} {g:?} {b:?}\n"));
-                }
+            (Some("Kd"), Some(rest)) if !rest.starts_with("spectral") && !rest.starts_with("xyz") => {
+                let [r, g, b] = rgb(rest).ok_or_else(|| {
+                    let at = format!("line {}, material {}", n + 1, quoted(&material));
+                    Error::file(path, format!("{at}: Kd {} must be 1 to 3 numbers in [0, 1]", quoted(rest)))
+                })?;
+                checked.push_str(&format!("Kd {r:?} {g:?} {b:?}\n"));
             }
             _ => {}
         }
     }
-    checked
+    Ok(checked)
 }
 
-/// `r [g [b]]` as three finite components, the missing ones equal to r (the MTL format).
+/// `r [g [b]]` as three components in [0, 1], the missing ones equal to r (the MTL format).
 fn rgb(text: &str) -> Option<[f32; 3]> {
     let values: Vec<f32> = text.split_whitespace().map(str::parse).collect::<Result<_, _>>().ok()?;
     match values[..] {
@@ -42,7 +52,7 @@ fn rgb(text: &str) -> Option<[f32; 3]> {
         [r, g, b] => Some([r, g, b]),
         _ => None,
     }
-    .filter(|c| c.iter().all(|v| v.is_finite()))
+    .filter(|c| c.iter().all(|v| (0.0..=1.0).contains(v)))
 }
 
 /// The materials of checked library text (see [`checked_library`]), through tobj; `name`
@@ -58,9 +68,8 @@ mod tests {
     #[test]
     fn optional_colour_components_take_red_and_other_forms_are_left_out() {
         let text = "\u{feff}newmtl grey\r\nKd 0.5\r\nKs 1 1\nnewmtl two\nKd 0.2 0.4 # comment\n\
-                    newmtl full\nKd 0.1 0.2 0.3\nnewmtl odd\nKd spectral grey.rfl\nKd xyz 1 1 1\nKd nan 0 0\n\
-                    newmtl\nKd 1 2 3 4\n";
-        let checked = checked_library(text);
+                    newmtl full\nKd 0.1 0.2 0.3\nnewmtl odd\nKd spectral grey.rfl\nKd xyz 1 1 1\nnewmtl\n";
+        let checked = checked_library(text, Path::new("t.mtl")).unwrap();
         assert_eq!(
             checked,
             "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl two\nKd 0.2 0.4 0.2\nnewmtl full\nKd 0.1 0.2 0.3\nnewmtl odd\n"
@@ -76,6 +85,18 @@ mod tests {
                 ("odd", None)
             ]
         );
+    }
+
+    #[test]
+    fn a_kd_that_is_no_reflectance_is_refused_by_line_and_material() {
+        for kd in ["nan 0 0", "inf", "-5", "1e300 0 0", "0.5 1.2", "1 0 0 0", "bright"] {
+            let text = format!("newmtl first\nKd 0.5\nnewmtl \"odd\"\n\nKd {kd}\n");
+            let e = checked_library(&text, Path::new("m.mtl")).unwrap_err().to_string();
+            let expected =
+                format!("m.mtl: line 5, material \"\\\"odd\\\"\": Kd \"{kd}\" must be 1 to 3 numbers in [0, 1]");
+            assert_eq!(e, expected);
+        }
+        assert!(checked_library("newmtl edges\nKd 0 1 0.25\n", Path::new("m.mtl")).is_ok());
     }
 
     #[test]

@@ -23,7 +23,8 @@
 //! libraries from its directory, each file once however many lines or spellings name it, as
 //! every input is read (regular files, charged to the run's budget, mesh/mtl.rs); a library
 //! that cannot be read is skipped, and its surfaces take the effect's default, but one the
-//! budget refuses stops the load. Text parsed without a path reads no library.
+//! budget refuses, or whose `Kd` is no reflectance, stops the load (mesh/mtl.rs). Text parsed
+//! without a path reads no library.
 
 use super::mtl::{checked_library, parse_checked_library};
 use super::surfaces::default_surfaces;
@@ -70,7 +71,7 @@ pub fn load_obj(path: &Path, ledger: &Ledger) -> Result<Mesh> {
         match read_identified_file(&library_path, &what, ledger) {
             Ok((bytes, id)) => {
                 seen.push(id);
-                let text = checked_library(&String::from_utf8_lossy(&bytes));
+                let text = checked_library(&String::from_utf8_lossy(&bytes), &library_path)?;
                 let materials = text.lines().filter(|l| l.starts_with("newmtl")).count() as u64;
                 ledger.charge(format_args!("parsing {}", library_path.display()), materials * BYTES_PER_MATERIAL)?;
                 libraries.push(Some((text, library_path.display().to_string())));
@@ -298,11 +299,11 @@ fn parse(checked: &Checked, name: &str, libraries: &[Option<(String, String)>]) 
     Ok(mesh)
 }
 
-/// A material's reflectivity: the mean of its diffuse colour `Kd`, within [0, 1].
+/// A material's reflectivity: the mean of its diffuse colour `Kd` (each component in [0, 1]:
+/// mesh/mtl.rs).
 fn reflectivity(material: &tobj::Material) -> Option<f32> {
     let kd = material.diffuse?;
-    let mean = kd.iter().map(|&k| k as f32).sum::<f32>() / 3.0;
-    mean.is_finite().then(|| mean.clamp(0.0, 1.0))
+    Some(kd.iter().map(|&k| k as f32).sum::<f32>() / 3.0)
 }
 
 #[cfg(test)]
