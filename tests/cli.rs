@@ -549,7 +549,8 @@ fn verify_reads_a_hypothesis_models_scale() {
 /// `verify` under a pinhole camera and projector, from the command line: the sensed EXR's
 /// header carries the rig, the true pose of the one box scores exactly 1, and a hypothesis
 /// file whose rig differs from the header is refused naming the key (`fx`); with
-/// `--override-sensor` its rig is taken, and the true pose no longer scores 1.
+/// `--override-sensor` its rig is taken, and the true pose no longer scores 1; a sensor of
+/// another kind of view is refused even then.
 #[test]
 fn verify_scores_under_a_pinhole_rig_and_refuses_a_rig_that_differs() {
     let d = dir("verify_rig");
@@ -594,6 +595,14 @@ fn verify_scores_under_a_pinhole_rig_and_refuses_a_rig_that_differs() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let line: serde_json::Value = serde_json::from_str(std::fs::read_to_string(&scores).unwrap().trim()).unwrap();
     assert!(line["s"].as_f64().unwrap() < 0.99, "{line}");
+    // Never another kind of view, even on request: its depths mean something else.
+    let scanner = r#""sensor": {"kind": "orthographic", "width": 96, "height": 72, "pitch": [0.01, 0.01], "origin": [0, 0], "theta_deg": 30}, "#;
+    let hyps = d.join("scanner.json");
+    std::fs::write(&hyps, file(scanner)).unwrap();
+    let out = verify(&hyps, &exr, &d.join("scanner.jsonl"), &["--override-sensor"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("is a view of kind pinhole but the sensor's reference view is orthographic"), "{stderr}");
 }
 
 /// `--shard i/N` verifies the i-th of N contiguous ranges: the three shards' outputs of a file

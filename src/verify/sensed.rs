@@ -75,6 +75,19 @@ impl SensedImage {
     /// Checks the image against the sensor it is verified with and computes its statistics.
     pub fn new(image: &RangeImage, sensor: &Sensor) -> Result<Self> {
         sensor.validate()?;
+        // A sensor given in place of the one the image records (`--override-sensor`) may read
+        // its pixels through another pitch or other intrinsics, on request; never through
+        // another kind of view, whose depths mean something else (z towards the scanner, or
+        // along a pinhole's axis).
+        if let Some(measured) = image.sensor.as_ref().map(|s| &s.reference) {
+            if measured.kind() != sensor.reference.kind() {
+                return Err(Error::Scene(format!(
+                    "the sensed image is a view of kind {} but the sensor's reference view is {}",
+                    measured.kind(),
+                    sensor.reference.kind()
+                )));
+            }
+        }
         if (image.width, image.height) != (sensor.width(), sensor.height()) {
             return Err(Error::Scene(format!(
                 "the sensed image is {}×{} but the sensor is {}×{}",

@@ -538,10 +538,8 @@ fn check_same_pixels(sensed: &View, sensor: &View) -> Result<()> {
             refuse(format!("was measured with intrinsics {:?} but the sensor has {:?}", a.intrinsics, b.intrinsics))
         }
         (View::Orthographic(_), View::Orthographic(_)) | (View::Pinhole(_), View::Pinhole(_)) => Ok(()),
-        _ => refuse(format!(
-            "was measured in a {} view but the sensor's reference view is {}",
-            sensed.kind(),
-            sensor.kind()
-        )),
+        _ => {
+            refuse(format!("is a view of kind {} but the sensor's reference view is {}", sensed.kind(), sensor.kind()))
+        }
     }
 }
