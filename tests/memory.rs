@@ -4,52 +4,15 @@
 //! exceed what the parse charged to its ledger. A factor set too low fails here, naming the
 //! input; docs/limits.md gives the factors and these measurements.
 
+mod common;
+
+use common::counting::{thread_peak_during, Counting};
 use rangesynth::limits::{Ledger, MemoryBudget};
 use rangesynth::mesh::{parse_obj, parse_ply, parse_stl, Mesh};
 use rangesynth::scene::load_model;
 use rangesynth::verify::HypothesisFile;
 use rangesynth::Scene;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::path::Path;
-
-/// Counts this thread's live bytes and their peak (each test thread its own).
-struct Counting;
-
-thread_local! {
-    static LIVE: Cell<usize> = const { Cell::new(0) };
-    static PEAK: Cell<usize> = const { Cell::new(0) };
-}
-
-fn note(delta: isize) {
-    let _ = LIVE.try_with(|live| {
-        let now = live.get().wrapping_add_signed(delta);
-        live.set(now);
-        let _ = PEAK.try_with(|peak| peak.set(peak.get().max(now)));
-    });
-}
-
-// SAFETY: every call is passed on to the system allocator unchanged; the counting only reads
-// the sizes.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note(layout.size() as isize);
-        // SAFETY: the caller's contract is the system allocator's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        note(-(layout.size() as isize));
-        // SAFETY: as above.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // Counted as the allocation of the new block before the old one is freed.
-        note(new_size as isize);
-        note(-(layout.size() as isize));
-        // SAFETY: as above.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
@@ -58,10 +21,7 @@ static ALLOCATOR: Counting = Counting;
 /// to its ledger (the input text itself, held by the caller, is charged but not counted).
 fn measure(input_bytes: usize, parse: impl FnOnce(&Ledger)) -> (usize, u64) {
     let ledger = Ledger::new(MemoryBudget::new(64 << 30));
-    let before = LIVE.with(Cell::get);
-    PEAK.with(|peak| peak.set(before));
-    parse(&ledger);
-    let peak = PEAK.with(Cell::get) - before;
+    let peak = thread_peak_during(|| parse(&ledger));
     (peak + input_bytes, ledger.held())
 }
 

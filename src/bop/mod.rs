@@ -99,7 +99,8 @@ pub struct BopSettings {
     pub shadow: ShadowSettings,
 }
 
-/// Most rows of one image whose images are made together.
+/// Most rows of one image whose images the GPU draws together (casting them on the CPU
+/// gains nothing from it: there a row's image is made, scored and dropped before the next).
 const ROWS_TOGETHER: usize = 16;
 
 /// A model's image: depth (mm) where the reference view meets it, 0 elsewhere; the same where
@@ -110,6 +111,9 @@ struct Rendering {
 }
 
 impl Rendering {
+    /// Bytes one holds a pixel of the image.
+    const BYTES_PER_PIXEL: u64 = 16;
+
     /// From labels before and after shadowing and depths, a word a pixel each.
     fn of(label: &[u32], shadowed: &[u32], z: impl Iterator<Item = f64> + Clone) -> Self {
         let kept = |labels: &[u32]| labels.iter().zip(z.clone()).map(|(&l, z)| if l != 0 { z } else { 0.0 }).collect();
@@ -282,7 +286,7 @@ impl<'a> BopScorer<'a> {
         if let Some(renderer) = self.renderer {
             // Their two depth images each, made from the drawn images (which draw_alone checks).
             let pixels = u64::from(sensor.width()) * u64::from(sensor.height());
-            let renderings = 16 * pixels * models.len() as u64;
+            let renderings = Rendering::BYTES_PER_PIXEL * pixels * models.len() as u64;
             self.ledger.check(format_args!("{} renderings of a rig's images", models.len()), renderings)?;
             let drawn = renderer.draw_alone(sensor, &self.settings.shadow, models, subject)?;
             return Ok(drawn.into_iter().map(Rendering::drawn).collect());
@@ -290,15 +294,19 @@ impl<'a> BopScorer<'a> {
         let (width, height) = (sensor.width(), sensor.height());
         let pixels = u64::from(width) * u64::from(height);
         let casters = exact::casters(sensor);
+        // Each image cast is checked on top of those cast before it, which are held with it.
+        let mut made = self.ledger.hold(format_args!("{} renderings of a rig's images", models.len()), 0)?;
         (0..)
             .zip(models)
             .map(|(i, (mesh, pose))| {
                 let about = |e: Error| e.concerning(&subject(i));
                 let triangles = mesh.triangles.len() as u64;
+                // The image cast, and the rendering made from it while it is alive.
+                let image_bytes = (exact::BYTES_PER_PIXEL + Rendering::BYTES_PER_PIXEL) * pixels;
                 self.ledger
                     .check(
                         format_args!("casting a {width}×{height} image"),
-                        exact::BYTES_PER_PIXEL * pixels + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
+                        image_bytes + casters * triangles * exact::CASTER_BYTES_PER_TRIANGLE,
                     )
                     .map_err(about)?;
                 let (centre, radius) = mesh.bounding_sphere();
@@ -307,6 +315,8 @@ impl<'a> BopScorer<'a> {
                 let solidity = self.solidities.get(&(Arc::as_ptr(mesh) as usize)).copied().unwrap_or(Solidity::Open);
                 let object = ExactObject { mesh, pose: *pose, label_base: 0, solidity };
                 let image = render_rig(sensor, &[object], self.settings.shadow.mode, footprint).map_err(about)?;
+                made.grow(format_args!("casting a {width}×{height} image"), Rendering::BYTES_PER_PIXEL * pixels)
+                    .map_err(about)?;
                 Ok(Rendering::cast(image))
             })
             .collect()
@@ -316,7 +326,8 @@ impl<'a> BopScorer<'a> {
     /// made together (on the GPU, in one batch), up to 16 at a time.
     pub fn score_rows(&mut self, rows: &[ResultRow]) -> Result<Vec<RowScores>> {
         let mut scores = Vec::with_capacity(rows.len());
-        for together in rows.chunk_by(same_image).flat_map(|run| run.chunks(ROWS_TOGETHER)) {
+        let together = if self.renderer.is_some() { ROWS_TOGETHER } else { 1 };
+        for together in rows.chunk_by(same_image).flat_map(|run| run.chunks(together)) {
             scores.extend(self.score_together(together)?);
         }
         Ok(scores)
@@ -352,7 +363,7 @@ impl<'a> BopScorer<'a> {
         let truths = made.split_off(rows.len());
         for ((k, ..), truth) in needed.into_iter().zip(truths) {
             // Kept while the image's rows last: its two depth images.
-            let bytes = 16 * truth.depth.len() as u64;
+            let bytes = Rendering::BYTES_PER_PIXEL * truth.depth.len() as u64;
             self.ledger.charge(format_args!("{}: a ground-truth rendering", subject(first)), bytes)?;
             let image = self.image.as_mut().expect("made above");
             image.bytes += bytes;

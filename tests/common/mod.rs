@@ -4,8 +4,10 @@
 //! When `RANGESYNTH_EXPECT_DEVICE` is set (CI sets "llvmpipe"), the device must match it.
 #![allow(dead_code)]
 
+pub mod bop_dataset;
 pub mod cli;
 pub mod compare;
+pub mod counting;
 pub mod reference;
 pub mod rig_reference;
 pub mod scorer;
