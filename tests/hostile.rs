@@ -122,6 +122,32 @@ fn an_exr_header_claiming_a_huge_image_is_refused_before_allocating() {
     assert!(e.contains("more than its") && e.contains("can hold"), "{e}");
 }
 
+/// A data window that disagrees with the file's blocks is refused, never read with the blocks
+/// put on other rows: the window moved down 10 rows and right 10 columns (its blocks still
+/// start at row 0), and a window whose corners are the wrong way round. The exr crate read the
+/// first as the image moved, the second as a window of the same size.
+#[test]
+fn an_exr_whose_data_window_disagrees_with_its_blocks_is_refused() {
+    let d = dir("exr_window");
+    let exr = sensed(&d);
+    let bytes = std::fs::read(&exr).unwrap();
+    let image = parse_range_image(&bytes, &exr, &Ledger::default()).unwrap();
+    let (w, h) = (image.width as i32, image.height as i32);
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).expect("a dataWindow attribute") + key.len() + 4;
+    let with_window = |corners: [i32; 4]| {
+        let mut patched = bytes.clone();
+        for (k, v) in corners.iter().enumerate() {
+            patched[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        parse_range_image(&patched, &exr, &Ledger::default()).map(|_| ()).unwrap_err().to_string()
+    };
+    let e = with_window([10, 10, w + 9, h + 9]);
+    assert!(e.contains("starts at row 0, which is not a block's first row of the data window's rows 10 to"), "{e}");
+    let e = with_window([w - 1, h - 1, 0, 0]);
+    assert!(e.contains("ends before it begins"), "{e}");
+}
+
 // 2. Device files and FIFOs, as models and as material libraries.
 #[test]
 fn devices_and_fifos_are_never_read() {

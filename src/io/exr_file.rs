@@ -221,6 +221,8 @@ type LayerParts = (u32, u32, Vec<AnyChannel<FlatSamples>>, LayerAttributes);
 fn decode_layer(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<LayerParts> {
     let image = guard_parser(&path.display().to_string(), "the exr decoder", || {
         check_claimed_sizes(bytes, path, ledger)?;
+        check_data_window(bytes, path)?;
+        check_blocks(bytes, path)?;
         read()
             .no_deep_data()
             .largest_resolution_level()
@@ -272,6 +274,60 @@ fn check_claimed_sizes(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<()>
             ));
         }
         ledger.charge(format_args!("decoding {} ({w}×{h})", path.display()), decoded)?;
+    }
+    Ok(())
+}
+
+/// Refuses a single-part header whose data window's corners are the wrong way round (its
+/// maximum below its minimum), which the exr crate reads as a window of the same size.
+fn check_data_window(bytes: &[u8], path: &Path) -> Result<()> {
+    let window = header_attributes(bytes)
+        .and_then(|attributes| attributes.into_iter().find(|(name, _)| *name == b"dataWindow"))
+        .and_then(|(_, attribute)| attribute.get(attribute.len().checked_sub(16)?..));
+    let Some(corners) = window else { return Ok(()) };
+    let corner = |k: usize| i32::from_le_bytes(corners[4 * k..4 * k + 4].try_into().expect("four bytes"));
+    let (x_min, y_min, x_max, y_max) = (corner(0), corner(1), corner(2), corner(3));
+    if x_max < x_min || y_max < y_min {
+        return Err(Error::file(
+            path,
+            format!("its data window ({x_min}, {y_min})–({x_max}, {y_max}) ends before it begins"),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses a file whose blocks of scan lines do not each lie, once, where its data window puts
+/// them: the exr crate places a block by its first row's offset into the window divided by the
+/// rows a block holds, rounded toward zero, so a block above the window, or between two
+/// blocks' rows, would land silently on other rows.
+fn check_blocks(bytes: &[u8], path: &Path) -> Result<()> {
+    let reader = exr::block::read(Cursor::new(bytes), false).map_err(|e| exr_error(path, e))?;
+    let headers = reader.meta_data().headers.clone();
+    let mut placed: Vec<Vec<bool>> = headers.iter().map(|h| vec![false; h.chunk_count]).collect();
+    for chunk in reader.all_chunks(false).map_err(|e| exr_error(path, e))? {
+        let chunk = chunk.map_err(|e| exr_error(path, e))?;
+        let exr::block::chunk::CompressedBlock::ScanLine(block) = &chunk.compressed_block else { continue };
+        let (Some(header), Some(placed)) = (headers.get(chunk.layer_index), placed.get_mut(chunk.layer_index)) else {
+            return Err(Error::file(path, format!("a block names part {}, which the file lacks", chunk.layer_index)));
+        };
+        let lines = header.compression.scan_lines_per_block() as i64;
+        let top = i64::from(header.own_attributes.layer_position.y());
+        let offset = i64::from(block.y_coordinate) - top;
+        let index = (offset >= 0 && offset % lines == 0).then(|| usize::try_from(offset / lines).ok()).flatten();
+        match index.and_then(|index| placed.get_mut(index)) {
+            Some(seen) if !*seen => *seen = true,
+            _ => {
+                let bottom = top + header.layer_size.height() as i64 - 1;
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "a block of {lines} scan lines starts at row {}, which is not a block's first row of \
+                         the data window's rows {top} to {bottom}, or is given twice",
+                        block.y_coordinate
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }
