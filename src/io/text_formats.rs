@@ -12,7 +12,12 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str) -> Result<T> {
     guard_parser("the TOML text", "the toml parser", || {
         toml::from_str(text).map_err(|e| {
             let at = e.span().map(|span| format!("line {}: ", line_of(text, span.start)));
-            Error::Scene(format!("{}{}", at.unwrap_or_default(), escaped(e.message(), 300)))
+            // The parser gives some errors (a NUL in a comment) no message of their own.
+            let message = match e.message().trim() {
+                "" => "not valid TOML (a character the format does not allow there?)",
+                message => message,
+            };
+            Error::Scene(format!("{}{}", at.unwrap_or_default(), escaped(message, 300)))
         })
     })
 }
@@ -46,6 +51,8 @@ mod tests {
         let e = parse_toml::<Doc>(&long).unwrap_err().to_string();
         assert!(e.starts_with("invalid scene: line 2: "), "{e}");
         assert!(e.len() < 500 && !e.contains('\u{1b}'), "{} bytes: {}", e.len(), &e[..e.len().min(300)]);
+        let e = parse_toml::<Doc>("a = 1\n# a \0 in a comment\n").unwrap_err().to_string();
+        assert_eq!(e, "invalid scene: line 2: not valid TOML (a character the format does not allow there?)");
         let e = parse_json::<Doc>(&format!("{{\"a\": 1, \"b{}\": 2}}", "x".repeat(100_000))).unwrap_err().to_string();
         assert!(e.len() < 500 && e.contains("unknown field"), "{} bytes", e.len());
     }
