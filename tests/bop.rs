@@ -299,6 +299,16 @@ fn bad_bop_input_is_refused_by_name() {
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["scene 1, image 1: depth_scale = 0"]);
     std::fs::write(&camera, good.replace("0.0, 0.0, 1.0]", "0.0, 0.0]")).unwrap();
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["scene 1, image 1: cam_K must be 9 finite numbers"]);
+    // An image given two cameras, as the same key or another spelling of its id.
+    let twice = good.replacen('{', "{\"1\": {\"cam_K\": [1, 0, 0, 0, 1, 0, 0, 0, 1], \"depth_scale\": 1.0}, ", 1);
+    std::fs::write(&camera, &twice).unwrap();
+    refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["scene_camera.json", "image 1 is given twice (key \"1\")"]);
+    std::fs::write(
+        &camera,
+        good.replacen('{', "{\"000001\": {\"cam_K\": [1, 0, 0, 0, 1, 0, 0, 0, 1], \"depth_scale\": 1.0}, ", 1),
+    )
+    .unwrap();
+    refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["image 1 is given twice"]);
     std::fs::write(&camera, &good).unwrap();
     std::fs::remove_file(root.join("test/000001/depth/000001.png")).unwrap();
     refused(&format!("1,1,1,0.5,{identity},0 0 1000,1"), &["000001.png"]);

@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::io::{parse_json, read_input_text};
 use crate::limits::Ledger;
 use crate::sensor::Intrinsics;
+use crate::untrusted::quoted;
 use glam::DMat4;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -87,9 +88,48 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str, ledger: &L
     parse_json(&text).map_err(|e| Error::file(path, e.to_string()))
 }
 
-/// An id written as a JSON object's key ("1", "000001").
-fn id_of(key: &str, path: &Path, what: &str) -> Result<u32> {
-    key.parse().map_err(|_| Error::file(path, format!("{what} id {key:?} is not a whole number")))
+/// A JSON object's entries as the file gives them, every key kept: serde_json's maps keep a
+/// repeated key's last value and say nothing, where a dataset that gives an image two cameras
+/// is malformed.
+struct Entries<V>(Vec<(String, V)>);
+
+impl<'de, V: serde::Deserialize<'de>> serde::Deserialize<'de> for Entries<V> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        struct Visitor<V>(std::marker::PhantomData<V>);
+        impl<'de, V: serde::Deserialize<'de>> serde::de::Visitor<'de> for Visitor<V> {
+            type Value = Entries<V>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object keyed by ids")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> std::result::Result<Self::Value, A::Error> {
+                let mut entries = Vec::new();
+                while let Some(entry) = map.next_entry()? {
+                    entries.push(entry);
+                }
+                Ok(Entries(entries))
+            }
+        }
+        deserializer.deserialize_map(Visitor(std::marker::PhantomData))
+    }
+}
+
+impl<V> Entries<V> {
+    /// The entries by id (their keys written as whole numbers, "1" or "000001"), each id once.
+    fn by_id(self, path: &Path, what: &str) -> Result<Vec<(u32, V)>> {
+        let mut seen = std::collections::BTreeSet::new();
+        self.0
+            .into_iter()
+            .map(|(key, value)| {
+                let id: u32 = key
+                    .parse()
+                    .map_err(|_| Error::file(path, format!("{what} id {} is not a whole number", quoted(&key))))?;
+                match seen.insert(id) {
+                    true => Ok((id, value)),
+                    false => Err(Error::file(path, format!("{what} {id} is given twice (key {})", quoted(&key)))),
+                }
+            })
+            .collect()
+    }
 }
 
 impl Dataset {
@@ -99,10 +139,9 @@ impl Dataset {
             return Err(Error::Scene(format!("--split {split:?} must name one directory of the dataset")));
         }
         let info_path = root.join("models").join("models_info.json");
-        let entries: BTreeMap<String, ModelInfo> = read_json(&info_path, "models_info.json", ledger)?;
+        let entries: Entries<ModelInfo> = read_json(&info_path, "models_info.json", ledger)?;
         let mut diameters = BTreeMap::new();
-        for (key, info) in entries {
-            let id = id_of(&key, &info_path, "object")?;
+        for (id, info) in entries.by_id(&info_path, "object")? {
             if !(info.diameter.is_finite() && info.diameter > 0.0) {
                 return Err(Error::file(
                     &info_path,
@@ -144,10 +183,9 @@ impl Dataset {
     pub fn scene(&self, scene_id: u32, ledger: &Ledger) -> Result<SceneFiles> {
         let dir = self.scene_dir(scene_id);
         let camera_path = dir.join("scene_camera.json");
-        let entries: BTreeMap<String, CameraEntry> = read_json(&camera_path, "scene_camera.json", ledger)?;
+        let entries: Entries<CameraEntry> = read_json(&camera_path, "scene_camera.json", ledger)?;
         let mut files = SceneFiles::default();
-        for (key, entry) in entries {
-            let im_id = id_of(&key, &camera_path, "image")?;
+        for (im_id, entry) in entries.by_id(&camera_path, "image")? {
             let at = |field: &str, reason: String| {
                 Error::file(&camera_path, format!("scene {scene_id}, image {im_id}: {field} {reason}"))
             };
@@ -178,9 +216,8 @@ impl Dataset {
         }
         let gt_path = dir.join("scene_gt.json");
         if gt_path.exists() {
-            let entries: BTreeMap<String, Vec<GtEntry>> = read_json(&gt_path, "scene_gt.json", ledger)?;
-            for (key, objects) in entries {
-                let im_id = id_of(&key, &gt_path, "image")?;
+            let entries: Entries<Vec<GtEntry>> = read_json(&gt_path, "scene_gt.json", ledger)?;
+            for (im_id, objects) in entries.by_id(&gt_path, "image")? {
                 let poses = objects
                     .iter()
                     .enumerate()
