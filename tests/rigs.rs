@@ -951,7 +951,7 @@ fn verify_under_a_rig_refuses_mismatched_sensors_and_impossible_depths() {
         rangesynth::sensor::Scanner { width: 640, height: 480, pitch: [0.01; 2], origin: [0.0; 2], theta_deg: 0.0 };
     let ortho = VerifySettings { sensor: scanner.into(), ..rig_settings(ShadowMode::None) };
     let e = refused(&ortho).unwrap_or_default();
-    assert!(e.contains("pinhole view") && e.contains("orthographic"), "{e}");
+    assert!(e.contains("a view of kind pinhole but the sensor's reference view is orthographic"), "{e}");
     let mut behind = image.clone();
     let i = behind.label.iter().position(|&l| l != 0).unwrap();
     behind.z[i] = -1.0;
