@@ -385,6 +385,9 @@ fn a_report_that_cannot_be_written_fails_the_run_by_name() {
     let out =
         rangesynth().args(["render", s(&box_scene), "--out", s(&d.join("set"))]).stdout(to_full()).output().unwrap();
     refused(&out, "render's summary", &["writing to standard output"]);
+    let acc = d.join("accuracy");
+    let out = rangesynth().args(["accuracy", "--quick", "--out", s(&acc)]).stdout(to_full()).output().unwrap();
+    refused(&out, "accuracy's table", &["writing to standard output"]);
     let mut missing = rangesynth();
     missing.args(["render", s(&d.join("missing.toml")), "--out", s(&d.join("x"))]);
     let out = missing.stdout(Stdio::null()).stderr(to_full()).output().unwrap();

@@ -474,25 +474,20 @@ fn verify_with<'py>(
         .collect();
     let settings = VerifySettings { sensor, shadow, effects, tolerance, compare_shadow: false, chunk_size: 1024 };
     let verifier = verifier.clone();
-    let mut done = Vec::with_capacity(hypotheses.len());
-    match progress {
-        None => {
-            done = py.detach(|| verifier.verify(&sensed, &settings, &hypotheses, &mut |_| {})).map_err(raised)?;
-        }
-        Some(callback) => {
-            // Chunk by chunk, the GIL taken back to tell the callback how many are done.
-            let callback = callback.clone().unbind();
-            let result = py.detach(|| {
-                verifier.verify_each(&sensed, &settings, &hypotheses, &mut |chunk| {
-                    done.extend(chunk);
-                    let count = done.len();
-                    Python::attach(|py| callback.call1(py, (count,)).map(|_| ()))
-                        .map_err(|e| rangesynth::Error::Scene(format!("the progress callback raised: {e}")))
-                })
-            });
-            result.map_err(raised)?;
-        }
-    }
+    // Chunk by chunk, the GIL taken back to tell the callback how many are done.
+    let callback = progress.map(|callback| callback.clone().unbind());
+    let done = py
+        .detach(|| {
+            verifier.verify_until(&sensed, &settings, &hypotheses, &mut |count| match &callback {
+                None => Ok(()),
+                Some(callback) => Python::attach(|py| callback.call1(py, (count,)).map(|_| ()))
+                    .map_err(|e| rangesynth::Error::Scene(format!("the progress callback raised: {e}"))),
+            })
+        })
+        .map_err(raised)?;
+    // Held again while the arrays are made from them: the crate gave its hold back.
+    let held: u64 = done.iter().map(Verification::held_bytes).sum();
+    let _verifications = ledger.hold(format_args!("the verifications of {count} poses"), held).map_err(raised)?;
     verification_arrays(py, &done, &sensed, surfaces)
 }
 
@@ -506,16 +501,17 @@ fn pose_count(py: Python<'_>, poses: &Bound<'_, PyAny>) -> PyResult<usize> {
     Ok(shape.first().copied().unwrap_or(0))
 }
 
-/// Host bytes a pose of a call takes besides its verification (which `Verifier::verify`
-/// holds to the budget itself): the pose as float64 (where it is converted) and as the
+/// Host bytes a pose of a call takes besides its verification (which the crate holds while it
+/// verifies, and this call after): the pose as float64 (where it is converted) and as the
 /// crate's matrix, its hypothesis (its id, its `bindings`), and its row of the output arrays
-/// (thirteen numbers, a count a surface of the model's `surfaces`, its overlaps' array and its
-/// rejection's text, each at least a Python object).
+/// as they are made (thirteen numbers; a count a surface of the model's `surfaces`, twice: the
+/// record's copy and the array's; its overlaps' array and its rejection's text, each at least
+/// a Python object).
 fn held_bytes_a_pose(bindings: usize, surfaces: usize) -> u64 {
     const PYTHON_OBJECT: usize = 64;
     let id = u64::MAX.to_string().len();
     let hypothesis = size_of::<Hypothesis>() + id + bindings * size_of::<(u32, u32)>();
-    let row = (13 + surfaces) * size_of::<u64>() + 2 * PYTHON_OBJECT;
+    let row = (13 + 2 * surfaces) * size_of::<u64>() + 2 * PYTHON_OBJECT;
     (2 * size_of::<DMat4>() + hypothesis + row) as u64
 }
 

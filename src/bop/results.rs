@@ -53,16 +53,17 @@ fn numbers(text: &str) -> std::result::Result<Vec<f64>, String> {
     text.split_whitespace().map(|v| v.parse::<f64>().map_err(|_| format!("{} is not a number", quoted(v)))).collect()
 }
 
-/// Bytes a row keeps besides its fields' text: its ids, pose and lists.
-pub const ROW_BYTES: u64 = 160;
+/// Bytes a row keeps besides its fields' text: its ids, pose and list of fields.
+pub const ROW_BYTES: u64 = (size_of::<ResultRow>() + RESULTS_HEADER.len() * size_of::<String>()) as u64;
 
 /// Reads a results file's text: its rows in order, each refused with the file, the row (from
 /// 1, the header not counted), its ids where they were read, and the field. Charged to
 /// `ledger` as it reads: what the CSV reader holds of a row while it reads it (as long as the
-/// text, at most) for the parse, then each row's [`ROW_BYTES`] and fields before it is kept.
+/// longest line) for the parse, then each row's [`ROW_BYTES`] and fields before it is kept.
 /// A score or time must be a finite number (BOP writes -1 for a time not measured).
 pub fn parse_results(path: &Path, text: &str, ledger: &Ledger) -> Result<Vec<ResultRow>> {
-    let _reading = ledger.hold(format_args!("reading the rows of {}", path.display()), text.len() as u64)?;
+    let longest_line = text.split('\n').map(str::len).max().unwrap_or(0) as u64;
+    let _reading = ledger.hold(format_args!("reading the rows of {}", path.display()), longest_line)?;
     let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
     let header = reader.headers().map_err(|e| Error::file(path, format!("unreadable header: {e}")))?;
     if header.iter().map(str::trim).ne(RESULTS_HEADER) {
@@ -125,13 +126,14 @@ mod tests {
         assert_eq!(row.fields[4], "0 -1 0 1 0 0 0 0 1");
     }
 
-    /// The parse is charged as it reads: the CSV reader's record, as long as the text at most,
+    /// The parse is charged as it reads: the CSV reader's record, as long as the longest line,
     /// and each row kept (its fields and [`ROW_BYTES`]); a budget one byte short refuses it.
     #[test]
     fn reading_the_rows_is_charged_as_it_goes() {
         let text = format!("{HEADER}1,3,5,0.9,1 0 0 0 1 0 0 0 1,10 20 30,-1\n");
         let fields = "1350.91 0 0 0 1 0 0 0 110 20 30-1".len() as u64;
-        let needed = text.len() as u64 + ROW_BYTES + fields;
+        let longest = text.lines().map(str::len).max().unwrap() as u64;
+        let needed = longest + ROW_BYTES + fields;
         let ledger = Ledger::new(crate::limits::MemoryBudget::new(needed));
         parse_results(Path::new("r.csv"), &text, &ledger).unwrap();
         assert_eq!(ledger.held(), ROW_BYTES + fields, "the reader's record is given back, the rows kept");

@@ -3,7 +3,7 @@
 //! and prints the table. The rasterizer is
 //! one of the sweep's settings, so the global `--raster` does not apply.
 
-use super::console::report;
+use super::console::{report, report_text};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::accuracy::{
@@ -81,8 +81,8 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, args: &AccuracyArgs) -
     accuracy::write_plot(&staged.staged(FILES[1]), &rows)?;
     let written = staged.commit()?;
     report!("device: {}", ctx.device_name())?;
-    print!("{}", Table(&rows));
-    print!("{}", Summary(&rows));
+    report_text(Table(&rows))?;
+    report_text(Summary(&rows))?;
     report!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))?;
     for verifier in std::iter::once(&graphics).chain(compute.as_ref()) {
         super::check_device(verifier.renderer())?;

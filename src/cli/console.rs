@@ -13,6 +13,11 @@ pub fn report_line(line: std::fmt::Arguments) -> Result<()> {
     out.write_fmt(line).and_then(|()| out.write_all(b"\n")).context("writing to standard output")
 }
 
+/// Text of the report on standard output, as it is (its own line ends).
+pub fn report_text(text: impl std::fmt::Display) -> Result<()> {
+    write!(std::io::stdout().lock(), "{text}").context("writing to standard output")
+}
+
 /// One line on standard error, or nothing where it cannot be written.
 pub fn note_line(line: std::fmt::Arguments) {
     let _ = writeln!(std::io::stderr().lock(), "{line}");

@@ -1,7 +1,7 @@
 //! `rangesynth experiment`: the paper's experiment on a synthetic benchmark (src/experiment/),
 //! with a progress bar; prints the table and where its files went.
 
-use super::console::report;
+use super::console::{report, report_text};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rangesynth::experiment::{run_experiment, ExperimentConfig};
@@ -42,7 +42,7 @@ pub fn run(options: &ContextOptions, ledger: Arc<Ledger>, raster: Raster, args: 
     let output = run_experiment(&verifier, &config, &args.out, &mut |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     report!("device: {}", verifier.renderer().context().device_name())?;
-    print!("{}", std::fs::read_to_string(args.out.join("table.md")).context("reading table.md back")?);
+    report_text(std::fs::read_to_string(args.out.join("table.md")).context("reading table.md back")?)?;
     let (correct, incorrect) = (output.summary.correct.n, output.summary.incorrect.n);
     report!(
         "\n{} views, {correct} correct and {incorrect} incorrect hypotheses; wrote {} (table.md, summary.json, \

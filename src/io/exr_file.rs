@@ -279,10 +279,11 @@ fn check_claimed_sizes(bytes: &[u8], path: &Path, ledger: &Ledger) -> Result<()>
 }
 
 /// Refuses a single-part header whose data window's corners are the wrong way round (its
-/// maximum below its minimum), which the exr crate reads as a window of the same size.
+/// maximum below its minimum), which the exr crate reads as a window of the same size (the
+/// last `dataWindow` attribute, the one the crate keeps).
 fn check_data_window(bytes: &[u8], path: &Path) -> Result<()> {
     let window = header_attributes(bytes)
-        .and_then(|attributes| attributes.into_iter().find(|(name, _)| *name == b"dataWindow"))
+        .and_then(|attributes| attributes.into_iter().rfind(|(name, _)| *name == b"dataWindow"))
         .and_then(|(_, attribute)| attribute.get(attribute.len().checked_sub(16)?..));
     let Some(corners) = window else { return Ok(()) };
     let corner = |k: usize| i32::from_le_bytes(corners[4 * k..4 * k + 4].try_into().expect("four bytes"));
@@ -303,8 +304,11 @@ fn check_data_window(bytes: &[u8], path: &Path) -> Result<()> {
 fn check_blocks(bytes: &[u8], path: &Path) -> Result<()> {
     let reader = exr::block::read(Cursor::new(bytes), false).map_err(|e| exr_error(path, e))?;
     let headers = reader.meta_data().headers.clone();
-    let mut placed: Vec<Vec<bool>> = headers.iter().map(|h| vec![false; h.chunk_count]).collect();
-    for chunk in reader.all_chunks(false).map_err(|e| exr_error(path, e))? {
+    let scan_lines = |h: &exr::meta::header::Header| matches!(h.blocks, exr::meta::BlockDescription::ScanLines);
+    let mut placed: Vec<Vec<bool>> =
+        headers.iter().map(|h| if scan_lines(h) { vec![false; h.chunk_count] } else { Vec::new() }).collect();
+    // Through the offset table, as the decoder reads them (not the bytes after it in turn).
+    for chunk in reader.filter_chunks(false, |_, _, _| true).map_err(|e| exr_error(path, e))? {
         let chunk = chunk.map_err(|e| exr_error(path, e))?;
         let exr::block::chunk::CompressedBlock::ScanLine(block) = &chunk.compressed_block else { continue };
         let (Some(header), Some(placed)) = (headers.get(chunk.layer_index), placed.get_mut(chunk.layer_index)) else {

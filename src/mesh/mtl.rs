@@ -6,9 +6,10 @@
 //! has checked: each `newmtl` line, and each `Kd` line rewritten with its three components.
 //! Colours given as a spectral file (`Kd spectral …`) or in CIE XYZ (`Kd xyz …`), and every
 //! other statement, are left out: they do not change a reflectivity the product reads. A `Kd`
-//! of any other form, or whose components are not fractions in [0, 1] (a reflectance is one;
-//! `nan`, `inf`, `-5`), is refused, naming the library, its line and its material: taken
-//! as given or left out, it would change the image without a word.
+//! of one to three numbers that are not finite and at least 0 (`nan`, `inf`, `-5`), or of
+//! other words, is refused, naming the library, its line and its material: taken as given or
+//! left out, it would change the image without a word. (Above 1 is allowed: the format says
+//! such a value raises the reflectivity, whose mean the reflectivity effect caps at 1.)
 
 use super::text_lines;
 use crate::error::{guard_parser, Error, Result};
@@ -33,7 +34,7 @@ pub(super) fn checked_library(text: &str, path: &Path) -> Result<String> {
             (Some("Kd"), Some(rest)) if !rest.starts_with("spectral") && !rest.starts_with("xyz") => {
                 let [r, g, b] = rgb(rest).ok_or_else(|| {
                     let at = format!("line {}, material {}", n + 1, quoted(&material));
-                    Error::file(path, format!("{at}: Kd {} must be 1 to 3 numbers in [0, 1]", quoted(rest)))
+                    Error::file(path, format!("{at}: Kd {} must be 1 to 3 finite numbers, at least 0", quoted(rest)))
                 })?;
                 checked.push_str(&format!("Kd {r:?} {g:?} {b:?}\n"));
             }
@@ -43,7 +44,8 @@ pub(super) fn checked_library(text: &str, path: &Path) -> Result<String> {
     Ok(checked)
 }
 
-/// `r [g [b]]` as three components in [0, 1], the missing ones equal to r (the MTL format).
+/// `r [g [b]]` as three finite components of at least 0, the missing ones equal to r (the MTL
+/// format).
 fn rgb(text: &str) -> Option<[f32; 3]> {
     let values: Vec<f32> = text.split_whitespace().map(str::parse).collect::<Result<_, _>>().ok()?;
     match values[..] {
@@ -52,7 +54,7 @@ fn rgb(text: &str) -> Option<[f32; 3]> {
         [r, g, b] => Some([r, g, b]),
         _ => None,
     }
-    .filter(|c| c.iter().all(|v| (0.0..=1.0).contains(v)))
+    .filter(|c| c.iter().all(|v| v.is_finite() && *v >= 0.0))
 }
 
 /// The materials of checked library text (see [`checked_library`]), through tobj; `name`
@@ -89,14 +91,16 @@ mod tests {
 
     #[test]
     fn a_kd_that_is_no_reflectance_is_refused_by_line_and_material() {
-        for kd in ["nan 0 0", "inf", "-5", "1e300 0 0", "0.5 1.2", "1 0 0 0", "bright"] {
+        for kd in ["nan 0 0", "inf", "-5", "0.5 -0.1", "1e39 0 0", "1 0 0 0", "bright", "0,8"] {
             let text = format!("newmtl first\nKd 0.5\nnewmtl \"odd\"\n\nKd {kd}\n");
             let e = checked_library(&text, Path::new("m.mtl")).unwrap_err().to_string();
-            let expected =
-                format!("m.mtl: line 5, material \"\\\"odd\\\"\": Kd \"{kd}\" must be 1 to 3 numbers in [0, 1]");
+            let expected = format!(
+                "m.mtl: line 5, material \"\\\"odd\\\"\": Kd \"{kd}\" must be 1 to 3 finite numbers, at least 0"
+            );
             assert_eq!(e, expected);
         }
-        assert!(checked_library("newmtl edges\nKd 0 1 0.25\n", Path::new("m.mtl")).is_ok());
+        let bright = "newmtl edges\nKd 0 1 0.25\nnewmtl bright\nKd 1.2 1.0000001 8e-1\n";
+        assert!(checked_library(bright, Path::new("m.mtl")).is_ok());
     }
 
     #[test]

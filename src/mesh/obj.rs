@@ -299,11 +299,11 @@ fn parse(checked: &Checked, name: &str, libraries: &[Option<(String, String)>]) 
     Ok(mesh)
 }
 
-/// A material's reflectivity: the mean of its diffuse colour `Kd` (each component in [0, 1]:
-/// mesh/mtl.rs).
+/// A material's reflectivity: the mean of its diffuse colour `Kd` (each component finite and
+/// at least 0: mesh/mtl.rs), at most 1.
 fn reflectivity(material: &tobj::Material) -> Option<f32> {
     let kd = material.diffuse?;
-    Some(kd.iter().map(|&k| k as f32).sum::<f32>() / 3.0)
+    Some((kd.iter().map(|&k| k as f32).sum::<f32>() / 3.0).min(1.0))
 }
 
 #[cfg(test)]

@@ -260,9 +260,10 @@ impl Verifier {
         Ok(Arc::new(Model { gpu, sphere: mesh.bounding_sphere(), mesh }))
     }
 
-    /// Checks everything [`Verifier::verify`] would refuse — the settings, each hypothesis'
-    /// bindings and views, and the memory the batch needs — without touching the GPU, so a
-    /// caller can refuse a whole file before it writes anything.
+    /// Checks everything [`Verifier::verify_each`] would refuse before it runs — the settings,
+    /// each hypothesis' bindings and views, and the memory the batch needs — without touching
+    /// the GPU, so a caller can refuse a whole file before it writes anything. (What
+    /// [`Verifier::verify`] gathers is held to the budget as it runs, on top of this.)
     pub fn check(&self, sensed: &SensedImage, settings: &VerifySettings, hypotheses: &[Hypothesis]) -> Result<()> {
         self.plan(sensed, settings, hypotheses).map(|_| ())
     }
@@ -393,6 +394,21 @@ impl Verifier {
         hypotheses: &[Hypothesis],
         progress: &mut dyn FnMut(usize),
     ) -> Result<Vec<Verification>> {
+        self.verify_until(sensed, settings, hypotheses, &mut |done| {
+            progress(done);
+            Ok(())
+        })
+    }
+
+    /// [`Verifier::verify`], whose `progress` may stop the call with an error (a caller's own
+    /// callback that failed: Python's), which is returned.
+    pub fn verify_until(
+        &self,
+        sensed: &SensedImage,
+        settings: &VerifySettings,
+        hypotheses: &[Hypothesis],
+        progress: &mut dyn FnMut(usize) -> Result<()>,
+    ) -> Result<Vec<Verification>> {
         let holding = |count: usize| format!("holding the verifications of {count} hypotheses");
         let least = (hypotheses.len() as u64).saturating_mul(Verification::LEAST_HELD_BYTES);
         let mut held = self.renderer.ledger().hold(holding(hypotheses.len()), least)?;
@@ -401,8 +417,7 @@ impl Verifier {
             let more: u64 = chunk.iter().map(|v| v.held_bytes() - Verification::LEAST_HELD_BYTES).sum();
             held.grow(holding(results.len() + chunk.len()), more)?;
             results.extend(chunk);
-            progress(results.len());
-            Ok(())
+            progress(results.len())
         })?;
         Ok(results)
     }
