@@ -123,6 +123,8 @@ struct BatchPlan {
     /// Chunks in flight at once (lanes.rs): as many as the verifier asks for whose slots and
     /// counts the budget holds, at least 1.
     lanes: usize,
+    /// What the run holds while it verifies: the sensed image, and each lane's chunk.
+    held_bytes: u64,
 }
 
 impl BatchPlan {
@@ -318,6 +320,7 @@ impl Verifier {
             counts_budget,
             slots: self.slots.min(hypotheses.len()).max(1),
             lanes: 1,
+            held_bytes: 0,
         };
         let per_hypothesis = |h: &Hypothesis| plan.counts_bytes(h);
         if let Some(h) = hypotheses.iter().find(|h| per_hypothesis(h) > counts_budget) {
@@ -378,6 +381,7 @@ impl Verifier {
             .rev()
             .find(|&lanes| sensed_bytes + lanes as u64 * in_flight <= available)
             .unwrap_or(1);
+        plan.held_bytes = sensed_bytes + plan.lanes as u64 * in_flight;
         Ok(plan)
     }
 
@@ -435,6 +439,11 @@ impl Verifier {
         each: &mut dyn FnMut(Vec<Verification>) -> Result<()>,
     ) -> Result<()> {
         let plan = self.plan(sensed, settings, hypotheses)?;
+        // Held while it runs, so that what a caller gathers meanwhile (Verifier::verify_until)
+        // and other calls on this verifier's budget count on top of it.
+        let (width, height) = (settings.sensor.width(), settings.sensor.height());
+        let _running =
+            self.renderer.ledger().hold(format_args!("verifying against a {width}×{height} image"), plan.held_bytes)?;
         let scanner = settings.sensor.scanner();
         let ctx = self.renderer.context();
         let (copies, counts_budget) = (plan.copies, plan.counts_budget);
