@@ -172,7 +172,8 @@ impl Ledger {
     }
 
     /// Takes `bytes` for `what` as [`Ledger::charge`] does, until the guard it returns is
-    /// dropped: what a call holds while it runs (the Python bindings' poses).
+    /// dropped: what a call holds while it runs (a verification's plan and what it gathers,
+    /// the Python bindings' poses).
     pub fn hold(&self, what: impl fmt::Display, bytes: u64) -> Result<Held<'_>> {
         self.charge(what, bytes)?;
         Ok(Held { ledger: self, bytes })
