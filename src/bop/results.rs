@@ -54,12 +54,12 @@ fn numbers(text: &str) -> std::result::Result<Vec<f64>, String> {
 }
 
 /// Bytes a row keeps besides its fields' text: its ids, pose and list of fields.
-pub const ROW_BYTES: u64 = (size_of::<ResultRow>() + RESULTS_HEADER.len() * size_of::<String>()) as u64;
+const ROW_BYTES: u64 = (size_of::<ResultRow>() + RESULTS_HEADER.len() * size_of::<String>()) as u64;
 
 /// Reads a results file's text: its rows in order, each refused with the file, the row (from
 /// 1, the header not counted), its ids where they were read, and the field. Charged to
 /// `ledger` as it reads: what the CSV reader holds of a row while it reads it (as long as the
-/// longest line) for the parse, then each row's [`ROW_BYTES`] and fields before it is kept.
+/// longest line) for the parse, then each row's `ROW_BYTES` and fields before it is kept.
 /// A score or time must be a finite number (BOP writes -1 for a time not measured).
 pub fn parse_results(path: &Path, text: &str, ledger: &Ledger) -> Result<Vec<ResultRow>> {
     let longest_line = text.split('\n').map(str::len).max().unwrap_or(0) as u64;
