@@ -361,6 +361,9 @@ impl<'a> BopScorer<'a> {
         };
         let mut made = self.renderings(&image.sensor, &models, &named)?;
         let truths = made.split_off(rows.len());
+        // The rows' own images, held while they are scored (the truths are kept, below).
+        let estimate_bytes = made.iter().map(|r| Rendering::BYTES_PER_PIXEL * r.depth.len() as u64).sum();
+        let _estimates = self.ledger.hold(format_args!("{}: the rows' renderings", subject(first)), estimate_bytes)?;
         for ((k, ..), truth) in needed.into_iter().zip(truths) {
             // Kept while the image's rows last: its two depth images.
             let bytes = Rendering::BYTES_PER_PIXEL * truth.depth.len() as u64;
