@@ -9,8 +9,7 @@ use std::io::Write;
 
 /// One line of the report on standard output.
 pub fn report_line(line: std::fmt::Arguments) -> Result<()> {
-    let mut out = std::io::stdout().lock();
-    out.write_fmt(line).and_then(|()| out.write_all(b"\n")).context("writing to standard output")
+    report_text(format_args!("{line}\n"))
 }
 
 /// Text of the report on standard output, as it is (its own line ends).

@@ -279,11 +279,6 @@ impl GpuContext {
         self.int64_atomics
     }
 
-    /// The most storage buffers one shader stage may bind.
-    pub fn max_storage_buffers_per_stage(&self) -> usize {
-        self.limits.max_per_stage_descriptor_storage_buffers as usize
-    }
-
     /// The most bytes the device binds as one storage buffer (maxStorageBufferRange): it bounds
     /// the pixels of an image (a word a pixel) and of a compute-rasterized view (8 bytes).
     pub fn max_storage_buffer_range(&self) -> u64 {

@@ -79,14 +79,8 @@ impl SensedImage {
         // its pixels through another pitch or other intrinsics, on request; never through
         // another kind of view, whose depths mean something else (z towards the scanner, or
         // along a pinhole's axis).
-        if let Some(measured) = image.sensor.as_ref().map(|s| &s.reference) {
-            if measured.kind() != sensor.reference.kind() {
-                return Err(Error::Scene(format!(
-                    "the sensed image is a view of kind {} but the sensor's reference view is {}",
-                    measured.kind(),
-                    sensor.reference.kind()
-                )));
-            }
+        if let Some(measured) = &image.sensor {
+            check_same_kind(&measured.reference, &sensor.reference)?;
         }
         if (image.width, image.height) != (sensor.width(), sensor.height()) {
             return Err(Error::Scene(format!(
@@ -196,5 +190,18 @@ impl SensedImage {
     /// Dense index of a segment label, if the image holds it.
     pub fn segment_index(&self, label: u32) -> Option<u32> {
         self.segments.binary_search(&label).ok().map(|k| k as u32)
+    }
+}
+
+/// Refuses a sensor whose reference view is of another kind than the one the sensed image was
+/// measured in.
+pub(super) fn check_same_kind(sensed: &View, sensor: &View) -> Result<()> {
+    match sensed.kind() == sensor.kind() {
+        true => Ok(()),
+        false => Err(Error::Scene(format!(
+            "the sensed image is a view of kind {} but the sensor's reference view is {}",
+            sensed.kind(),
+            sensor.kind()
+        ))),
     }
 }

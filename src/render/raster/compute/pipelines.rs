@@ -13,10 +13,15 @@ use crate::render::stages::shadow_mask::{mask_pipelines, MaskVariant};
 use crate::render::targets::ViewKind;
 use std::sync::{Arc, OnceLock};
 
+/// What the coverage pass binds: the uniform block (the members' draws and constants), each
+/// member's words in each view, the large-triangle queue and its dispatch arguments.
+const COVERAGE_SET: SetShape = SetShape { images: 0, uniform_buffers: 1, storage_buffers: COVERAGE_STORAGE_BUFFERS };
+
 /// Whether `ctx`'s device can run the compute rasterizer: 64-bit integers and buffer atomics,
-/// and as many storage buffers a shader stage as its coverage pass binds.
+/// and the bindings of its coverage pass within the device's limits (the check its pipelines'
+/// creation makes, which would refuse them).
 pub fn device_supports(ctx: &GpuContext) -> bool {
-    ctx.has_int64_atomics() && ctx.max_storage_buffers_per_stage() >= COVERAGE_STORAGE_BUFFERS
+    ctx.has_int64_atomics() && COVERAGE_SET.check_fits(0, &ctx.limits, "coverage").is_ok()
 }
 
 /// The coverage passes' pipelines for dispatches of `members` jobs, or (`Ties`) the passes
@@ -155,9 +160,6 @@ pub(super) fn covering(
     (views, tiles): (u32, bool),
     name: &str,
 ) -> Result<ComputePipeline> {
-    // The uniform block (the members' draws and constants), each member's words in each view,
-    // the large-triangle queue and its dispatch arguments.
-    let shape = SetShape { images: 0, uniform_buffers: 1, storage_buffers: COVERAGE_STORAGE_BUFFERS };
     // The shader's specialization constants: MAX_GROUPS, the views it covers, how it deals its
     // workgroups, whether a dispatch covers one job or up to COVERAGE_MEMBERS, and TILES.
     use shaders::layout::spec::RASTER_COMP as spec;
@@ -174,7 +176,7 @@ pub(super) fn covering(
         (Coverage::Nearest, 1) => "one job",
         (Coverage::Nearest, _) => "grouped",
     };
-    ComputePipeline::new(ctx, shape, 0, code, &constants, &format!("{name}, {dispatch}"))
+    ComputePipeline::new(ctx, COVERAGE_SET, 0, code, &constants, &format!("{name}, {dispatch}"))
 }
 
 pub struct ComputeRasterPipelines {
